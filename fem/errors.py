@@ -1,0 +1,7 @@
+"""Errors for finite-element input: each names the offending node, element, card or value."""
+
+from trussid.errors import UserError
+
+
+class ModelError(UserError):
+    """The model as given cannot be built or solved (bad value, unknown node, mechanism)."""

@@ -1,0 +1,434 @@
+"""The finite-element model as plain data: nodes, beams, point masses, springs, rigid bodies,
+supports.
+
+A :class:`Model` is a builder: ``add_*`` calls append, each accepting many items at once.
+Elements refer to nodes by *node id* (the user's numbering, e.g. NASTRAN GRID ids), so
+elements may be added before their nodes; ids are resolved to indices, and checked, when the
+model is assembled (:func:`Model.index_of`). Global DOF ``6 * i + k`` is component ``k``
+(ux, uy, uz, rx, ry, rz) of the node at index ``i`` (the order nodes were added).
+
+Everything is SI: m, kg, s, N, Pa.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable, Literal
+
+import numpy as np
+
+from fem.errors import ModelError
+from fem.materials import Material
+from fem.sections import Section
+
+DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
+
+
+def parse_dofs(dofs: str | Iterable[int]) -> np.ndarray:
+    """DOF components as a boolean mask of length 6.
+
+    ``dofs`` is a NASTRAN-style digit string (``"123"`` = translations, ``"123456"`` = all)
+    or an iterable of 0-based component indices.
+    """
+    mask = np.zeros(6, dtype=bool)
+    if isinstance(dofs, str):
+        for ch in dofs.strip():
+            if ch not in "123456":
+                raise ModelError(f"DOF string {dofs!r}: component {ch!r} is not one of 1-6")
+            mask[int(ch) - 1] = True
+    else:
+        for k in dofs:
+            if not 0 <= int(k) < 6:
+                raise ModelError(f"DOF component {k!r} is not in 0..5")
+            mask[int(k)] = True
+    return mask
+
+
+@dataclass
+class Beams:
+    """All 2-node frame elements, as arrays of length ``n``.
+
+    Attributes
+    ----------
+    ids : (n,) int
+        Element ids.
+    nodes : (n, 2) int
+        Node ids of ends A and B.
+    orient : (n, 3) float
+        Orientation vector in global axes: together with the axis it fixes the local x-y
+        plane (NASTRAN's v vector). Must not be parallel to the element.
+    A, Iy, Iz, J, Asy, Asz : (n,) float
+        Section properties (see :class:`fem.sections.Section`) [m^2, m^4].
+    E, G, rho : (n,) float
+        Material [Pa, Pa, kg/m^3].
+    nsm : (n,) float
+        Non-structural mass per length [kg/m].
+    rod : (n,) bool
+        Axial and torsion only (CROD/CONROD): no bending stiffness, translational mass.
+    labels : (n,) object
+        Property label for messages and reports (e.g. ``"strut 3"``, ``"PBAR 12"``).
+    """
+
+    ids: np.ndarray
+    nodes: np.ndarray
+    orient: np.ndarray
+    A: np.ndarray
+    Iy: np.ndarray
+    Iz: np.ndarray
+    J: np.ndarray
+    Asy: np.ndarray
+    Asz: np.ndarray
+    E: np.ndarray
+    G: np.ndarray
+    rho: np.ndarray
+    nsm: np.ndarray
+    rod: np.ndarray
+    labels: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+
+@dataclass
+class PointMasses:
+    """Concentrated masses (CONM2-like), arrays of length ``n``.
+
+    Attributes
+    ----------
+    nodes : (n,) int
+        Node ids.
+    mass : (n,) float
+        Mass [kg].
+    inertia : (n, 3, 3) float
+        Inertia tensor about the mass's own centre of gravity, global axes [kg m^2].
+    offset : (n, 3) float
+        Centre of gravity relative to the node, global axes [m].
+    """
+
+    nodes: np.ndarray
+    mass: np.ndarray
+    inertia: np.ndarray
+    offset: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.nodes)
+
+
+@dataclass
+class Springs:
+    """Uncoupled 6-DOF springs (CELAS/CBUSH-like), arrays of length ``n``.
+
+    A spring joins node A to node B, or node A to ground when B is ``-1``. Its stiffness is
+    diagonal in the frame whose rows are ``frame[i]`` (global axes by default).
+
+    Attributes
+    ----------
+    ids : (n,) int
+    nodes : (n, 2) int
+        Node ids; ``-1`` in column 1 for grounded springs.
+    k : (n, 6) float
+        Stiffness per component [N/m for translations, N m/rad for rotations], >= 0.
+    frame : (n, 3, 3) float
+        Rows are the spring's axes in global coordinates (orthonormal).
+    """
+
+    ids: np.ndarray
+    nodes: np.ndarray
+    k: np.ndarray
+    frame: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+
+@dataclass
+class RigidBody:
+    """A rigid body (RBE2-like) with optional mass.
+
+    The dependent components ``dofs`` of every slave node follow the master node rigidly.
+    The body's mass is attached at the master (its centre of gravity need not be there).
+    Applied by DOF transformation, not penalty.
+
+    Attributes
+    ----------
+    id : int
+    master : int
+        Master node id.
+    slaves : (k,) int
+        Slave node ids.
+    dofs : (6,) bool
+        Slave components that follow the master (all six for a fully rigid body).
+    mass : float
+        Mass [kg] (0 for a massless link).
+    cg : (3,) float
+        Centre of gravity, global coordinates [m] (ignored when mass is 0).
+    inertia : (3, 3) float
+        Inertia tensor about the centre of gravity, global axes [kg m^2].
+    label : str
+    """
+
+    id: int
+    master: int
+    slaves: np.ndarray
+    dofs: np.ndarray
+    mass: float = 0.0
+    cg: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    inertia: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
+    label: str = ""
+
+
+class Model:
+    """A 3-D frame model under construction.
+
+    Parameters
+    ----------
+    beam_theory : {"euler-bernoulli", "timoshenko"}
+        Timoshenko adds shear deformation (and rotary inertia) using the sections' shear
+        areas.
+    mass : {"consistent", "lumped"}
+        Beam mass matrix formulation.
+    name : str
+        For reports.
+
+    Examples
+    --------
+    >>> from fem import Model, Section, ALUMINIUM
+    >>> m = Model()
+    >>> m.add_nodes([1, 2], [[0, 0, 0], [1, 0, 0]])
+    >>> m.add_beams([1], [[1, 2]], Section.tube(0.00635, 0.001), ALUMINIUM, orient=[0, 0, 1])
+    >>> m.fix(1)
+    """
+
+    def __init__(self, beam_theory: Literal["euler-bernoulli", "timoshenko"] = "euler-bernoulli",
+                 mass: Literal["consistent", "lumped"] = "consistent", name: str = "model"):
+        if beam_theory not in ("euler-bernoulli", "timoshenko"):
+            raise ModelError(f"beam_theory must be 'euler-bernoulli' or 'timoshenko', got {beam_theory!r}")
+        if mass not in ("consistent", "lumped"):
+            raise ModelError(f"mass must be 'consistent' or 'lumped', got {mass!r}")
+        self.beam_theory = beam_theory
+        self.mass_formulation = mass
+        self.name = name
+        self._node_ids: list[np.ndarray] = []
+        self._xyz: list[np.ndarray] = []
+        self._beams: list[dict[str, np.ndarray]] = []
+        self._masses: list[dict[str, np.ndarray]] = []
+        self._springs: list[dict[str, np.ndarray]] = []
+        self.rigid_bodies: list[RigidBody] = []
+        self._fixed: list[tuple[np.ndarray, np.ndarray]] = []
+
+    # ------------------------------------------------------------------ nodes
+    def add_nodes(self, ids, xyz) -> None:
+        """Add nodes with integer ``ids`` (n,) at coordinates ``xyz`` (n, 3) [m]."""
+        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        xyz = np.atleast_2d(np.asarray(xyz, dtype=float))
+        if xyz.shape != (len(ids), 3):
+            raise ModelError(f"add_nodes: xyz must have shape ({len(ids)}, 3), got {xyz.shape}")
+        bad = ~np.isfinite(xyz).all(axis=1)
+        if bad.any():
+            raise ModelError(f"node {ids[bad][0]}: coordinates are not finite")
+        self._node_ids.append(ids)
+        self._xyz.append(xyz)
+
+    def add_node(self, id: int, xyz) -> None:
+        """Add one node."""
+        self.add_nodes([id], [xyz])
+
+    @property
+    def node_ids(self) -> np.ndarray:
+        """Node ids in index order, (n,)."""
+        return np.concatenate(self._node_ids) if self._node_ids else np.zeros(0, np.int64)
+
+    @property
+    def xyz(self) -> np.ndarray:
+        """Node coordinates in index order, (n, 3) [m]."""
+        return np.concatenate(self._xyz) if self._xyz else np.zeros((0, 3))
+
+    @property
+    def n_nodes(self) -> int:
+        return sum(len(a) for a in self._node_ids)
+
+    @property
+    def n_dof(self) -> int:
+        """Number of DOFs before supports and rigid links are applied."""
+        return 6 * self.n_nodes
+
+    def index_of(self, ids, what: str = "element") -> np.ndarray:
+        """Node indices for node ``ids`` (any shape); unknown ids raise naming ``what``.
+
+        ``what`` may be a callable ``what(position) -> str`` describing the referrer of the
+        flat position that failed (e.g. ``"beam 12"``).
+        """
+        node_ids = self.node_ids
+        order = np.argsort(node_ids, kind="stable")
+        sorted_ids = node_ids[order]
+        dup = sorted_ids[1:][sorted_ids[1:] == sorted_ids[:-1]]
+        if dup.size:
+            raise ModelError(f"node {dup[0]} is defined more than once")
+        ids = np.asarray(ids, dtype=np.int64)
+        pos = np.searchsorted(sorted_ids, ids.ravel())
+        pos_c = np.minimum(pos, max(len(sorted_ids) - 1, 0))
+        ok = (pos < len(sorted_ids)) & (sorted_ids[pos_c] == ids.ravel()) if len(sorted_ids) else np.zeros(ids.size, bool)
+        if not ok.all():
+            first = int(np.flatnonzero(~ok)[0])
+            who = what(first) if callable(what) else what
+            raise ModelError(f"undefined node {ids.ravel()[first]} (referenced by {who})")
+        return order[pos_c].reshape(ids.shape)
+
+    # ------------------------------------------------------------------ elements
+    def add_beams(self, ids, nodes, section: Section | dict, material: Material | dict,
+                  orient, nsm=0.0, rod: bool = False, label: str | None = None) -> None:
+        """Add frame elements sharing one section and material.
+
+        Parameters
+        ----------
+        ids : (n,) int
+            Element ids.
+        nodes : (n, 2) int
+            Node ids of the two ends.
+        section : Section
+            Cross-section, or a dict of per-element arrays with keys A, Iy, Iz, J, Asy, Asz.
+        material : Material
+            Material, or a dict of per-element arrays with keys E, G, rho.
+        orient : (3,) or (n, 3) float
+            Orientation vector(s), global axes.
+        nsm : float or (n,) float
+            Non-structural mass per length [kg/m].
+        rod : bool
+            Axial and torsion only.
+        label : str, optional
+            Property label for messages (defaults to the section's name).
+        """
+        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        n = len(ids)
+        nodes = np.asarray(nodes, dtype=np.int64).reshape(n, 2)
+        orient = np.broadcast_to(np.asarray(orient, dtype=float), (n, 3)).copy()
+        sec = section if isinstance(section, dict) else {
+            k: getattr(section, k) for k in ("A", "Iy", "Iz", "J", "Asy", "Asz")}
+        mat = material if isinstance(material, dict) else {
+            k: getattr(material, k) for k in ("E", "G", "rho")}
+        chunk = {"ids": ids, "nodes": nodes, "orient": orient}
+        for key, value in {**sec, **mat, "nsm": nsm}.items():
+            chunk[key] = np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy()
+        chunk["rod"] = np.full(n, bool(rod))
+        name = label if label is not None else getattr(section, "name", "section")
+        chunk["labels"] = np.full(n, name, dtype=object)
+        self._beams.append(chunk)
+
+    @property
+    def beams(self) -> Beams:
+        """All beams as one :class:`Beams` of arrays."""
+        keys = Beams.__dataclass_fields__.keys()
+        if not self._beams:
+            shapes = {"nodes": (0, 2), "orient": (0, 3)}
+            return Beams(**{k: np.zeros(shapes.get(k, (0,)),
+                                         dtype=np.int64 if k in ("ids", "nodes") else bool if k == "rod"
+                                         else object if k == "labels" else float) for k in keys})
+        return Beams(**{k: np.concatenate([c[k] for c in self._beams]) for k in keys})
+
+    def add_point_masses(self, nodes, mass, inertia=None, offset=None) -> None:
+        """Add point masses at node ids ``nodes``.
+
+        Parameters
+        ----------
+        nodes : (n,) int
+        mass : float or (n,) float
+            [kg], >= 0.
+        inertia : (3, 3) or (n, 3, 3) float, optional
+            About each mass's centre of gravity, global axes [kg m^2]; default zero.
+        offset : (3,) or (n, 3) float, optional
+            Centre of gravity relative to the node [m]; default zero.
+        """
+        nodes = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        n = len(nodes)
+        chunk = {
+            "nodes": nodes,
+            "mass": np.broadcast_to(np.asarray(mass, dtype=float), (n,)).copy(),
+            "inertia": np.broadcast_to(np.zeros((3, 3)) if inertia is None else np.asarray(inertia, float), (n, 3, 3)).copy(),
+            "offset": np.broadcast_to(np.zeros(3) if offset is None else np.asarray(offset, float), (n, 3)).copy(),
+        }
+        bad = (chunk["mass"] < 0) | ~np.isfinite(chunk["mass"])
+        if bad.any():
+            raise ModelError(f"point mass at node {nodes[bad][0]}: mass must be >= 0, got {chunk['mass'][bad][0]!r}")
+        self._masses.append(chunk)
+
+    @property
+    def point_masses(self) -> PointMasses:
+        if not self._masses:
+            return PointMasses(np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 3, 3)), np.zeros((0, 3)))
+        return PointMasses(**{k: np.concatenate([c[k] for c in self._masses]) for k in PointMasses.__dataclass_fields__})
+
+    def add_springs(self, ids, nodes, k, frame=None) -> None:
+        """Add 6-DOF springs.
+
+        Parameters
+        ----------
+        ids : (n,) int
+        nodes : (n, 2) int or (n,) int
+            Node id pairs; a 1-D array (or ``-1`` in the second column) grounds the spring.
+        k : (6,) or (n, 6) float
+            Stiffnesses [N/m, N m/rad], >= 0.
+        frame : (3, 3) or (n, 3, 3) float, optional
+            Rows are the spring axes in global coordinates; default global axes.
+        """
+        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        n = len(ids)
+        nodes = np.asarray(nodes, dtype=np.int64)
+        if nodes.ndim == 1:
+            nodes = np.column_stack([nodes, np.full(n, -1)])
+        nodes = nodes.reshape(n, 2)
+        kk = np.broadcast_to(np.asarray(k, dtype=float), (n, 6)).copy()
+        bad = ~(np.isfinite(kk) & (kk >= 0)).all(axis=1)
+        if bad.any():
+            raise ModelError(f"spring {ids[bad][0]}: stiffness must be finite and >= 0, got {kk[bad][0].tolist()}")
+        fr = np.broadcast_to(np.eye(3) if frame is None else np.asarray(frame, float), (n, 3, 3)).copy()
+        err = np.abs(fr @ fr.transpose(0, 2, 1) - np.eye(3)).max(axis=(1, 2))
+        if (err > 1e-9).any():
+            raise ModelError(f"spring {ids[err > 1e-9][0]}: frame axes are not orthonormal")
+        self._springs.append({"ids": ids, "nodes": nodes, "k": kk, "frame": fr})
+
+    @property
+    def springs(self) -> Springs:
+        if not self._springs:
+            return Springs(np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros((0, 6)), np.zeros((0, 3, 3)))
+        return Springs(**{k: np.concatenate([c[k] for c in self._springs]) for k in Springs.__dataclass_fields__})
+
+    def add_rigid_body(self, id: int, master: int, slaves, dofs: str = "123456", mass: float = 0.0,
+                       cg=None, inertia=None, label: str = "") -> None:
+        """Add a rigid body: ``slaves`` (node ids) follow ``master`` in components ``dofs``.
+
+        ``mass`` [kg] with centre of gravity ``cg`` (global, m; default the master node) and
+        ``inertia`` about the cg (3, 3) [kg m^2] is attached to the master.
+        """
+        if not (np.isfinite(mass) and mass >= 0):
+            raise ModelError(f"rigid body {id}: mass must be >= 0, got {mass!r}")
+        inertia = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float)
+        if inertia.shape != (3, 3) or not np.allclose(inertia, inertia.T, rtol=0, atol=1e-12 * max(1.0, abs(inertia).max())):
+            raise ModelError(f"rigid body {id}: inertia must be a symmetric 3x3 tensor")
+        self.rigid_bodies.append(RigidBody(
+            id=int(id), master=int(master), slaves=np.atleast_1d(np.asarray(slaves, dtype=np.int64)),
+            dofs=parse_dofs(dofs), mass=float(mass),
+            cg=None if cg is None else np.asarray(cg, dtype=float), inertia=inertia, label=label or f"rigid body {id}",
+        ))
+
+    # ------------------------------------------------------------------ supports
+    def fix(self, nodes, dofs: str = "123456") -> None:
+        """Support (eliminate) components ``dofs`` at node ids ``nodes``."""
+        nodes = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        self._fixed.append((nodes, parse_dofs(dofs)))
+
+    def fixed_mask(self) -> np.ndarray:
+        """(n_nodes, 6) bool: supported DOFs, in node index order."""
+        mask = np.zeros((self.n_nodes, 6), dtype=bool)
+        for nodes, comps in self._fixed:
+            idx = self.index_of(nodes, what="a support")
+            mask[np.ix_(np.atleast_1d(idx), comps.nonzero()[0])] = True
+        return mask
+
+    @property
+    def has_supports(self) -> bool:
+        return bool(self._fixed)
+
+    def __repr__(self) -> str:
+        return (f"Model({self.name!r}: {self.n_nodes} nodes, {len(self.beams)} beams, "
+                f"{len(self.point_masses)} point masses, {len(self.springs)} springs, "
+                f"{len(self.rigid_bodies)} rigid bodies, {self.beam_theory}, {self.mass_formulation} mass)")

@@ -1,0 +1,1 @@
+"""Parametric testbed geometry and solids (trimesh). Knows nothing of finite elements."""

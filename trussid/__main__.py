@@ -1,0 +1,3 @@
+from trussid.cli import main
+
+raise SystemExit(main())
