@@ -1,0 +1,15 @@
+"""Errors the ``plid`` package raises for mistakes in what the user gave.
+
+Both subclass :class:`trussid.errors.UserError`, so the command line turns them into a
+one-line message. Messages name the offending item (column, sample, parameter, order).
+"""
+
+from trussid.errors import UserError
+
+
+class DataError(UserError):
+    """Bad input/output data: NaN/inf, length mismatch, unexciting input, unknown column."""
+
+
+class IdentificationError(UserError):
+    """An identification request that cannot be honoured (invalid order, bad prior, bad option)."""
