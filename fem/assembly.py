@@ -1,0 +1,244 @@
+"""Assembly of the global stiffness and mass matrices (scipy.sparse), reduced by constraints.
+
+Every element kind contributes a stack of small dense matrices plus the global DOF index of
+each row; one COO -> CSR conversion sums them (no Python loop over elements). The full
+matrices are then reduced to the independent DOFs, ``K = T^T K_full T``, by
+:func:`fem.constraints.build_transformation` (supports by elimination, rigid bodies by DOF
+transformation).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from fem.constraints import build_transformation, dof_label, rigid_mass
+from fem.elements import check_beam_properties, frame_matrices, local_axes
+from fem.errors import ModelError
+from fem.model import DOF_NAMES
+
+
+@dataclass
+class System:
+    """Assembled, constrained system ``M q'' + K q = f`` on the independent DOFs ``q``.
+
+    Attributes
+    ----------
+    K, M : (n_red, n_red) scipy.sparse.csr_matrix
+        Symmetric stiffness [N/m ...] and mass [kg ...] on the reduced DOFs.
+    T : (6 n_nodes, n_red) scipy.sparse.csr_matrix
+        Full DOF vector = ``T @ q`` (supported DOFs zero, rigid-body slaves expanded).
+    node_ids : (n_nodes,) int
+    xyz : (n_nodes, 3) float
+        Node coordinates [m].
+    n_dof : int
+        Number of reduced DOFs ``n_red``.
+    dofs : (n_red,) int
+        Full DOF index (``6 * node_index + component``) of each reduced DOF.
+    autospc : list of (int, str)
+        ``(node_id, component)`` removed because they had neither stiffness nor mass.
+    mass_formulation : str
+        "consistent" or "lumped".
+    beam_theory : str
+    has_supports : bool
+        The model had supports (then zero-frequency modes are mechanisms).
+    name : str
+    """
+
+    K: sp.csr_matrix
+    M: sp.csr_matrix
+    T: sp.csr_matrix
+    node_ids: np.ndarray
+    xyz: np.ndarray
+    n_dof: int
+    dofs: np.ndarray
+    autospc: list = field(default_factory=list)
+    mass_formulation: str = "consistent"
+    beam_theory: str = "euler-bernoulli"
+    has_supports: bool = False
+    name: str = "model"
+
+    def dof_label(self, j: int) -> str:
+        """``"node 7 rz"`` for reduced DOF ``j``."""
+        return dof_label(self.node_ids, int(self.dofs[j]))
+
+
+def _element_dofs(node_index: np.ndarray) -> np.ndarray:
+    """(n, 6 k) global DOF indices for elements joining ``k`` nodes (n, k)."""
+    return (6 * node_index[:, :, None] + np.arange(6)).reshape(len(node_index), -1)
+
+
+def beam_matrices(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Global-axis element matrices of all beams and their DOF indices.
+
+    Returns
+    -------
+    K, M : (n_elem, 12, 12) float
+    dofs : (n_elem, 12) int
+    """
+    b = model.beams
+    if len(b) == 0:
+        return np.zeros((0, 12, 12)), np.zeros((0, 12, 12)), np.zeros((0, 12), np.int64)
+    check_beam_properties(b, model.beam_theory)
+    idx = model.index_of(b.nodes, what=lambda pos: f"element {b.ids[pos // 2]}")
+    same = idx[:, 0] == idx[:, 1]
+    if same.any():
+        raise ModelError(f"element {b.ids[same][0]}: zero length (both ends are node {b.nodes[same][0, 0]})")
+    xyz = model.xyz
+    L, R = local_axes(xyz[idx[:, 0]], xyz[idx[:, 1]], b.orient, b.ids)
+    K, M = frame_matrices(L, b.A, b.Iy, b.Iz, b.J, b.E, b.G, b.rho, nsm=b.nsm, Asy=b.Asy, Asz=b.Asz,
+                          rod=b.rod, R=R, theory=model.beam_theory, mass=model.mass_formulation)
+    return K, M, _element_dofs(idx)
+
+
+def spring_matrices(model) -> tuple[list, list]:
+    """Stiffness blocks and DOF indices of the springs: ``([K2, K1], [dofs2, dofs1])``.
+
+    Two-node springs give (n, 12, 12) blocks, grounded ones (n, 6, 6).
+    """
+    s = model.springs
+    if len(s) == 0:
+        return [], []
+    grounded = s.nodes[:, 1] == -1
+    ia = model.index_of(s.nodes[:, 0], what=lambda pos: f"spring {s.ids[pos]}")
+    ib = np.full(len(s), -1)
+    if (~grounded).any():
+        ib[~grounded] = model.index_of(s.nodes[~grounded, 1],
+                                       what=lambda pos: f"spring {s.ids[~grounded][pos]}")
+    same = ~grounded & (ia == ib)
+    if same.any():
+        raise ModelError(f"spring {s.ids[same][0]}: both ends are node {s.nodes[same][0, 0]}")
+    # Diagonal in the spring frame F (rows = axes): K_global = F^T diag(k) F per 3x3 block.
+    F = s.frame
+    k6 = np.zeros((len(s), 6, 6))
+    k6[:, :3, :3] = np.einsum("nki,nk,nkj->nij", F, s.k[:, :3], F)
+    k6[:, 3:, 3:] = np.einsum("nki,nk,nkj->nij", F, s.k[:, 3:], F)
+    blocks, dofs = [], []
+    two = ~grounded
+    if two.any():
+        k = k6[two]
+        k12 = np.concatenate([np.concatenate([k, -k], axis=2), np.concatenate([-k, k], axis=2)], axis=1)
+        blocks.append(k12)
+        dofs.append(_element_dofs(np.column_stack([ia[two], ib[two]])))
+    if grounded.any():
+        blocks.append(k6[grounded])
+        dofs.append(_element_dofs(ia[grounded][:, None]))
+    return blocks, dofs
+
+
+def mass_blocks(model) -> tuple[list, list]:
+    """6x6 mass blocks (point masses and rigid-body masses at their masters) and DOFs."""
+    blocks, dofs = [], []
+    pm = model.point_masses
+    if len(pm):
+        idx = model.index_of(pm.nodes, what=lambda pos: f"point mass {pos + 1} (at node {pm.nodes[pos]})")
+        blocks.append(rigid_mass(pm.mass, pm.offset, pm.inertia))
+        dofs.append(_element_dofs(idx[:, None]))
+    bodies = [b for b in model.rigid_bodies if b.mass > 0 or np.any(b.inertia)]
+    if bodies:
+        idx = model.index_of([b.master for b in bodies],
+                             what=lambda pos: f"rigid body {bodies[pos].id} (master)")
+        xyz = model.xyz[idx]
+        cg = np.array([xyz[i] if b.cg is None else np.asarray(b.cg, float) for i, b in enumerate(bodies)])
+        blocks.append(rigid_mass(np.array([b.mass for b in bodies]), cg - xyz,
+                                 np.array([b.inertia for b in bodies])))
+        dofs.append(_element_dofs(idx[:, None]))
+    return blocks, dofs
+
+
+def _coo(blocks, dofs, n) -> sp.csr_matrix:
+    """Sum dense element blocks into an (n, n) CSR matrix with one COO conversion."""
+    if not blocks:
+        return sp.csr_matrix((n, n))
+    rows = np.concatenate([np.broadcast_to(d[:, :, None], b.shape).ravel() for b, d in zip(blocks, dofs)])
+    cols = np.concatenate([np.broadcast_to(d[:, None, :], b.shape).ravel() for b, d in zip(blocks, dofs)])
+    vals = np.concatenate([b.ravel() for b in blocks])
+    keep = vals != 0
+    A = sp.coo_matrix((vals[keep], (rows[keep], cols[keep])), shape=(n, n)).tocsr()
+    A.sum_duplicates()
+    return A
+
+
+def _zero(diag: np.ndarray, dofs: np.ndarray, rel: float = 1e-12) -> np.ndarray:
+    """Diagonal entries that are zero relative to the largest of their kind.
+
+    Translations and rotations are compared separately: their units (and magnitudes) differ.
+    """
+    out = np.zeros(len(diag), bool)
+    rot = (dofs % 6) >= 3
+    for sel in (rot, ~rot):
+        if sel.any():
+            d = np.abs(diag[sel])
+            out[sel] = d <= rel * d.max() if d.max() > 0 else True
+    return out
+
+
+def assemble(model, autospc: bool = False) -> System:
+    """Assemble and constrain a :class:`fem.Model`.
+
+    Parameters
+    ----------
+    model : fem.Model
+    autospc : bool
+        Remove (and list in ``System.autospc``) every independent DOF with neither
+        stiffness nor mass, like NASTRAN's AUTOSPC: e.g. the rotations of nodes joined
+        only by rods. Without it such a DOF is an error.
+
+    Returns
+    -------
+    System
+
+    Raises
+    ------
+    ModelError
+        Bad element data or references (naming the element, spring, mass or body), a DOF
+        without stiffness when the model has supports (``"mechanism: node 7 rz has no
+        stiffness"``), or a DOF with neither stiffness nor mass when ``autospc`` is off.
+    """
+    node_ids = model.node_ids
+    if len(node_ids) == 0:
+        raise ModelError("the model has no nodes")
+    model.index_of(node_ids[:1], what="the node list")  # duplicate node ids are an error
+    n = model.n_dof
+    Kb, Mb, db = beam_matrices(model)
+    ks, ds = spring_matrices(model)
+    ms, dm = mass_blocks(model)
+    K_full = _coo([Kb] + ks, [db] + ds, n)
+    M_full = _coo([Mb] + ms, [db] + dm, n)
+
+    fixed = model.fixed_mask()
+    T, dofs = build_transformation(model, fixed)
+    if model.rigid_bodies:
+        Tt = T.T.tocsr()
+        K = (Tt @ K_full @ T).tocsr()
+        M = (Tt @ M_full @ T).tocsr()
+    else:
+        K = K_full[dofs][:, dofs].tocsr()
+        M = M_full[dofs][:, dofs].tocsr()
+
+    zk = _zero(K.diagonal(), dofs)
+    zm = _zero(M.diagonal(), dofs)
+    removed: list[tuple[int, str]] = []
+    empty = zk & zm
+    if empty.any():
+        if not autospc:
+            j = int(np.flatnonzero(empty)[0])
+            raise ModelError(f"mechanism: {dof_label(node_ids, dofs[j])} has no stiffness (and no mass); "
+                             f"support it, or use AUTOSPC to remove such DOFs")
+        keep = np.flatnonzero(~empty)
+        removed = [(int(node_ids[d // 6]), DOF_NAMES[d % 6]) for d in dofs[empty]]
+        T, dofs = T[:, keep].tocsr(), dofs[keep]
+        K, M = K[keep][:, keep].tocsr(), M[keep][:, keep].tocsr()
+        zk = zk[keep]
+    if model.has_supports and zk.any():
+        j = int(np.flatnonzero(zk)[0])
+        raise ModelError(f"mechanism: {dof_label(node_ids, dofs[j])} has no stiffness")
+    if K.shape[0] == 0:
+        raise ModelError("the model has no free DOF left after supports and constraints")
+    K.sort_indices()
+    M.sort_indices()
+    return System(K=K, M=M, T=T, node_ids=node_ids, xyz=model.xyz, n_dof=K.shape[0], dofs=dofs,
+                  autospc=removed, mass_formulation=model.mass_formulation,
+                  beam_theory=model.beam_theory, has_supports=model.has_supports, name=model.name)
