@@ -259,8 +259,8 @@ class UdfParams(_Section):
         Height of the prism between the centrelines of its lower and upper triangles [m].
         Suggested: 6 in (keeps the testbed under the thesis's 4 ft).
     member_size : float
-        Side of the square steel bars of the frame [m]. Suggested: 1.125 in, which gives a
-        bare-steel frame of about 35 lb; the solid is then scaled to exactly ``mass`` (a
+        Side of the square steel bars of the frame [m]. Suggested: 1.2 in, which gives a
+        bare-steel frame of 35.09 lb; the solid is then scaled to exactly ``mass`` (a
         uniform density scale, see :func:`geometry.solids.udf_rigid_body`).
     mass : float
         Total mass [kg]. Thesis: 35 lb (Fig. 2.2.1-2).
@@ -274,7 +274,7 @@ class UdfParams(_Section):
 
     side: float = _p(12 * INCH, "m", "side of the triangle of top vertices (thesis: 12 in)")
     height: float = _p(6 * INCH, "m", "prism height between triangle centrelines (suggested: 6 in)")
-    member_size: float = _p(1.125 * INCH, "m", "side of the square steel bars (suggested: 1.125 in)")
+    member_size: float = _p(1.2 * INCH, "m", "side of the square steel bars (suggested: 1.2 in)")
     mass: float = _p(35 * POUND, "kg", "total UDF mass (thesis: 35 lb)")
     density: float = _p(7850.0, "kg/m^3", "steel density of the solid before scaling to mass")
     youngs_modulus: float = _p(200e9, "Pa", "steel Young's modulus")
