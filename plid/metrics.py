@@ -1,0 +1,266 @@
+"""How good an identified model is: prediction, frequency-response, simulation and pole metrics.
+
+Definitions (used by ``trussid identify``, ``compare`` and the demo report)
+-------------------------------------------------------------------------
+One-step signal-to-prediction-error ratio [dB]
+    Run the model's one-step (Kalman) predictor over validation data from x0 = 0,
+    x[k+1] = A x[k] + B u[k] + K (y[k] - C x[k] - D u[k]),  yhat[k] = C x[k] + D u[k].
+    Per output channel j: ``20 log10( RMS(y_j) / RMS(y_j - yhat_j) )``, where RMS(y_j) is
+    the RMS of the measured sensor signal (mean not removed). Overall:
+    ``-10 log10( mean_j ( MS(e_j) / MS(y_j) ) )`` -- the mean of the normalised error
+    powers, so it is independent of channel units and dominated by the worst channel.
+    The first ``skip`` samples (the predictor's start-up from x0 = 0) are left out.
+Simulation fit [dB]
+    The same ratio for the model simulated open loop (no K) against the noise-free output
+    of validation data; also the NRMSE fit ``100 (1 - ||e|| / ||y - mean(y)||)`` [%].
+FRF error
+    Per channel (output i, input j) over a band: magnitude error
+    ``20 log10|H_model| - 20 log10|H_ref|`` [dB] and phase error ``angle(H_model / H_ref)``
+    [deg], reported as max of the absolute value and RMS over the frequency grid.
+Poles
+    Discrete poles z map to s = ln(z) / dt; frequency |s| / 2 pi [Hz], damping -Re(s)/|s|.
+    Identified and true poles (one of each complex pair) are matched by minimum total
+    s-plane distance (Hungarian assignment, scipy.optimize.linear_sum_assignment).
+"""
+
+from __future__ import annotations
+
+import control
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+from plid.errors import DataError
+from plid.experiment import simulate
+from plid.frf import FRF, frequency_response
+
+
+def _check_sizes(sys, u, y=None):
+    u = np.asarray(u, dtype=float)
+    u = u[:, None] if u.ndim == 1 else u
+    if u.shape[1] != sys.ninputs:
+        raise DataError(f"the model has {sys.ninputs} inputs but the data has {u.shape[1]}")
+    if y is None:
+        return u, None
+    y = np.asarray(y, dtype=float)
+    y = y[:, None] if y.ndim == 1 else y
+    if y.shape[1] != sys.noutputs:
+        raise DataError(f"the model has {sys.noutputs} outputs but the data has {y.shape[1]}")
+    if y.shape[0] != u.shape[0]:
+        raise DataError(f"u has {u.shape[0]} samples, y has {y.shape[0]}")
+    return u, y
+
+
+def predictor_gain(sys: control.StateSpace, Q, R) -> np.ndarray:
+    """Steady-state one-step Kalman predictor gain K = A P C^T (C P C^T + R)^-1.
+
+    P solves the filter Riccati equation P = A P A^T - A P C^T (C P C^T + R)^-1 C P A^T + Q
+    (scipy.linalg.solve_discrete_are on the dual problem). Q (n x n) state-noise and
+    R (p x p) output-noise covariances.
+    """
+    A, C = np.asarray(sys.A), np.asarray(sys.C)
+    try:
+        P = scipy.linalg.solve_discrete_are(A.T, C.T, np.asarray(Q, float), np.asarray(R, float))
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise DataError(f"no steady-state predictor for this model and noise ({exc})") from None
+    return A @ P @ C.T @ np.linalg.inv(C @ P @ C.T + R)
+
+
+def default_noise_covariances(sys, u, y, rel: float = 1e-2):
+    """Noise covariances for a predictor when none are known: input noise and output noise
+    each at ``rel`` of the channel RMS (Q = B diag(sigma_u^2) B^T + tiny ridge, R = diag)."""
+    su = rel * np.sqrt(np.mean(np.asarray(u) ** 2, axis=0))
+    sy = rel * np.sqrt(np.mean(np.asarray(y) ** 2, axis=0))
+    B = np.asarray(sys.B)
+    Q = B @ np.diag(su**2) @ B.T
+    Q = Q + 1e-9 * (np.trace(Q) / max(Q.shape[0], 1) or 1.0) * np.eye(Q.shape[0])
+    R = np.diag(np.maximum(sy**2, 1e-300))
+    return Q, R
+
+
+def one_step_predict(sys: control.StateSpace, u, y, K=None, Q=None, R=None) -> np.ndarray:
+    """One-step-ahead output predictions yhat[k] (given data up to k-1), shape (N, p).
+
+    ``K`` is the predictor gain; if None, the steady-state gain from ``Q``, ``R``
+    (default :func:`default_noise_covariances`).
+    """
+    if not control.isdtime(sys, strict=True):
+        raise DataError("one-step prediction needs a discrete model (dt > 0)")
+    u, y = _check_sizes(sys, u, y)
+    A, B, C, D = (np.asarray(M, dtype=float) for M in (sys.A, sys.B, sys.C, sys.D))
+    n, p = A.shape[0], C.shape[0]
+    if K is None:
+        dQ, dR = default_noise_covariances(sys, u, y)
+        K = predictor_gain(sys, dQ if Q is None else Q, dR if R is None else R)
+    K = np.asarray(K, dtype=float)
+    if K.shape != (n, p):
+        raise DataError(f"predictor gain K has shape {K.shape}, the model needs {(n, p)}")
+    # The predictor is itself an LTI system driven by [u, y].
+    pred = control.ss(A - K @ C, np.hstack([B - K @ D, K]), C,
+                      np.hstack([D, np.zeros((p, p))]), sys.dt)
+    return simulate(pred, np.hstack([u, y]))
+
+
+def _ratio_db(ref, err, skip):
+    ref, err = ref[skip:], err[skip:]
+    ms_ref = np.mean(ref**2, axis=0)
+    ms_err = np.mean(err**2, axis=0)
+    with np.errstate(divide="ignore"):
+        per = 10 * np.log10(ms_ref / ms_err)
+        overall = -10 * np.log10(np.mean(ms_err / ms_ref))
+    return per, float(overall)
+
+
+def prediction_ratio_db(sys, u, y, K=None, Q=None, R=None, skip: int = 0) -> dict:
+    """One-step signal-to-prediction-error ratio [dB] (see the module docstring).
+
+    Returns ``{"per_channel": [dB per output], "overall": dB, "skip": skip}``.
+    """
+    u, y = _check_sizes(sys, u, y)
+    if not 0 <= skip < u.shape[0]:
+        raise DataError(f"skip={skip} leaves no samples of {u.shape[0]}")
+    yhat = one_step_predict(sys, u, y, K, Q, R)
+    per, overall = _ratio_db(y, y - yhat, skip)
+    return {"per_channel": per.tolist(), "overall": overall, "skip": int(skip)}
+
+
+def simulation_fit(sys, u, y_clean, skip: int = 0) -> dict:
+    """Open-loop simulation of ``sys`` from x0 = 0 against noise-free outputs.
+
+    Returns ``{"per_channel_db", "overall_db", "nrmse_percent"}`` (see module docstring).
+    """
+    u, y_clean = _check_sizes(sys, u, y_clean)
+    ysim = simulate(sys, u)
+    e = (y_clean - ysim)[skip:]
+    per, overall = _ratio_db(y_clean, y_clean - ysim, skip)
+    yc = y_clean[skip:]
+    nrmse = 100 * (1 - np.linalg.norm(e, axis=0) / np.linalg.norm(yc - yc.mean(axis=0), axis=0))
+    return {"per_channel_db": per.tolist(), "overall_db": overall,
+            "nrmse_percent": nrmse.tolist()}
+
+
+def modal_parameters(sys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Frequencies [Hz], damping ratios and s-plane poles of ``sys``, one per complex pair.
+
+    Poles with negative imaginary part are dropped (they mirror the kept ones); real poles
+    are kept. Sorted by frequency. Works for continuous and discrete models.
+    """
+    poles = np.linalg.eigvals(np.asarray(sys.A, dtype=float)) if sys.nstates else np.array([])
+    if control.isdtime(sys, strict=True):
+        z = np.where(np.abs(poles) < 1e-300, 1e-300, poles)
+        s = np.log(z.astype(complex)) / sys.dt
+    else:
+        s = poles.astype(complex)
+    s = s[s.imag >= -1e-12 * np.maximum(np.abs(s), 1)]
+    s = np.where(np.abs(s.imag) < 1e-12 * np.maximum(np.abs(s), 1), s.real + 0j, s)
+    wn = np.abs(s)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        zeta = np.where(wn > 0, -s.real / wn, 1.0)
+    order = np.argsort(wn, kind="stable")
+    return wn[order] / (2 * np.pi), zeta[order], s[order]
+
+
+def compare_poles(identified, truth) -> list[dict]:
+    """Match identified poles to true ones and list frequencies and damping side by side.
+
+    Returns one dict per true pole (sorted by true frequency) with ``true_frequency_hz``,
+    ``true_damping``, ``frequency_hz``, ``damping`` (None when unmatched: fewer identified
+    poles) and ``frequency_error_percent``; identified poles left over follow with the true
+    fields None.
+    """
+    fi, zi, si = modal_parameters(identified)
+    ft, zt, st = modal_parameters(truth)
+    rows = []
+    if si.size and st.size:
+        cost = np.abs(si[:, None] - st[None, :])
+        r, c = scipy.optimize.linear_sum_assignment(cost)
+        match = dict(zip(c.tolist(), r.tolist()))
+    else:
+        match = {}
+    for j in range(st.size):
+        i = match.get(j)
+        row = {"true_frequency_hz": float(ft[j]), "true_damping": float(zt[j]),
+               "frequency_hz": None, "damping": None, "frequency_error_percent": None}
+        if i is not None:
+            row.update(frequency_hz=float(fi[i]), damping=float(zi[i]),
+                       frequency_error_percent=float(100 * (fi[i] - ft[j]) / ft[j])
+                       if ft[j] > 0 else None)
+        rows.append(row)
+    used = set(match.values())
+    for i in range(si.size):
+        if i not in used:
+            rows.append({"true_frequency_hz": None, "true_damping": None,
+                         "frequency_hz": float(fi[i]), "damping": float(zi[i]),
+                         "frequency_error_percent": None})
+    return rows
+
+
+def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
+    """Magnitude [dB] and phase [deg] error of ``model`` against ``reference`` over a band.
+
+    Parameters
+    ----------
+    model : control.StateSpace
+    reference : control.StateSpace or FRF
+        The truth (a plant) or an estimate (e.g. H1) on its own frequency grid.
+    band : (float, float), optional
+        [Hz]; default the whole range (0, Nyquist) of the model (or of the FRF grid).
+    n_freq : int
+        Grid size when the reference is a model (a linear grid, plus the reference's modal
+        frequencies inside the band so that resonance peaks are not stepped over).
+
+    Returns
+    -------
+    dict with ``max_db``, ``rms_db``, ``max_deg``, ``rms_deg`` (overall, floats) and
+    ``per_channel`` {same keys: nested lists p x m}, ``band`` and ``n_freq``.
+    """
+    if isinstance(reference, FRF):
+        f = np.asarray(reference.f, dtype=float)
+        lo, hi = band if band is not None else (f.min(), f.max())
+        keep = (f >= lo) & (f <= hi) & (f > 0)
+        if not keep.any():
+            raise DataError(f"no reference frequency inside the band ({lo:g}, {hi:g}) Hz")
+        f, H_ref = f[keep], reference.H[keep]
+    else:
+        if (reference.ninputs, reference.noutputs) != (model.ninputs, model.noutputs):
+            raise DataError(f"the model has {model.ninputs} inputs and {model.noutputs} "
+                            f"outputs, the reference {reference.ninputs} and "
+                            f"{reference.noutputs}")
+        nyq = 0.5 / model.dt if control.isdtime(model, strict=True) else None
+        if band is None:
+            if nyq is None:
+                raise DataError("give a band for a continuous model")
+            band = (0.0, nyq)
+        lo, hi = (float(b) for b in band)
+        if not 0 <= lo < hi:
+            raise DataError(f"band ({lo:g}, {hi:g}) Hz must have 0 <= low < high")
+        if nyq is not None and hi > nyq * (1 + 1e-12):
+            raise DataError(f"band upper edge {hi:g} Hz is above the Nyquist frequency "
+                            f"{nyq:g} Hz")
+        grid = np.linspace(max(lo, 1e-9 * hi), hi * (1 - 1e-9), n_freq)
+        fr, _, _ = modal_parameters(reference)
+        f = np.unique(np.concatenate([grid, fr[(fr > lo) & (fr < hi)]]))
+        H_ref = frequency_response(reference, f)
+    if H_ref.shape[1:] != (model.noutputs, model.ninputs):
+        raise DataError(f"reference FRF is {H_ref.shape[1]} x {H_ref.shape[2]}, the model "
+                        f"{model.noutputs} x {model.ninputs}")
+    H = frequency_response(model, f)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mag = 20 * np.log10(np.abs(H)) - 20 * np.log10(np.abs(H_ref))
+        ph = np.degrees(np.angle(H / H_ref))
+    out = {"band": [float(f.min()), float(f.max())], "n_freq": int(f.size), "per_channel": {}}
+    for key, arr, fn in (("max_db", mag, lambda a: np.max(np.abs(a), axis=0)),
+                         ("rms_db", mag, lambda a: np.sqrt(np.mean(a**2, axis=0))),
+                         ("max_deg", ph, lambda a: np.max(np.abs(a), axis=0)),
+                         ("rms_deg", ph, lambda a: np.sqrt(np.mean(a**2, axis=0)))):
+        out["per_channel"][key] = fn(arr).tolist()
+    out["max_db"] = float(np.max(np.abs(mag)))
+    out["rms_db"] = float(np.sqrt(np.mean(mag**2)))
+    out["max_deg"] = float(np.max(np.abs(ph)))
+    out["rms_deg"] = float(np.sqrt(np.mean(ph**2)))
+    return out
+
+
+__all__ = ["predictor_gain", "default_noise_covariances", "one_step_predict",
+           "prediction_ratio_db", "simulation_fit", "modal_parameters", "compare_poles",
+           "frf_error"]
