@@ -1,0 +1,960 @@
+"""NASTRAN bulk data in and out, through pyNastran.
+
+:func:`read_bdf` maps a bulk-data deck onto a :class:`fem.Model` and reports, in a
+:class:`BdfInfo`, every choice that changes the answer (mass formulation, WTMASS, beam
+theory, SPC set, eigenvalue request, AUTOSPC). :func:`write_bdf` writes a model back as a
+deck that NASTRAN can run and that :func:`read_bdf` re-reads to the same model.
+
+The deck is parsed by pyNastran (``pyNastran.bdf.bdf.BDF``), so the card formats (small,
+large and free field, continuations, INCLUDE) are pyNastran's. pyNastran's own element
+matrices are not used: this module only translates cards into the model's arrays.
+
+Conventions that matter
+-----------------------
+* Units are the deck's: numbers are used as given, except that every mass (densities,
+  non-structural mass, CONM2 mass and inertia) is multiplied by ``PARAM,WTMASS``.
+* Mass formulation: NASTRAN's default is lumped mass; ``PARAM,COUPMASS`` > 0 selects the
+  coupled (consistent) mass.
+* PBAR/PBEAM ``I1`` is the second moment for bending in plane 1 (the element x-y plane, which
+  contains the orientation vector v), i.e. about the element z axis: ``Iz = I1``,
+  ``Iy = I2``. Shear areas are ``K1 A`` (along y) and ``K2 A`` (along z).
+* Shear flexibility follows NASTRAN: PBAR without K1/K2 has none (infinite shear area);
+  PBEAM has K1 = K2 = 1.0 by default (0.0 means none); PBARL/PBEAML compute shear
+  factors from the shape (here: the Cowper factors of :mod:`fem.sections`). The model is
+  Timoshenko when any element has a finite shear area, else Euler-Bernoulli.
+* CONM2 inertia: the deck gives I11, I21, I22, I31, I32, I33 with the products of inertia as
+  positive integrals (I21 = int x1 x2 dm); NASTRAN supplies the minus signs, so the tensor
+  is ``[[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]]`` (MSC/Autodesk QRG, CONM2
+  remark on the form of the inertia matrix).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections import defaultdict
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fem.errors import ModelError
+from fem.model import Model
+from fem.sections import Section
+
+#: Bulk-data cards :func:`read_bdf` translates.
+SUPPORTED_CARDS = frozenset({
+    "GRID", "CORD1R", "CORD2R", "CORD1C", "CORD2C", "CORD1S", "CORD2S",
+    "CBAR", "CBEAM", "CROD", "CONROD", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PTUBE",
+    "MAT1", "CONM2", "RBE2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH",
+    "SPC", "SPC1", "SPCADD", "EIGRL", "EIGR", "PARAM", "ENDDATA",
+})
+
+#: PARAMs read, and PARAMs that only steer output or solver book-keeping (no effect on the
+#: model or its modes), accepted and listed in :attr:`BdfInfo.ignored`.
+HANDLED_PARAMS = frozenset({"WTMASS", "COUPMASS", "AUTOSPC"})
+OUTPUT_PARAMS = frozenset({
+    "POST", "PRTMAXIM", "GRDPNT", "OGEOM", "NOCOMPS", "PATVER", "SRCOMPS", "EST", "OUGCORD",
+    "MAXRATIO", "BAILOUT", "NEWSEQ", "LMODES", "RESVEC", "PRGPST", "SEMAPPRT", "USETPRT",
+    "AUTOMSET", "DDRMM", "POSTEXT", "PRINT", "NASPRT", "SOLADJC",
+})
+
+#: PBARL/PBEAML shapes with a matching :class:`fem.sections.Section` constructor.
+SECTION_TYPES = ("ROD", "TUBE", "BAR", "BOX")
+
+
+@dataclass
+class EigenRequest:
+    """The deck's real-eigenvalue request (EIGRL or EIGR).
+
+    Attributes
+    ----------
+    card : str
+        "EIGRL" or "EIGR".
+    sid : int
+    n_modes : int or None
+        ND: number of modes wanted.
+    f_low, f_high : float or None
+        Frequency range [Hz in the deck's time unit] (EIGRL V1, V2; EIGR F1, F2).
+    """
+
+    card: str
+    sid: int
+    n_modes: int | None
+    f_low: float | None
+    f_high: float | None
+
+
+@dataclass
+class BdfInfo:
+    """What :func:`read_bdf` found and decided, for reports.
+
+    Attributes
+    ----------
+    path : str
+    wtmass : float
+        PARAM,WTMASS (1.0 when absent): the factor applied to every mass.
+    mass : {"consistent", "lumped"}
+        Mass formulation used.
+    mass_reason : str
+        Why (the PARAM,COUPMASS value, or NASTRAN's lumped default).
+    beam_theory : {"euler-bernoulli", "timoshenko"}
+    beam_theory_reason : str
+    eigen : EigenRequest or None
+        The eigenvalue request selected by the case control (METHOD), or the only one.
+    spc_sets : list of int or None
+        SPC set ids applied (after SPCADD expansion); ``None`` when the deck has none.
+    spc_reason : str
+    autospc : bool
+        Whether DOFs with neither stiffness nor mass should be removed (NASTRAN's AUTOSPC,
+        on by default in SOL 103; ``PARAM,AUTOSPC,NO`` turns it off).
+    autospc_reason : str
+    cards : dict of str to int
+        Bulk-data cards read, with counts.
+    ignored : list of str
+        Accepted entries without effect on the modes (e.g. ``"PARAM,POST"``).
+    notes : list of str
+        Other things a user should know (multiple subcases, enforced displacements...).
+    """
+
+    path: str
+    wtmass: float = 1.0
+    mass: str = "lumped"
+    mass_reason: str = ""
+    beam_theory: str = "euler-bernoulli"
+    beam_theory_reason: str = ""
+    eigen: EigenRequest | None = None
+    spc_sets: list | None = None
+    spc_reason: str = ""
+    autospc: bool = True
+    autospc_reason: str = ""
+    cards: dict = field(default_factory=dict)
+    ignored: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+
+# ======================================================================= reading
+def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[Model, BdfInfo]:
+    """Read a NASTRAN bulk-data deck into a :class:`fem.Model`.
+
+    Parameters
+    ----------
+    path : path-like
+        A deck (.bdf/.dat/.nas...), with or without executive and case control.
+    beam_theory : {"euler-bernoulli", "timoshenko"}, optional
+        Override the theory chosen from the shear factors (see the module notes).
+
+    Returns
+    -------
+    model : fem.Model
+        Nodes in the deck's basic coordinates, everything in the deck's units, masses
+        multiplied by WTMASS.
+    info : BdfInfo
+
+    Raises
+    ------
+    ModelError
+        A missing or unreadable file, any card this reader does not translate (all such
+        cards are listed with their counts), or a card it cannot translate faithfully
+        (offsets, pin flags, tapered beams, non-basic displacement systems...), naming the
+        card.
+    """
+    path = Path(path)
+    bdf = _parse(path)
+    info = BdfInfo(path=str(path), cards=dict(sorted(bdf.card_count.items())))
+    _check_cards(bdf, path, info)
+    _read_params(bdf, info)
+
+    node_ids, xyz = _nodes(bdf)
+    nodes = _NodeTable(node_ids, xyz)
+    mats = _materials(bdf, info.wtmass)
+    props = _properties(bdf, mats, info.wtmass)
+
+    if beam_theory is None:
+        shear = sorted({p.label for p in props.values() if p.shear})
+        if shear:
+            info.beam_theory = "timoshenko"
+            info.beam_theory_reason = (f"shear flexibility given by {', '.join(shear[:5])}"
+                                       f"{' ...' if len(shear) > 5 else ''} (NASTRAN includes it)")
+        else:
+            info.beam_theory = "euler-bernoulli"
+            info.beam_theory_reason = "no property gives shear flexibility"
+    else:
+        info.beam_theory = beam_theory
+        info.beam_theory_reason = "requested by the caller"
+
+    model = Model(beam_theory=info.beam_theory, mass=info.mass, name=path.stem)
+    model.add_nodes(node_ids, xyz)
+    _add_bars(bdf, model, nodes, props)
+    _add_rods(bdf, model, nodes, props, mats, info.wtmass)
+    _add_masses(bdf, model, nodes, info.wtmass)
+    _add_springs(bdf, model, nodes)
+    _add_rigid(bdf, model, nodes)
+    _add_spcs(bdf, model, nodes, info)
+    _select_eigen(bdf, info)
+    return model, info
+
+
+def _parse(path: Path):
+    """pyNastran's BDF of ``path``, quietly; any failure becomes a one-line ModelError."""
+    from cpylog import SimpleLogger
+    from pyNastran.bdf.bdf import BDF
+
+    if not path.exists():
+        raise ModelError(f"{path}: no such file")
+    if path.is_dir():
+        raise ModelError(f"{path}: is a directory, not a bulk-data file")
+    try:
+        text = path.read_text(errors="replace")
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read ({exc.strerror})") from None
+    # Without executive/case control pyNastran must be told the file is bulk data only.
+    punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, re.IGNORECASE | re.MULTILINE) is None
+    bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
+    try:
+        bdf.read_bdf(str(path), xref=False, validate=False, punch=punch)
+    except Exception as exc:  # pyNastran raises many types for malformed decks
+        msg = " ".join(str(exc).split())[:300] or type(exc).__name__
+        raise ModelError(f"{path}: not a readable bulk-data deck ({msg})") from None
+    if not bdf.card_count:
+        raise ModelError(f"{path}: no bulk-data cards found")
+    return bdf
+
+
+def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
+    """Every card must be translated or known to be harmless: list all the others."""
+    bad = {name: n for name, n in bdf.card_count.items() if name not in SUPPORTED_CARDS}
+    for name in sorted(bdf.params):
+        if name in OUTPUT_PARAMS:
+            info.ignored.append(f"PARAM,{name}")
+        elif name not in HANDLED_PARAMS:
+            bad[f"PARAM,{name}"] = 1
+    if bad:
+        listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items()))
+        raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
+                         f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")
+
+
+def _param(bdf, name):
+    p = bdf.params.get(name)
+    if p is None:
+        return None
+    return p.values[0]
+
+
+def _read_params(bdf, info: BdfInfo) -> None:
+    wt = _param(bdf, "WTMASS")
+    if wt is not None:
+        if not (isinstance(wt, (int, float)) and math.isfinite(wt) and wt > 0):
+            raise ModelError(f"PARAM,WTMASS must be a positive number, got {wt!r}")
+        info.wtmass = float(wt)
+    cm = _param(bdf, "COUPMASS")
+    if cm is None:
+        info.mass = "lumped"
+        info.mass_reason = "PARAM,COUPMASS absent: NASTRAN's default lumped mass"
+    else:
+        if not isinstance(cm, (int, float)):
+            raise ModelError(f"PARAM,COUPMASS must be a number, got {cm!r}")
+        info.mass = "consistent" if cm > 0 else "lumped"
+        info.mass_reason = f"PARAM,COUPMASS,{cm} ({'> 0: coupled' if cm > 0 else '<= 0: lumped'} mass)"
+    auto = _param(bdf, "AUTOSPC")
+    if auto is None:
+        info.autospc, info.autospc_reason = True, "NASTRAN's default (AUTOSPC=YES in SOL 103)"
+    else:
+        value = str(auto).strip().upper()
+        if value not in ("YES", "NO"):
+            raise ModelError(f"PARAM,AUTOSPC must be YES or NO, got {auto!r}")
+        info.autospc, info.autospc_reason = value == "YES", f"PARAM,AUTOSPC,{value}"
+
+
+class _NodeTable:
+    """Node id -> index and coordinates, with lookups that name the referring card."""
+
+    def __init__(self, ids: np.ndarray, xyz: np.ndarray):
+        self.ids, self.xyz = ids, xyz
+        self.order = np.argsort(ids, kind="stable")
+        self.sorted = ids[self.order]
+
+    def index(self, ids, card: str, eids) -> np.ndarray:
+        ids = np.asarray(ids, dtype=np.int64)
+        pos = np.searchsorted(self.sorted, ids.ravel())
+        pos_c = np.minimum(pos, len(self.sorted) - 1)
+        ok = self.sorted[pos_c] == ids.ravel()
+        if not ok.all():
+            i = int(np.flatnonzero(~ok)[0])
+            eid = np.broadcast_to(np.asarray(eids)[:, None] if ids.ndim == 2 else np.asarray(eids),
+                                  ids.shape).ravel()[i]
+            raise ModelError(f"{card} {eid}: grid {ids.ravel()[i]} is not defined")
+        return self.order[pos_c].reshape(ids.shape)
+
+    def coords(self, ids, card: str, eids) -> np.ndarray:
+        return self.xyz[self.index(ids, card, eids)]
+
+
+def _nodes(bdf) -> tuple[np.ndarray, np.ndarray]:
+    """GRID ids and basic coordinates (CP systems resolved by pyNastran)."""
+    if not bdf.nodes:
+        raise ModelError("the deck has no GRID cards")
+    ids = np.fromiter(bdf.nodes.keys(), dtype=np.int64, count=len(bdf.nodes))
+    cd = np.fromiter((g.cd for g in bdf.nodes.values()), dtype=np.int64, count=len(ids))
+    if (cd != 0).any():
+        bad = ids[cd != 0]
+        raise ModelError(f"GRID {bad[0]}: displacement coordinate system CD={cd[cd != 0][0]} is not "
+                         f"supported (only the basic system, CD blank or 0)"
+                         + (f"; also grids {', '.join(map(str, bad[1:6]))}" if len(bad) > 1 else ""))
+    seid = [g.nid for g in bdf.nodes.values() if getattr(g, "seid", 0)]
+    if seid:
+        raise ModelError(f"GRID {seid[0]}: superelements (SEID) are not supported")
+    cp = np.fromiter((g.cp for g in bdf.nodes.values()), dtype=np.int64, count=len(ids))
+    for nid, c in zip(ids[cp != 0], cp[cp != 0]):
+        if c not in bdf.coords:
+            raise ModelError(f"GRID {nid}: coordinate system CP={c} is not defined")
+    try:
+        if len(bdf.coords) > 1:  # resolve coordinate systems defined relative to others
+            bdf.cross_reference(xref=True, xref_nodes=True, xref_elements=False, xref_properties=False,
+                                xref_masses=False, xref_materials=False, xref_loads=False,
+                                xref_constraints=False, xref_aero=False, xref_sets=False,
+                                xref_optimization=False)
+    except Exception as exc:
+        raise ModelError(f"cannot resolve coordinate systems: {' '.join(str(exc).split())[:200]}") from None
+    if not (cp != 0).any():
+        return ids, np.array([g.xyz for g in bdf.nodes.values()], dtype=float).reshape(-1, 3)
+    try:
+        _icd, icp, xyz_cp, nid_cp_cd = bdf.get_displacement_index_xyz_cp_cd()
+        xyz = bdf.transform_xyzcp_to_xyz_cid(xyz_cp, nid_cp_cd[:, 0], icp, cid=0)
+    except Exception as exc:
+        raise ModelError(f"cannot resolve grid coordinate systems: {' '.join(str(exc).split())[:200]}") from None
+    order = {int(n): i for i, n in enumerate(nid_cp_cd[:, 0])}
+    return ids, np.asarray(xyz, float)[[order[int(n)] for n in ids]]
+
+
+def _materials(bdf, wtmass: float) -> dict:
+    """MAT1 id -> dict(E, G, nu, rho); NASTRAN's rule for a blank E, G or NU is pyNastran's."""
+    mats = {}
+    for mid, mat in bdf.materials.items():
+        # pyNastran applies the MAT1 rule when it reads the card: one blank of E, G, NU is
+        # computed from E = 2 (1 + NU) G; E (or G) alone gives the others 0.0.
+        mats[mid] = {"E": float(mat.e or 0.0), "G": float(mat.g or 0.0), "nu": float(mat.nu or 0.0),
+                     "rho": float(mat.rho or 0.0) * wtmass, "label": f"MAT1 {mid}"}
+    return mats
+
+
+@dataclass
+class _Prop:
+    """A line property resolved to section arrays, material and mass per length."""
+
+    label: str
+    kind: str  # "bar" (bending) or "rod"
+    section: dict
+    mat: dict
+    nsm: float
+    shear: bool
+
+
+def _material(mats: dict, mid: int, label: str) -> dict:
+    if mid not in mats:
+        raise ModelError(f"{label}: material {mid} is not defined (MAT1 expected)")
+    return mats[mid]
+
+
+def _section_from_shape(shape: str, dims, nu: float, label: str) -> Section:
+    """A :class:`Section` for a PBARL/PBEAML shape.
+
+    NASTRAN's element axes for these shapes (QRG PBARL figure, and pyNastran's I1/I2): DIM1
+    runs along element z, DIM2 along element y, so for BAR ``I1 = Izz = DIM1 DIM2^3 / 12``.
+    """
+    d = [float(x) for x in dims]
+    need = {"ROD": 1, "TUBE": 2, "BAR": 2, "BOX": 4}[shape]
+    if len(d) < need:
+        raise ModelError(f"{label}: {shape} needs {need} dimensions, got {len(d)}")
+    if shape == "ROD":
+        return Section.circle(d[0], nu=nu, name=label)
+    if shape == "TUBE":
+        if not d[1] < d[0]:
+            raise ModelError(f"{label}: TUBE inner radius DIM2={d[1]:g} must be less than the outer "
+                             f"radius DIM1={d[0]:g}")
+        return Section.tube(d[0], d[0] - d[1], nu=nu, name=label)
+    if shape == "BAR":
+        return Section.rectangle(b=d[1], h=d[0], nu=nu, name=label)
+    if d[2] != d[3]:
+        raise ModelError(f"{label}: BOX with unequal wall thicknesses (DIM3={d[2]:g}, DIM4={d[3]:g}) "
+                         f"is not supported")
+    return Section.box(b=d[1], h=d[0], t=d[2], nu=nu, name=label)
+
+
+def _sec(A, Iy, Iz, J, Asy=math.inf, Asz=math.inf) -> dict:
+    return {"A": float(A), "Iy": float(Iy), "Iz": float(Iz), "J": float(J),
+            "Asy": float(Asy), "Asz": float(Asz)}
+
+
+def _properties(bdf, mats: dict, wtmass: float) -> dict:
+    props = {}
+    for pid, p in bdf.properties.items():
+        label = f"{p.type} {pid}"
+        if p.type in ("PELAS", "PBUSH"):
+            continue
+        full = _material(mats, p.mid, label)
+        mat = {k: full[k] for k in ("E", "G", "rho")}
+        if p.type == "PBAR":
+            if p.i12:
+                raise ModelError(f"{label}: I12 = {p.i12:g} (non-principal axes) is not supported")
+            # NASTRAN: K1/K2 blank means no shear flexibility; pyNastran stores blank as 1e8.
+            k1 = math.inf if p.k1 is None or p.k1 >= 1e8 or p.k1 == 0 else p.k1
+            k2 = math.inf if p.k2 is None or p.k2 >= 1e8 or p.k2 == 0 else p.k2
+            sec = _sec(p.A, p.i2, p.i1, p.j, k1 * p.A, k2 * p.A)
+            props[pid] = _Prop(label, "bar", sec, mat, float(p.nsm) * wtmass,
+                               math.isfinite(k1) or math.isfinite(k2))
+        elif p.type == "PBEAM":
+            for key in ("A", "i1", "i2", "j", "nsm"):
+                v = np.asarray(getattr(p, key), float)
+                if (v != v[0]).any():
+                    raise ModelError(f"{label}: tapered beam ({key} varies along the element) is not "
+                                     f"supported; give a constant section")
+            if np.any(np.asarray(p.i12, float) != 0):
+                raise ModelError(f"{label}: I12 (non-principal axes) is not supported")
+            for key in ("m1a", "m2a", "m1b", "m2b", "n1a", "n2a", "n1b", "n2b", "nsia", "nsib",
+                        "cwa", "cwb"):
+                if getattr(p, key, 0.0) not in (None, 0.0):
+                    raise ModelError(f"{label}: {key.upper()} = {getattr(p, key):g} is not supported "
+                                     f"(offsets, non-structural inertia and warping must be 0)")
+            # PBEAM: K default 1.0; K = 0.0 means no shear flexibility.
+            k1 = math.inf if not p.k1 else p.k1
+            k2 = math.inf if not p.k2 else p.k2
+            A = float(p.A[0])
+            sec = _sec(A, p.i2[0], p.i1[0], p.j[0], k1 * A, k2 * A)
+            props[pid] = _Prop(label, "bar", sec, mat, float(p.nsm[0]) * wtmass,
+                               math.isfinite(k1) or math.isfinite(k2))
+        elif p.type in ("PBARL", "PBEAML"):
+            shape = str(p.beam_type).strip().upper()
+            if shape not in SECTION_TYPES:
+                raise ModelError(f"{label}: section type {shape} is not supported "
+                                 f"(supported: {', '.join(SECTION_TYPES)})")
+            if p.type == "PBEAML":
+                dims = np.atleast_2d(np.asarray(p.dim, float))
+                nsm = np.atleast_1d(np.asarray(p.nsm, float))
+                if (dims != dims[0]).any() or (nsm != nsm[0]).any():
+                    raise ModelError(f"{label}: tapered beam (dimensions vary along the element) is "
+                                     f"not supported; give a constant section")
+                dims, nsm = dims[0], float(nsm[0])
+            else:
+                dims, nsm = p.dim, float(p.nsm or 0.0)
+            s = _section_from_shape(shape, dims, _nu_for_shear(full), label)
+            props[pid] = _Prop(label, "bar", _sec(s.A, s.Iy, s.Iz, s.J, s.Asy, s.Asz), mat,
+                               nsm * wtmass, True)
+        elif p.type == "PROD":
+            props[pid] = _Prop(label, "rod", _rod_sec(p.A, p.j), mat, float(p.nsm) * wtmass, False)
+        elif p.type == "PTUBE":
+            if p.OD2 is not None and p.OD2 != p.OD1:
+                raise ModelError(f"{label}: tapered tube (OD2 != OD1) is not supported")
+            r = p.OD1 / 2.0
+            t = p.t if p.t else r
+            s = Section.circle(r, name=label) if t >= r else Section.tube(r, t, name=label)
+            props[pid] = _Prop(label, "rod", _rod_sec(s.A, s.J), mat, float(p.nsm) * wtmass, False)
+    return props
+
+
+def _nu_for_shear(mat: dict) -> float:
+    # Cowper's shear factors need Poisson's ratio; MAT1 with E alone has NU = 0.
+    nu = mat["nu"]
+    return nu if -1.0 < nu < 0.5 else 0.3
+
+
+def _rod_sec(A, J) -> dict:
+    # Rods have no bending: Iy, Iz are placeholders the element ignores for rods.
+    return _sec(A, 1.0, 1.0, J or 0.0)
+
+
+def _group(items, key):
+    groups = defaultdict(list)
+    for item in items:
+        groups[key(item)].append(item)
+    return groups
+
+
+def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
+    """CBAR and CBEAM: one add_beams call per property."""
+    elems = [e for e in bdf.elements.values() if e.type in ("CBAR", "CBEAM")]
+    for e in elems:
+        card = f"{e.type} {e.eid}"
+        if e.pa or e.pb:
+            raise ModelError(f"{card}: pin flags PA={e.pa or ''} PB={e.pb or ''} are not supported")
+        if np.any(np.asarray(e.wa, float) != 0) or np.any(np.asarray(e.wb, float) != 0):
+            raise ModelError(f"{card}: offsets WA={list(e.wa)} WB={list(e.wb)} are not supported "
+                             f"(give the grids at the neutral axis)")
+        if e.type == "CBEAM" and (getattr(e, "sa", 0) or getattr(e, "sb", 0)):
+            raise ModelError(f"{card}: warping scalar points SA/SB are not supported")
+        if getattr(e, "bit", None) is not None:
+            raise ModelError(f"{card}: BIT (beam-in-time orientation) is not supported")
+        if e.pid not in props:
+            raise ModelError(f"{card}: property {e.pid} is not defined")
+        if props[e.pid].kind != "bar":
+            raise ModelError(f"{card}: property {e.pid} is a {props[e.pid].label.split()[0]}, "
+                             f"not a bar/beam property")
+    for pid, group in _group(elems, lambda e: e.pid).items():
+        prop = props[pid]
+        eids = np.array([e.eid for e in group], dtype=np.int64)
+        ends = np.array([[e.ga, e.gb] if e.type == "CBAR" else e.nodes for e in group], dtype=np.int64)
+        card = group[0].type
+        xyz = nodes.coords(ends, card, eids)
+        g0 = np.array([e.g0 if e.g0 not in (None, 0) else -1 for e in group], dtype=np.int64)
+        orient = np.array([[np.nan] * 3 if e.x is None or e.x[0] is None else e.x for e in group],
+                          dtype=float)
+        use_g0 = g0 >= 0
+        if use_g0.any():
+            orient[use_g0] = nodes.coords(g0[use_g0], card, eids[use_g0]) - xyz[use_g0, 0]
+        bad = ~np.isfinite(orient).all(axis=1)
+        if bad.any():
+            raise ModelError(f"{card} {eids[bad][0]}: no orientation (give X1-X3 or G0)")
+        model.add_beams(eids, ends, prop.section, prop.mat, orient, nsm=prop.nsm, rod=False,
+                        label=prop.label)
+
+
+def _add_rods(bdf, model: Model, nodes: _NodeTable, props: dict, mats: dict, wtmass: float) -> None:
+    """CROD (one call per property) and CONROD (one call with per-element arrays)."""
+    crods = [e for e in bdf.elements.values() if e.type == "CROD"]
+    for e in crods:
+        if e.pid not in props:
+            raise ModelError(f"CROD {e.eid}: property {e.pid} is not defined")
+        if props[e.pid].kind != "rod":
+            raise ModelError(f"CROD {e.eid}: property {e.pid} is not a PROD or PTUBE")
+    for pid, group in _group(crods, lambda e: e.pid).items():
+        prop = props[pid]
+        eids = np.array([e.eid for e in group], dtype=np.int64)
+        ends = np.array([e.nodes for e in group], dtype=np.int64)
+        nodes.index(ends, "CROD", eids)
+        model.add_beams(eids, ends, prop.section, prop.mat, [1.0, 0.0, 0.0], nsm=prop.nsm,
+                        rod=True, label=prop.label)
+    conrods = [e for e in bdf.elements.values() if e.type == "CONROD"]
+    if conrods:
+        eids = np.array([e.eid for e in conrods], dtype=np.int64)
+        ends = np.array([e.nodes for e in conrods], dtype=np.int64)
+        nodes.index(ends, "CONROD", eids)
+        m = [_material(mats, e.mid, f"CONROD {e.eid}") for e in conrods]
+        sec = {"A": [e.A for e in conrods], "Iy": 1.0, "Iz": 1.0, "J": [e.j or 0.0 for e in conrods],
+               "Asy": math.inf, "Asz": math.inf}
+        mat = {k: [mi[k] for mi in m] for k in ("E", "G", "rho")}
+        nsm = np.array([e.nsm or 0.0 for e in conrods]) * wtmass
+        model.add_beams(eids, ends, {k: np.broadcast_to(np.asarray(v, float), (len(eids),))
+                                     for k, v in sec.items()},
+                        mat, [1.0, 0.0, 0.0], nsm=nsm, rod=True, label="CONROD")
+
+
+def _rect_frame(bdf, cid: int, card: str) -> np.ndarray:
+    """Rows = axes of rectangular coordinate system ``cid`` in basic coordinates."""
+    if cid == 0:
+        return np.eye(3)
+    if cid not in bdf.coords:
+        raise ModelError(f"{card}: coordinate system {cid} is not defined")
+    coord = bdf.coords[cid]
+    if coord.Type != "R":
+        raise ModelError(f"{card}: coordinate system {cid} is not rectangular (only CORD1R/CORD2R "
+                         f"are supported here)")
+    return np.vstack([coord.i, coord.j, coord.k]).astype(float)
+
+
+def _add_masses(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
+    """CONM2: mass, cg offset and inertia tensor (minus signs on I21, I31, I32), times WTMASS."""
+    conm2 = [m for m in bdf.masses.values() if m.type == "CONM2"]
+    if not conm2:
+        return
+    eids = np.array([m.eid for m in conm2], dtype=np.int64)
+    nids = np.array([m.nid for m in conm2], dtype=np.int64)
+    xyz = nodes.coords(nids, "CONM2", eids)
+    mass = np.array([m.mass for m in conm2], dtype=float)
+    X = np.array([m.X for m in conm2], dtype=float)
+    I = np.array([m.I for m in conm2], dtype=float)  # I11, I21, I22, I31, I32, I33
+    tensor = np.empty((len(conm2), 3, 3))
+    tensor[:, 0, 0], tensor[:, 1, 1], tensor[:, 2, 2] = I[:, 0], I[:, 2], I[:, 5]
+    tensor[:, 0, 1] = tensor[:, 1, 0] = -I[:, 1]
+    tensor[:, 0, 2] = tensor[:, 2, 0] = -I[:, 3]
+    tensor[:, 1, 2] = tensor[:, 2, 1] = -I[:, 4]
+    cid = np.array([m.cid for m in conm2], dtype=np.int64)
+    offset = X.copy()
+    absolute = cid == -1  # X is the cg in basic coordinates
+    offset[absolute] = X[absolute] - xyz[absolute]
+    for i in np.flatnonzero(cid > 0):
+        R = _rect_frame(bdf, int(cid[i]), f"CONM2 {eids[i]}")
+        offset[i] = R.T @ X[i]
+        tensor[i] = R.T @ tensor[i] @ R
+    bad = mass < 0
+    if bad.any():
+        raise ModelError(f"CONM2 {eids[bad][0]}: mass must be >= 0, got {mass[bad][0]:g}")
+    model.add_point_masses(nids, mass * wtmass, inertia=tensor * wtmass, offset=offset)
+
+
+def _add_springs(bdf, model: Model, nodes: _NodeTable) -> None:
+    """CELAS1/CELAS2 (one component, C1 == C2) and CBUSH/PBUSH, in one add_springs call each."""
+    ids, pairs, ks = [], [], []
+    for e in bdf.elements.values():
+        if e.type not in ("CELAS1", "CELAS2"):
+            continue
+        card = f"{e.type} {e.eid}"
+        if e.type == "CELAS1":
+            p = bdf.properties.get(e.pid)
+            if p is None or p.type != "PELAS":
+                raise ModelError(f"{card}: property {e.pid} is not a defined PELAS")
+            k = float(p.k)
+        else:
+            k = float(e.k)
+        g1, g2 = (n or 0 for n in e.nodes)
+        c1, c2 = e.c1 or 0, e.c2 or 0
+        if g1 == 0 and g2 == 0:
+            raise ModelError(f"{card}: no grid given")
+        if g1 == 0:  # grounded at its first end: swap
+            g1, g2, c1, c2 = g2, g1, c2, c1
+        if c1 == 0 or (g2 != 0 and c2 == 0):
+            raise ModelError(f"{card}: scalar points (component 0) are not supported")
+        if g2 != 0 and c1 != c2:
+            raise ModelError(f"{card}: couples component {c1} of grid {g1} with component {c2} of grid "
+                             f"{g2}; only equal components are supported")
+        if g2 == g1:
+            raise ModelError(f"{card}: both ends are grid {g1}")
+        kv = np.zeros(6)
+        kv[c1 - 1] = k
+        if k < 0:
+            raise ModelError(f"{card}: negative stiffness {k:g} is not supported")
+        ids.append(e.eid)
+        pairs.append([g1, g2 if g2 else -1])
+        ks.append(kv)
+    if ids:
+        ids_a = np.array(ids, dtype=np.int64)
+        pairs_a = np.array(pairs, dtype=np.int64)
+        nodes.index(pairs_a[:, 0], "spring", ids_a)
+        two = pairs_a[:, 1] >= 0
+        nodes.index(pairs_a[two, 1], "spring", ids_a[two])
+        model.add_springs(ids_a, pairs_a, np.array(ks))
+    _add_bushes(bdf, model, nodes)
+
+
+def _add_bushes(bdf, model: Model, nodes: _NodeTable) -> None:
+    bushes = [e for e in bdf.elements.values() if e.type == "CBUSH"]
+    if not bushes:
+        return
+    ids, pairs, ks, frames = [], [], [], []
+    for e in bushes:
+        card = f"CBUSH {e.eid}"
+        p = bdf.properties.get(e.pid)
+        if p is None or p.type != "PBUSH":
+            raise ModelError(f"{card}: property {e.pid} is not a defined PBUSH")
+        if "K" not in p.vars:
+            raise ModelError(f"PBUSH {p.pid}: no K stiffness line")
+        k = np.array([0.0 if v is None else float(v) for v in (list(p.Ki) + [None] * 6)[:6]])
+        ga, gb = e.nodes[0], e.nodes[1] if len(e.nodes) > 1 else None
+        xa = nodes.coords([ga], "CBUSH", [e.eid])[0]
+        xb = nodes.coords([gb], "CBUSH", [e.eid])[0] if gb else xa
+        d = xb - xa
+        L = float(np.linalg.norm(d))
+        coincident = L <= 1e-9 * max(1.0, float(np.abs(nodes.xyz).max()))
+        if e.cid is not None and e.cid >= 0:
+            frame = _rect_frame(bdf, int(e.cid), card)
+        elif coincident:
+            raise ModelError(f"{card}: element axes undefined (grounded or coincident grids need CID)")
+        else:
+            if e.g0 not in (None, 0):
+                v = nodes.coords([e.g0], "CBUSH", [e.eid])[0] - xa
+            elif e.x is not None and e.x[0] is not None:
+                v = np.asarray(e.x, float)
+            else:
+                raise ModelError(f"{card}: no orientation (give X1-X3, G0 or CID)")
+            x = d / L
+            z = np.cross(x, v)
+            if np.linalg.norm(z) <= 1e-9 * np.linalg.norm(v):
+                raise ModelError(f"{card}: orientation vector is parallel to GA-GB")
+            z /= np.linalg.norm(z)
+            frame = np.vstack([x, np.cross(z, x), z])
+        if not coincident:
+            # NASTRAN puts the spring at a point on GA-GB joined rigidly to both grids, so a
+            # translational stiffness across that line also transmits a moment (lever arm);
+            # the model's springs act between the grids' own DOFs and cannot represent that.
+            across = np.linalg.norm(np.cross(frame, d / L), axis=1) > 1e-9
+            if (across & (k[:3] != 0)).any():
+                raise ModelError(f"{card}: translational stiffness across the line between non-"
+                                 f"coincident grids {ga} and {gb} (lever-arm coupling) is not "
+                                 f"supported; make the grids coincident")
+        ids.append(e.eid)
+        pairs.append([ga, gb if gb else -1])
+        ks.append(k)
+        frames.append(frame)
+    model.add_springs(np.array(ids, dtype=np.int64), np.array(pairs, dtype=np.int64), np.array(ks),
+                      frame=np.array(frames))
+
+
+def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
+    for eid, e in sorted(bdf.rigid_elements.items()):
+        if e.type != "RBE2":
+            raise ModelError(f"{e.type} {eid}: not supported")
+        nodes.index([e.gn], "RBE2", [eid])
+        nodes.index(np.asarray(e.Gmi, dtype=np.int64), "RBE2", [eid] * len(e.Gmi))
+        model.add_rigid_body(eid, e.gn, e.Gmi, dofs=str(e.cm), mass=0.0, label=f"RBE2 {eid}")
+
+
+def _case_values(bdf, key: str) -> list:
+    """Values of case-control ``key`` (e.g. "SPC", "METHOD") over the subcases, in order."""
+    deck = getattr(bdf, "case_control_deck", None)
+    if deck is None:
+        return []
+    values = []
+    for sid in sorted(deck.subcases):
+        sub = deck.subcases[sid]
+        if sub.has_parameter(key)[0]:
+            value = sub.get_parameter(key)[0]
+            if value not in values:
+                values.append(value)
+    return values
+
+
+def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
+    """SPC/SPC1 (through SPCADD) of the case control's SPC set, else of all sets; GRID PS."""
+    all_sets = set(bdf.spcs) | set(bdf.spcadds)
+    chosen = _case_values(bdf, "SPC")
+    if chosen:
+        if len(chosen) > 1:
+            info.notes.append(f"subcases select different SPC sets {chosen}; using the first, {chosen[0]}")
+        top = int(chosen[0])
+        if top not in all_sets:
+            raise ModelError(f"case control SPC = {top}, but no SPC, SPC1 or SPCADD has set {top}")
+        info.spc_reason = f"SPC = {top} in the case control"
+        roots = [top]
+    elif all_sets:
+        roots = sorted(all_sets)
+        info.spc_reason = "no SPC request in the case control: all SPC sets applied"
+    else:
+        roots = []
+        info.spc_reason = "no SPC cards"
+    used = []
+    stack = list(roots)
+    while stack:
+        sid = stack.pop()
+        if sid in used:
+            continue
+        used.append(sid)
+        for add in bdf.spcadds.get(sid, []):
+            for s in add.sets:
+                if s not in all_sets:
+                    raise ModelError(f"SPCADD {sid}: SPC set {s} is not defined")
+                stack.append(s)
+    info.spc_sets = sorted(used) if used else None
+    by_comp = defaultdict(list)
+    for sid in used:
+        for c in bdf.spcs.get(sid, []):
+            if c.type == "SPC1":
+                by_comp[str(c.components)].append(np.asarray(c.nodes, dtype=np.int64))
+            elif c.type == "SPC":
+                for nid, comp, d in zip(c.nodes, c.components, c.enforced):
+                    if d:
+                        info.notes.append(f"SPC {sid}: enforced displacement {d:g} at grid {nid} "
+                                          f"(irrelevant to modes) treated as a support")
+                    by_comp[str(comp)].append(np.array([nid], dtype=np.int64))
+            else:
+                raise ModelError(f"{c.type} {sid}: not supported")
+    for g in bdf.nodes.values():
+        if g.ps:
+            by_comp[str(g.ps)].append(np.array([g.nid], dtype=np.int64))
+    for comp, chunks in sorted(by_comp.items()):
+        ids = np.concatenate(chunks)
+        nodes.index(ids, "SPC set with components", np.full(len(ids), comp))
+        if comp.strip("0") == "":
+            continue
+        model.fix(np.unique(ids), comp.replace("0", ""))
+
+
+def _select_eigen(bdf, info: BdfInfo) -> None:
+    methods = {sid: m for sid, m in bdf.methods.items() if m.type in ("EIGRL", "EIGR")}
+    chosen = _case_values(bdf, "METHOD")
+    if chosen:
+        sid = int(chosen[0])
+        if sid not in methods:
+            raise ModelError(f"case control METHOD = {sid}, but no EIGRL or EIGR has SID {sid}")
+        if len(chosen) > 1:
+            info.notes.append(f"subcases select different METHODs {chosen}; using the first, {sid}")
+    elif methods:
+        sid = min(methods)
+        if len(methods) > 1:
+            info.notes.append(f"several eigenvalue requests and no METHOD in the case control; using {sid}")
+    else:
+        return
+    m = methods[sid]
+    if m.type == "EIGRL":
+        info.eigen = EigenRequest("EIGRL", sid, m.nd, m.v1, m.v2)
+    else:
+        info.eigen = EigenRequest("EIGR", sid, m.nd or m.ne, m.f1, m.f2)
+
+
+# ======================================================================= writing
+def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
+              title: str | None = None) -> None:
+    """Write ``model`` as a runnable SOL 103 NASTRAN deck.
+
+    Parameters
+    ----------
+    model : fem.Model
+    path : path-like
+        Output deck; written atomically (no partial file on error).
+    n_modes : int or None
+        ND of the EIGRL written (with METHOD in the case control); None writes no EIGRL.
+    title : str, optional
+        Case-control TITLE (default: the model's name).
+
+    Notes
+    -----
+    Cards written: GRID; CBAR + PBAR (``I1 = Iz``, ``I2 = Iy``, K1/K2 = shear areas / A only
+    for a Timoshenko model, blank otherwise) or CROD + PROD for rods; MAT1 (E, G, RHO; NU
+    left blank so NASTRAN derives it); CONM2 (mass, offset and inertia about the cg, products
+    of inertia with NASTRAN's sign); CELAS2 per nonzero component of springs in global axes,
+    CBUSH + PBUSH with a CORD2R for springs in other axes (grounded or between coincident
+    grids only: elsewhere NASTRAN adds a lever arm the model's spring does not have); RBE2
+    (a rigid body's mass as a CONM2 at its master, CID = 0, offset to its cg); SPC1 (set 1);
+    PARAM,COUPMASS (1 consistent, -1 lumped); EIGRL. Element ids that clash across kinds are
+    renumbered above the largest id. Values are written in 16-character fields so that a
+    re-read model matches to about 1e-14.
+    """
+    from cpylog import SimpleLogger
+    from pyNastran.bdf.bdf import BDF
+    from pyNastran.bdf.case_control_deck import CaseControlDeck
+
+    from trussid.files import atomic_path
+
+    bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
+    ids, xyz = model.node_ids, model.xyz
+    if len(ids) == 0:
+        raise ModelError("write_bdf: the model has no nodes")
+    for nid, x in zip(ids.tolist(), xyz):
+        bdf.add_grid(nid, x.tolist())
+
+    used_eids: set[int] = set()
+    next_id = [0]
+    beams = model.beams
+    all_ids = [beams.ids, model.springs.ids, np.array([b.id for b in model.rigid_bodies], dtype=np.int64)]
+    next_id[0] = int(max([a.max() for a in all_ids if len(a)] + [0])) + 1
+
+    def eid_for(wanted: int) -> int:
+        if wanted > 0 and wanted not in used_eids:
+            used_eids.add(wanted)
+            return wanted
+        new = next_id[0]
+        next_id[0] += 1
+        used_eids.add(new)
+        return new
+
+    _write_beams(bdf, model, eid_for)
+    _write_masses(bdf, model, eid_for)
+    _write_springs(bdf, model, eid_for)
+    _write_rigid(bdf, model, eid_for)
+
+    fixed = model.fixed_mask() if model.has_supports else np.zeros((len(ids), 6), bool)
+    has_spc = bool(fixed.any())
+    if has_spc:
+        codes = np.array(["".join(str(k + 1) for k in np.flatnonzero(row)) for row in fixed])
+        for comp in sorted(set(codes) - {""}):
+            bdf.add_spc1(1, comp, ids[codes == comp].tolist())
+    bdf.add_param("COUPMASS", [1 if model.mass_formulation == "consistent" else -1])
+    if n_modes:
+        bdf.add_eigrl(1, nd=int(n_modes))
+
+    bdf.sol = 103
+    bdf.executive_control_lines = ["SOL 103", "CEND"]
+    lines = [f"TITLE = {title or model.name}", "ECHO = NONE", "SUBCASE 1"]
+    if n_modes:
+        lines.append("  METHOD = 1")
+    if has_spc:
+        lines.append("  SPC = 1")
+    lines += ["  DISPLACEMENT = ALL", "BEGIN BULK"]
+    bdf.case_control_deck = CaseControlDeck(lines, log=bdf.log)
+    with atomic_path(path) as tmp:
+        bdf.write_bdf(str(tmp), size=16, is_double=False, enddata=True)
+
+
+def _unique_rows(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    rows, inverse = np.unique(arr, axis=0, return_inverse=True)
+    return rows, inverse.ravel()
+
+
+def _write_beams(bdf, model: Model, eid_for) -> None:
+    b = model.beams
+    if len(b) == 0:
+        return
+    mats, mat_of = _unique_rows(np.column_stack([b.E, b.G, b.rho]))
+    for mid, (E, G, rho) in enumerate(mats, start=1):
+        bdf.add_mat1(mid, float(E), float(G), None, rho=float(rho))
+    timo = model.beam_theory == "timoshenko"
+    Asy = np.where(np.isfinite(b.Asy), b.Asy, 0.0)
+    Asz = np.where(np.isfinite(b.Asz), b.Asz, 0.0)
+    keys = np.column_stack([b.rod, b.A, b.Iy, b.Iz, b.J, Asy, Asz, b.nsm, mat_of])
+    props, prop_of = _unique_rows(keys)
+    for pid, (rod, A, Iy, Iz, J, asy, asz, nsm, mi) in enumerate(props, start=1):
+        mid = int(mi) + 1
+        label = str(b.labels[np.flatnonzero(prop_of == pid - 1)[0]])
+        if rod:
+            bdf.add_prod(pid, mid, float(A), j=float(J), nsm=float(nsm), comment=label)
+        else:
+            # Euler-Bernoulli: K1/K2 blank (no shear flexibility). pyNastran writes blank
+            # for its 1e8 sentinel.
+            k1 = float(asy / A) if timo and asy > 0 else 1e8
+            k2 = float(asz / A) if timo and asz > 0 else 1e8
+            bdf.add_pbar(pid, mid, A=float(A), i1=float(Iz), i2=float(Iy), j=float(J), nsm=float(nsm),
+                         k1=k1, k2=k2, comment=label)
+    for i in range(len(b)):
+        eid = eid_for(int(b.ids[i]))
+        pid = int(prop_of[i]) + 1
+        ga, gb = (int(n) for n in b.nodes[i])
+        if b.rod[i]:
+            bdf.add_crod(eid, pid, [ga, gb])
+        else:
+            bdf.add_cbar(eid, pid, [ga, gb], b.orient[i].tolist(), None)
+
+
+def _tensor_to_conm2(I: np.ndarray) -> list[float]:
+    """Tensor about the cg -> CONM2 I11, I21, I22, I31, I32, I33 (NASTRAN adds the minus)."""
+    return [float(I[0, 0]), float(-I[1, 0]), float(I[1, 1]), float(-I[2, 0]), float(-I[2, 1]),
+            float(I[2, 2])]
+
+
+def _write_masses(bdf, model: Model, eid_for) -> None:
+    pm = model.point_masses
+    for i in range(len(pm)):
+        bdf.add_conm2(eid_for(0), int(pm.nodes[i]), float(pm.mass[i]), cid=0,
+                      X=pm.offset[i].tolist(), I=_tensor_to_conm2(pm.inertia[i]))
+
+
+def _write_springs(bdf, model: Model, eid_for) -> None:
+    s = model.springs
+    if len(s) == 0:
+        return
+    ids, xyz = model.node_ids, model.xyz
+    pos = {int(n): i for i, n in enumerate(ids)}
+    next_cid = [max(bdf.coords) + 1]
+    next_pid = [max(bdf.properties, default=0) + 1]
+    for i in range(len(s)):
+        ga, gb = int(s.nodes[i, 0]), int(s.nodes[i, 1])
+        frame = s.frame[i]
+        if np.array_equal(frame, np.eye(3)):
+            for c in np.flatnonzero(s.k[i]):
+                nodes = [ga, gb] if gb >= 0 else [ga, None]
+                comps = [int(c) + 1, int(c) + 1] if gb >= 0 else [int(c) + 1, 0]
+                bdf.add_celas2(eid_for(int(s.ids[i])), float(s.k[i, c]), nodes, c1=comps[0], c2=comps[1])
+            continue
+        if gb >= 0 and np.linalg.norm(xyz[pos[ga]] - xyz[pos[gb]]) > 0:
+            raise ModelError(f"spring {s.ids[i]}: a spring in rotated axes between non-coincident nodes "
+                             f"{ga} and {gb} has no exact NASTRAN equivalent (CBUSH adds a lever arm)")
+        cid = next_cid[0]
+        next_cid[0] += 1
+        # CORD2R by origin, a point on z and a point in the x-z plane (basic coordinates).
+        bdf.add_cord2r(cid, [0.0, 0.0, 0.0], frame[2].tolist(), frame[0].tolist())
+        pid = next_pid[0]
+        next_pid[0] += 1
+        bdf.add_pbush(pid, s.k[i].tolist(), [0.0] * 6, [0.0] * 6)
+        bdf.add_cbush(eid_for(int(s.ids[i])), pid, [ga, gb if gb >= 0 else None], None, None, cid=cid)
+
+
+def _write_rigid(bdf, model: Model, eid_for) -> None:
+    xyz_of = dict(zip(model.node_ids.tolist(), model.xyz))
+    for rb in model.rigid_bodies:
+        comps = "".join(str(k + 1) for k in np.flatnonzero(rb.dofs))
+        bdf.add_rbe2(eid_for(rb.id), rb.master, comps, rb.slaves.tolist(), comment=rb.label)
+        if rb.mass > 0 or np.any(rb.inertia):
+            if rb.master not in xyz_of:
+                raise ModelError(f"{rb.label}: master node {rb.master} is not defined")
+            offset = np.zeros(3) if rb.cg is None else np.asarray(rb.cg, float) - xyz_of[rb.master]
+            bdf.add_conm2(eid_for(0), rb.master, float(rb.mass), cid=0, X=offset.tolist(),
+                          I=_tensor_to_conm2(rb.inertia), comment=f"mass of {rb.label}")
