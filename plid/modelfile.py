@@ -84,7 +84,7 @@ def save_model(path, sys: control.StateSpace, K=None, input_names=None, output_n
                   output_names=np.array(output_names, dtype=str),
                   format_version=np.int64(FORMAT_VERSION))
     if K is not None:
-        K = np.asarray(K, dtype=float).reshape(n, -1) if n else np.zeros((0, p))
+        K = np.atleast_2d(np.asarray(K, dtype=float))
         if K.shape != (n, p):
             raise DataError(f"model: predictor gain K has shape {K.shape}, needs {(n, p)}")
         arrays["K"] = K
