@@ -1,0 +1,730 @@
+"""Offscreen mode-shape rendering with pyvista/VTK: PNG stills, one-period GIFs, mode grids.
+
+The structure is drawn as solids: every beam as a tube whose radius is the equivalent
+radius of its section, rigid bodies as thin tubes from master to slaves, point masses as
+small spheres, supports as dark cubes, plus optional *decorations* (arbitrary solids such as
+adapter blocks, PZT wafers, a top frame or a base plate) that ride on one node's rigid
+motion. The deformed shape is coloured by displacement magnitude (relative to its maximum)
+over a faint ghost of the undeformed structure.
+
+Beams are deformed with the cubic Hermite shape functions of a frame element, from the
+end translations and rotations, so bending modes look curved between nodes.
+
+Rendering never needs an X server or a GPU: unless the caller has chosen a VTK window class
+with ``VTK_DEFAULT_OPENGL_WINDOW``, the render functions create VTK's OSMesa window
+(``vtkOSOpenGLRenderWindow``: Mesa's llvmpipe software rasteriser, Debian package
+``libosmesa6``) for the duration of the call. VTK's own default would try X first (and warn
+``bad X server connection`` without a display) before falling back to EGL.
+
+Mode numbers are 1-based throughout (mode 1 is the lowest), as on the command line.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import ctypes.util
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from fem.model import Model
+from trussid.errors import UserError
+from trussid.files import atomic_path
+
+#: Default drawn amplitude: the largest displacement is this fraction of the diagonal of the
+#: model's bounding box.
+DEFAULT_AMPLITUDE = 0.08
+DEFAULT_WINDOW = (1024, 768)
+GHOST_COLOR = "#9a9a9a"
+GHOST_OPACITY = 0.22
+SUPPORT_COLOR = "#3b3b3b"
+SCALAR_NAME = "displacement / max"
+
+
+class RenderError(UserError):
+    """A rendering request that cannot be met (mode number, output format, sizes)."""
+
+
+# --------------------------------------------------------------------------- inputs
+@dataclass(frozen=True)
+class Decoration:
+    """A solid drawn with the structure and moved by one node's rigid-body motion.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh or pyvista.DataSet
+        The solid in its undeformed position, global coordinates [m].
+    color : colour-like, optional
+        Its own colour (e.g. PZT wafers); ``None`` colours it by displacement magnitude like
+        the beams.
+    node : int, optional
+        Id of the node whose translation and (small) rotation carry the solid:
+        ``u(x) = u_node + theta_node x (x - x_node)``. ``None``: the solid does not move
+        (a clamped base plate).
+    opacity : float
+        0-1.
+    name : str
+        For error messages and the scene's dictionary of meshes.
+    """
+
+    mesh: Any
+    color: Any = None
+    node: int | None = None
+    opacity: float = 1.0
+    name: str = ""
+
+
+def _as_decoration(item) -> Decoration:
+    if isinstance(item, Decoration):
+        return item
+    if isinstance(item, dict):
+        return Decoration(**item)
+    return Decoration(*item)  # (mesh, colour, node[, opacity[, name]])
+
+
+# --------------------------------------------------------------------------- numerics
+def hermite_beam_displacements(x_a, x_b, u_a, u_b, xi, rod=None):
+    """Displacements along frame elements from their end translations and rotations.
+
+    Transverse displacement uses the cubic Hermite shape functions of an Euler-Bernoulli
+    beam (exact for end-loaded beams); the axial part is linear. The slope of the
+    transverse displacement at an end is ``theta x e`` for end rotation ``theta`` and unit
+    axis ``e``, so no local axes are needed. Rods (``rod`` True) are interpolated linearly.
+
+    Parameters
+    ----------
+    x_a, x_b : (n, 3) float
+        End coordinates [m].
+    u_a, u_b : (n, 6) float
+        End displacements (ux, uy, uz, rx, ry, rz) [m, rad].
+    xi : (s,) float
+        Sample positions along each element, 0 (end A) to 1 (end B).
+    rod : (n,) bool, optional
+
+    Returns
+    -------
+    x : (n, s, 3) float
+        Undeformed sample points [m].
+    u : (n, s, 3) float
+        Their displacements [m].
+    """
+    x_a, x_b = np.asarray(x_a, float), np.asarray(x_b, float)
+    u_a, u_b = np.asarray(u_a, float), np.asarray(u_b, float)
+    xi = np.asarray(xi, float)
+    d = x_b - x_a
+    length = np.linalg.norm(d, axis=1)
+    e = d / np.where(length > 0, length, 1.0)[:, None]
+    s = xi[None, :, None]
+    x = x_a[:, None, :] + s * d[:, None, :]
+    linear = (1 - s) * u_a[:, None, :3] + s * u_b[:, None, :3]
+    h1 = 1 - 3 * s**2 + 2 * s**3
+    h2 = s - 2 * s**2 + s**3
+    h3 = 3 * s**2 - 2 * s**3
+    h4 = -(s**2) + s**3
+    L = length[:, None, None]
+    slope_a = np.cross(u_a[:, 3:], e)[:, None, :]
+    slope_b = np.cross(u_b[:, 3:], e)[:, None, :]
+    w = h1 * u_a[:, None, :3] + h2 * L * slope_a + h3 * u_b[:, None, :3] + h4 * L * slope_b
+    ee = e[:, None, :]
+    u = np.sum(linear * ee, axis=2, keepdims=True) * ee + w - np.sum(w * ee, axis=2, keepdims=True) * ee
+    if rod is not None:
+        rod = np.asarray(rod, bool)
+        u[rod] = linear[rod]
+    return x, u
+
+
+def equivalent_radius(A, Iy, Iz):
+    """Outer radius of the round tube with the section's area and mean second moment.
+
+    For a tube or a solid circle this is exactly its outer radius: with
+    ``I = pi (ro^4 - ri^4) / 4`` and ``A = pi (ro^2 - ri^2)``, ``ro^2 = (4 I / A + A / pi) / 2``.
+    Other shapes get the tube that has the same A and I.
+
+    Parameters
+    ----------
+    A, Iy, Iz : array-like
+        [m^2, m^4, m^4].
+
+    Returns
+    -------
+    r : ndarray [m]
+    """
+    A = np.asarray(A, float)
+    inertia = 0.5 * (np.asarray(Iy, float) + np.asarray(Iz, float))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r2 = 0.5 * (4 * inertia / A + A / math.pi)
+        r = np.sqrt(r2)
+        fallback = np.sqrt(np.abs(A) / math.pi)
+    return np.where(np.isfinite(r) & (r > 0), r, fallback)
+
+
+def _node_displacements(model: Model, modes, mode: int) -> np.ndarray:
+    """(n_nodes, 6) shape of ``mode`` (1-based) in the model's node order, sign-normalised."""
+    shapes = np.asarray(modes.shapes_full, float)
+    n_modes = shapes.shape[1]
+    check_mode_number(mode, n_modes)
+    mode_ids = np.asarray(modes.node_ids, np.int64)
+    if shapes.shape[0] != 6 * len(mode_ids):
+        raise RenderError(f"shapes_full has {shapes.shape[0]} rows, expected 6 x {len(mode_ids)} nodes")
+    order = np.argsort(mode_ids, kind="stable")
+    sorted_ids = mode_ids[order]
+    ids = model.node_ids
+    pos = np.minimum(np.searchsorted(sorted_ids, ids), max(len(sorted_ids) - 1, 0))
+    found = sorted_ids[pos] == ids if len(sorted_ids) else np.zeros(len(ids), bool)
+    if not found.all():
+        raise RenderError(f"node {ids[~found][0]} of the model has no entry in the mode shapes")
+    rows = order[pos]
+    u = shapes[:, mode - 1].reshape(-1, 6)[rows]
+    # Eigenvectors have an arbitrary sign: make the largest translation positive so a
+    # picture does not flip between solver runs.
+    flat = u[:, :3].ravel()
+    if flat.size and flat[np.argmax(np.abs(flat))] < 0:
+        u = -u
+    return u
+
+
+def check_mode_number(mode, n_modes: int) -> None:
+    """Raise :class:`RenderError` unless ``mode`` is an integer in 1..``n_modes``."""
+    if isinstance(mode, bool) or not isinstance(mode, (int, np.integer)):
+        raise RenderError(f"mode number must be an integer, got {mode!r}")
+    if n_modes < 1:
+        raise RenderError("there are no modes to render")
+    if not 1 <= mode <= n_modes:
+        raise RenderError(f"mode {mode} is out of range: valid mode numbers are 1 to {n_modes}")
+
+
+def _mode_title(modes, mode: int, label: str | None, labels: Sequence[str] | None) -> str:
+    if label is None:
+        seq = labels if labels is not None else getattr(modes, "labels", None)
+        if seq is not None and len(seq) >= mode:
+            label = seq[mode - 1]
+    freq = float(np.asarray(modes.frequencies_hz)[mode - 1])
+    title = f"Mode {mode}: {freq:.4g} Hz"
+    return f"{title}  {label}" if label else title
+
+
+# --------------------------------------------------------------------------- geometry
+def _polylines(points: np.ndarray):
+    """PolyData of ``n`` polylines from points (n, s, 3)."""
+    import pyvista as pv
+
+    n, s, _ = points.shape
+    idx = np.arange(n * s).reshape(n, s)
+    lines = np.column_stack([np.full(n, s), idx]).ravel()
+    return pv.PolyData(points.reshape(-1, 3), lines=lines)
+
+
+def _tubes(points: np.ndarray, radius: np.ndarray, data: dict[str, np.ndarray], n_sides: int):
+    """Tubes along polylines (n, s, 3) with per-line radius; ``data`` per line or per point."""
+    poly = _polylines(points)
+    n, s, _ = points.shape
+    poly.point_data["radius"] = np.repeat(radius, s)
+    for key, value in data.items():
+        value = np.asarray(value)
+        poly.point_data[key] = np.repeat(value, s) if value.shape == (n,) else value.reshape(n * s)
+    return poly.tube(scalars="radius", absolute=True, n_sides=n_sides, capping=True)
+
+
+def _replicate(template, centres: np.ndarray, sizes: np.ndarray):
+    """One copy of ``template`` (unit size, at the origin) per centre, scaled, merged."""
+    import pyvista as pv
+
+    tpl = template.triangulate()
+    p = np.asarray(tpl.points)
+    faces = np.asarray(tpl.faces).reshape(-1, 4)[:, 1:]
+    k = len(centres)
+    pts = centres[:, None, :] + sizes[:, None, None] * p[None]
+    f = faces[None] + (np.arange(k) * len(p))[:, None, None]
+    f = np.concatenate([np.full((k, len(faces), 1), 3), f], axis=2).ravel()
+    return pv.PolyData(pts.reshape(-1, 3), faces=f)
+
+
+@dataclass
+class _Part:
+    """A drawable piece: undeformed points and their unit-scale displacements."""
+
+    name: str
+    kind: str  # "tubes" | "solid"
+    x0: np.ndarray
+    u: np.ndarray
+    color: Any = None
+    opacity: float = 1.0
+    ghost: bool = True
+    radius: np.ndarray | None = None
+    data: dict[str, np.ndarray] = field(default_factory=dict)
+    template: Any = None  # PolyData whose points are x0 (solids)
+
+
+@dataclass
+class ModeScene:
+    """The drawable geometry of one mode, deformable by any factor of the drawn amplitude.
+
+    Attributes
+    ----------
+    parts : list
+        The pieces (beam tubes, rigid links, masses, supports, decorations).
+    scale : float
+        Multiplier applied to the (mass-normalised) mode shape for the drawn deformation.
+    u_max : float
+        Largest drawn displacement at ``factor=1`` [m]; colours are ``|u| / u_max``.
+    diagonal : float
+        Diagonal of the undeformed bounding box [m].
+    title : str
+    n_sides : int
+        Facets around each tube.
+    """
+
+    parts: list[_Part]
+    scale: float
+    u_max: float
+    diagonal: float
+    title: str
+    n_sides: int = 16
+
+    def meshes(self, factor: float = 1.0) -> dict[str, Any]:
+        """Deformed meshes at ``factor`` times the drawn amplitude.
+
+        Each mesh carries the point array ``"|u| / max"`` (displacement magnitude over the
+        largest displacement of the mode at ``factor=1``); beam tubes also carry
+        ``"beam_id"``, the element id of every point.
+        """
+        return {p.name: self._mesh(p, factor) for p in self.parts}
+
+    def ghost_meshes(self) -> dict[str, Any]:
+        """The undeformed meshes of the moving parts."""
+        return {p.name: self._mesh(p, 0.0) for p in self.parts if p.ghost}
+
+    def _mesh(self, part: _Part, factor: float):
+        u = factor * part.u
+        mag = np.linalg.norm(u, axis=-1) / self.u_max if self.u_max > 0 else np.zeros(u.shape[:-1])
+        if part.kind == "tubes":
+            return _tubes(part.x0 + u, part.radius, {SCALAR_NAME: mag, **part.data}, self.n_sides)
+        mesh = part.template.copy()
+        mesh.points = part.x0 + u
+        mesh.point_data[SCALAR_NAME] = mag
+        return mesh
+
+    def bounds(self) -> tuple[float, ...]:
+        """Bounds covering the ghost and both extremes of the motion."""
+        lo = np.full(3, np.inf)
+        hi = np.full(3, -np.inf)
+        for p in self.parts:
+            x = p.x0.reshape(-1, 3)
+            u = np.abs(p.u.reshape(-1, 3))
+            pad = 0.0 if p.radius is None else float(np.max(p.radius))
+            lo = np.minimum(lo, (x - u).min(axis=0) - pad)
+            hi = np.maximum(hi, (x + u).max(axis=0) + pad)
+        return (lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
+
+
+def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None,
+               amplitude: float = DEFAULT_AMPLITUDE, decorations: Sequence = (),
+               label: str | None = None, labels: Sequence[str] | None = None,
+               n_samples: int = 9, n_sides: int = 16, show_supports: bool = True) -> ModeScene:
+    """Build the deformable geometry of ``mode`` (1-based) without rendering it.
+
+    Parameters
+    ----------
+    model : fem.Model
+    modes : Modes-like
+        ``shapes_full`` (6 n_nodes, n_modes), ``frequencies_hz`` (n_modes,), ``node_ids``
+        (n_nodes,); optional ``labels``.
+    mode : int
+        1-based mode number.
+    scale : float, optional
+        Multiplier on the mode shape for drawing (model units per shape unit). Default:
+        chosen so the largest displacement is ``amplitude`` times the bounding-box diagonal.
+    amplitude : float
+        Used when ``scale`` is None.
+    decorations : sequence of Decoration or (mesh, colour, node) tuples
+    label : str, optional
+        Text after mode number and frequency in the title; default ``labels[mode - 1]``,
+        then ``modes.labels[mode - 1]`` when present.
+    n_samples : int
+        Points per beam element for the Hermite interpolation (>= 2).
+    n_sides : int
+        Facets around each tube.
+    show_supports : bool
+        Draw supported nodes as small dark cubes.
+    """
+    import pyvista as pv
+
+    if n_samples < 2:
+        raise RenderError(f"n_samples must be at least 2, got {n_samples}")
+    if not (scale is None or (np.isfinite(scale) and scale >= 0)):
+        raise RenderError(f"scale must be a finite number >= 0, got {scale!r}")
+    if not (np.isfinite(amplitude) and amplitude >= 0):
+        raise RenderError(f"amplitude must be a finite number >= 0, got {amplitude!r}")
+    u_nodes = _node_displacements(model, modes, mode)
+    title = _mode_title(modes, mode, label, labels)
+    xyz = model.xyz
+    decorations = [_as_decoration(d) for d in decorations]
+    dec_meshes = [pv.wrap(d.mesh) if not isinstance(d.mesh, pv.DataSet) else d.mesh for d in decorations]
+    extent_pts = [xyz] + [np.asarray(m.points) for m in dec_meshes]
+    allpts = np.concatenate(extent_pts) if extent_pts else np.zeros((1, 3))
+    diagonal = float(np.linalg.norm(allpts.max(axis=0) - allpts.min(axis=0))) or 1.0
+
+    beams = model.beams
+    parts: list[_Part] = []
+    xi = np.linspace(0.0, 1.0, n_samples)
+    radii = np.zeros(0)
+    if len(beams):
+        ends = model.index_of(beams.nodes, what=lambda k: f"beam {beams.ids[k // 2]}")
+        x, u = hermite_beam_displacements(xyz[ends[:, 0]], xyz[ends[:, 1]], u_nodes[ends[:, 0]],
+                                          u_nodes[ends[:, 1]], xi, rod=beams.rod)
+        radii = np.maximum(equivalent_radius(beams.A, beams.Iy, beams.Iz), 1e-3 * diagonal)
+        parts.append(_Part("beams", "tubes", x, u, radius=radii,
+                           data={"beam_id": beams.ids.astype(np.int64)}))
+    typical = float(np.median(radii)) if radii.size else 4e-3 * diagonal
+
+    links = [(rb.master, s) for rb in model.rigid_bodies for s in rb.slaves]
+    if links:
+        ln = model.index_of(np.array(links, np.int64), what="a rigid body")
+        # Linear interpolation is exact for a rigid link: u(x) = u_m + theta_m x (x - x_m).
+        x, u = hermite_beam_displacements(xyz[ln[:, 0]], xyz[ln[:, 1]], u_nodes[ln[:, 0]],
+                                          u_nodes[ln[:, 1]], np.array([0.0, 1.0]),
+                                          rod=np.ones(len(ln), bool))
+        parts.append(_Part("links", "tubes", x, u, radius=np.full(len(ln), 0.45 * typical)))
+
+    pm = model.point_masses
+    if len(pm):
+        idx = model.index_of(pm.nodes, what="a point mass")
+        centres = xyz[idx] + pm.offset
+        tpl = _replicate(pv.Sphere(radius=1.0, theta_resolution=16, phi_resolution=12),
+                         centres, np.full(len(idx), 1.8 * typical))
+        per = tpl.n_points // len(idx)
+        node_of_point = np.repeat(idx, per)
+        parts.append(_Part("masses", "solid", np.asarray(tpl.points),
+                           _rigid_motion(u_nodes[node_of_point], xyz[node_of_point], np.asarray(tpl.points)),
+                           template=tpl))
+
+    if show_supports and model.has_supports:
+        fixed = np.flatnonzero(model.fixed_mask().any(axis=1))
+        if fixed.size:
+            tpl = _replicate(pv.Cube(x_length=1, y_length=1, z_length=1), xyz[fixed],
+                             np.full(fixed.size, 3.0 * typical))
+            parts.append(_Part("supports", "solid", np.asarray(tpl.points), np.zeros((tpl.n_points, 3)),
+                               color=SUPPORT_COLOR, ghost=False, template=tpl))
+
+    for k, (dec, mesh) in enumerate(zip(decorations, dec_meshes)):
+        mesh = mesh.extract_surface() if not isinstance(mesh, pv.PolyData) else mesh.copy()
+        pts = np.asarray(mesh.points, float)
+        name = f"decoration {k}: {dec.name}" if dec.name else f"decoration {k}"
+        if dec.node is None:
+            u = np.zeros_like(pts)
+        else:
+            i = int(model.index_of(np.array([dec.node]), what=name)[0])
+            u = _rigid_motion(np.broadcast_to(u_nodes[i], (len(pts), 6)), xyz[i], pts)
+        parts.append(_Part(name, "solid", pts, u, color=dec.color, opacity=float(dec.opacity),
+                           ghost=dec.node is not None, template=mesh))
+
+    if not parts:
+        raise RenderError("the model has nothing to draw (no beams, rigid bodies, masses or decorations)")
+    u_max_unit = max((float(np.linalg.norm(p.u, axis=-1).max()) if p.u.size else 0.0) for p in parts)
+    if scale is None:
+        scale = amplitude * diagonal / u_max_unit if u_max_unit > 0 else 0.0
+    for p in parts:
+        p.u = scale * p.u
+    return ModeScene(parts, float(scale), scale * u_max_unit, diagonal, title, n_sides)
+
+
+def _rigid_motion(u6: np.ndarray, x_node: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Small rigid motion of points ``x`` (k, 3) with node displacement ``u6`` (k, 6) at ``x_node``."""
+    return u6[..., :3] + np.cross(u6[..., 3:], x - x_node)
+
+
+# --------------------------------------------------------------------------- rendering
+def _osmesa_available() -> bool:
+    for name in ("libOSMesa.so.8", "libOSMesa.so.6", ctypes.util.find_library("OSMesa")):
+        if name:
+            try:
+                ctypes.CDLL(name)
+                return True
+            except OSError:
+                continue
+    return False
+
+
+@contextlib.contextmanager
+def offscreen_backend():
+    """Create VTK render windows with OSMesa (no X server, no GPU) inside this block.
+
+    An explicit ``VTK_DEFAULT_OPENGL_WINDOW`` set by the user wins (e.g.
+    ``vtkEGLRenderWindow`` on a GPU machine). The variable is restored on exit so that the
+    rest of the process is unaffected.
+    """
+    key = "VTK_DEFAULT_OPENGL_WINDOW"
+    if os.environ.get(key):
+        yield os.environ[key]
+        return
+    if not _osmesa_available():
+        raise RuntimeError(
+            "offscreen rendering needs Mesa's OSMesa library (Debian/Ubuntu package libosmesa6, "
+            "installed by scripts/setup.sh), or set VTK_DEFAULT_OPENGL_WINDOW to another VTK "
+            "window class such as vtkEGLRenderWindow")
+    os.environ[key] = "vtkOSOpenGLRenderWindow"
+    try:
+        yield os.environ[key]
+    finally:
+        os.environ.pop(key, None)
+
+
+def _check_size(window_size) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in window_size)
+    except (TypeError, ValueError):
+        raise RenderError(f"window size must be two integers (width, height), got {window_size!r}") from None
+    if not (16 <= w <= 8192 and 16 <= h <= 8192):
+        raise RenderError(f"window size {w}x{h} is out of range: each side must be 16 to 8192 pixels")
+    return w, h
+
+
+def _view_vector(view) -> np.ndarray:
+    named = {"iso": (1.0, -1.6, 0.9), "xz": (0.0, -1.0, 0.0), "xy": (0.0, 0.0, 1.0),
+             "yz": (1.0, 0.0, 0.0)}
+    v = np.asarray(named.get(view, view) if isinstance(view, str) else view, float)
+    if isinstance(view, str) and view not in named:
+        raise RenderError(f"unknown view {view!r}: use one of {', '.join(named)} or a direction (3,)")
+    if v.shape != (3,) or not np.isfinite(v).all() or np.linalg.norm(v) == 0:
+        raise RenderError(f"view direction must be a non-zero 3-vector, got {view!r}")
+    return v / np.linalg.norm(v)
+
+
+def _add_scene(plotter, scene: ModeScene, factor: float, cmap: str, show_ghost: bool,
+               scalar_bar: bool, font_size: int) -> dict[str, Any]:
+    """Add the ghost and the deformed meshes to the active subplot; return the deformed meshes."""
+    if show_ghost:
+        for mesh in scene.ghost_meshes().values():
+            plotter.add_mesh(mesh, color=GHOST_COLOR, opacity=GHOST_OPACITY, smooth_shading=True,
+                             scalars=None, show_scalar_bar=False)
+    deformed = scene.meshes(factor)
+    cmap = default_cmap() if cmap is None else cmap
+    bar_args = dict(title="displacement / max", n_labels=6, fmt="%.1f", vertical=True, position_x=0.86,
+                    position_y=0.1, height=0.62, width=0.05, color="black",
+                    title_font_size=max(font_size, 12), label_font_size=max(font_size - 1, 12),
+                    unconstrained_font_size=True)
+    bar_done = False
+    for part in scene.parts:
+        mesh = deformed[part.name]
+        if part.color is not None:
+            plotter.add_mesh(mesh, color=part.color, opacity=part.opacity, smooth_shading=True,
+                             scalars=None, show_scalar_bar=False, specular=0.3)
+        else:
+            plotter.add_mesh(mesh, scalars=SCALAR_NAME, cmap=cmap, clim=(0.0, 1.0), opacity=part.opacity,
+                             smooth_shading=True, specular=0.3, show_scalar_bar=scalar_bar and not bar_done,
+                             scalar_bar_args=bar_args)
+            bar_done = True
+    plotter.add_text(scene.title, position="upper_left", font_size=font_size, color="black")
+    return deformed
+
+
+def _frame_camera(plotter, scene: ModeScene, view) -> None:
+    v = _view_vector(view)
+    b = np.array(scene.bounds()).reshape(3, 2)
+    centre = b.mean(axis=1)
+    up = np.array([0.0, 0.0, 1.0]) if abs(v[2]) < 0.95 else np.array([0.0, 1.0, 0.0])
+    plotter.camera_position = [tuple(centre + v * scene.diagonal * 3), tuple(centre), tuple(up)]
+    plotter.reset_camera(bounds=tuple(b.ravel()))
+
+
+def _new_plotter(window_size, shape=(1, 1)):
+    import pyvista as pv
+
+    p = pv.Plotter(off_screen=True, window_size=list(window_size), shape=shape, border=False)
+    p.set_background("white")
+    return p
+
+
+def _write_png(image: np.ndarray, out) -> None:
+    from PIL import Image
+
+    with atomic_path(out, suffix=".png") as tmp:
+        Image.fromarray(image).save(tmp, format="PNG")
+
+
+def _check_out(out, suffix: str):
+    if out is None:
+        return None
+    from pathlib import Path
+
+    out = Path(out)
+    if out.suffix.lower() != suffix:
+        raise RenderError(f"output file {str(out)!r}: expected a {suffix} file")
+    return out
+
+
+def render_mode(model: Model, modes, mode: int = 1, out=None, *, window_size=DEFAULT_WINDOW,
+                scale: float | None = None, amplitude: float = DEFAULT_AMPLITUDE,
+                label: str | None = None, labels: Sequence[str] | None = None,
+                decorations: Sequence = (), view="iso", show_ghost: bool = True,
+                cmap=None, n_samples: int = 9) -> np.ndarray:
+    """Render one mode shape offscreen as a still image.
+
+    Parameters
+    ----------
+    model, modes, mode, scale, amplitude, label, labels, decorations, n_samples
+        See :func:`mode_scene`.
+    out : path-like, optional
+        PNG file to write (atomically).
+    window_size : (int, int)
+        Width and height [pixels].
+    view : {"iso", "xz", "xy", "yz"} or (3,) float
+        Direction from the model towards the camera (z is up).
+    show_ghost : bool
+        Draw the undeformed structure faintly.
+    cmap : str or matplotlib colormap, optional
+        Colour map for ``|u| / max |u|``; default :func:`default_cmap`.
+
+    Returns
+    -------
+    image : (height, width, 3) uint8
+    """
+    out = _check_out(out, ".png")
+    size = _check_size(window_size)
+    scene = mode_scene(model, modes, mode, scale=scale, amplitude=amplitude, decorations=decorations,
+                       label=label, labels=labels, n_samples=n_samples)
+    with offscreen_backend():
+        p = _new_plotter(size)
+        try:
+            _add_scene(p, scene, 1.0, cmap, show_ghost, True, _font_size(size))
+            _frame_camera(p, scene, view)
+            image = np.asarray(p.screenshot(return_img=True))
+        finally:
+            p.close()
+    if out is not None:
+        _write_png(image, out)
+    return image
+
+
+def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int = 24,
+                    period: float = 1.5, window_size=(800, 600), scale: float | None = None,
+                    amplitude: float = DEFAULT_AMPLITUDE, label: str | None = None,
+                    labels: Sequence[str] | None = None, decorations: Sequence = (), view="iso",
+                    show_ghost: bool = True, cmap=None, n_samples: int = 9) -> np.ndarray:
+    """Render one period of a mode's vibration as an animated GIF (looping).
+
+    Frame ``j`` shows the deformation ``sin(2 pi j / frames)`` times the drawn amplitude;
+    the colour range and the camera are fixed across frames.
+
+    Parameters
+    ----------
+    frames : int
+        Number of frames in one period (>= 2).
+    period : float
+        Playback duration of one period [s].
+    out : path-like, optional
+        GIF file to write (atomically).
+    Others
+        As :func:`render_mode`.
+
+    Returns
+    -------
+    images : (frames, height, width, 3) uint8
+    """
+    out = _check_out(out, ".gif")
+    size = _check_size(window_size)
+    if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or not 2 <= frames <= 1000:
+        raise RenderError(f"frames must be an integer from 2 to 1000, got {frames!r}")
+    if not (np.isfinite(period) and period > 0):
+        raise RenderError(f"period must be positive, got {period!r}")
+    scene = mode_scene(model, modes, mode, scale=scale, amplitude=amplitude, decorations=decorations,
+                       label=label, labels=labels, n_samples=n_samples)
+    factors = np.sin(2 * np.pi * np.arange(frames) / frames)
+    images = []
+    with offscreen_backend():
+        p = _new_plotter(size)
+        try:
+            deformed = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size))
+            _frame_camera(p, scene, view)
+            for c in factors:
+                for name, mesh in scene.meshes(c).items():
+                    deformed[name].copy_from(mesh, deep=True)
+                p.render()
+                images.append(np.asarray(p.screenshot(return_img=True)))
+        finally:
+            p.close()
+    images = np.stack(images)
+    if out is not None:
+        _write_gif(images, out, period / frames)
+    return images
+
+
+def _write_gif(images: np.ndarray, out, frame_seconds: float) -> None:
+    # Pillow (already required by pyvista and matplotlib) writes the GIF; pyvista's own
+    # open_gif needs imageio, which is not a dependency.
+    from PIL import Image
+
+    pics = [Image.fromarray(im).quantize(colors=255, method=Image.Quantize.MEDIANCUT) for im in images]
+    with atomic_path(out, suffix=".gif") as tmp:
+        pics[0].save(tmp, format="GIF", save_all=True, append_images=pics[1:],
+                     duration=max(int(round(1000 * frame_seconds)), 20), loop=0, disposal=1,
+                     optimize=False)
+
+
+def render_mode_grid(model: Model, modes, n: int = 6, out=None, *, ncols: int | None = None,
+                     window_size=None, scale: float | None = None,
+                     amplitude: float = DEFAULT_AMPLITUDE, labels: Sequence[str] | None = None,
+                     decorations: Sequence = (), view="iso", show_ghost: bool = True,
+                     cmap=None, n_samples: int = 9) -> np.ndarray:
+    """Render modes 1..``n`` side by side in one image.
+
+    Parameters
+    ----------
+    n : int
+        Number of modes (1..number of modes available).
+    ncols : int, optional
+        Columns (default ``ceil(sqrt(n))``).
+    window_size : (int, int), optional
+        Whole image [pixels]; default 420 x 340 per cell.
+    out : path-like, optional
+        PNG file to write (atomically).
+    Others
+        As :func:`render_mode`; ``scale``, when given, applies to every mode.
+
+    Returns
+    -------
+    image : (height, width, 3) uint8
+    """
+    out = _check_out(out, ".png")
+    n_avail = np.asarray(modes.shapes_full).shape[1]
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise RenderError(f"number of modes in the grid must be a positive integer, got {n!r}")
+    if n > n_avail:
+        raise RenderError(f"cannot show {n} modes in the grid: only {n_avail} modes are available")
+    if ncols is None:
+        ncols = int(math.ceil(math.sqrt(n)))
+    nrows = int(math.ceil(n / ncols))
+    size = _check_size(window_size if window_size is not None else (420 * ncols, 340 * nrows))
+    scenes = [mode_scene(model, modes, k, scale=scale, amplitude=amplitude, decorations=decorations,
+                         labels=labels, n_samples=n_samples) for k in range(1, n + 1)]
+    cell = (size[0] // ncols, size[1] // nrows)
+    with offscreen_backend():
+        p = _new_plotter(size, shape=(nrows, ncols))
+        try:
+            for k, scene in enumerate(scenes):
+                p.subplot(k // ncols, k % ncols)
+                p.set_background("white")
+                _add_scene(p, scene, 1.0, cmap, show_ghost, k == n - 1, _font_size(cell))
+                _frame_camera(p, scene, view)
+            image = np.asarray(p.screenshot(return_img=True))
+        finally:
+            p.close()
+    if out is not None:
+        _write_png(image, out)
+    return image
+
+
+def _font_size(size) -> int:
+    return int(np.clip(min(size) / 48, 9, 18))
+
+
+def default_cmap():
+    """Turbo without its darkest tenth, so parts at rest read as blue, not black."""
+    import matplotlib
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap(matplotlib.colormaps["turbo"](np.linspace(0.1, 1.0, 256)), name="turbo_light")
