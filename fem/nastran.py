@@ -30,6 +30,8 @@ Conventions that matter
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import os
 import re
@@ -213,7 +215,10 @@ def _parse(path: Path):
     punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, re.IGNORECASE | re.MULTILINE) is None
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     try:
-        bdf.read_bdf(str(path), xref=False, validate=False, punch=punch)
+        # pyNastran also print()s some complaints; keep them off the user's terminal (the
+        # exception carries the message).
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            bdf.read_bdf(str(path), xref=False, validate=False, punch=punch)
     except Exception as exc:  # pyNastran raises many types for malformed decks
         msg = " ".join(str(exc).split())[:300] or type(exc).__name__
         raise ModelError(f"{path}: not a readable bulk-data deck ({msg})") from None
@@ -257,7 +262,7 @@ def _read_params(bdf, info: BdfInfo) -> None:
         if not isinstance(cm, (int, float)):
             raise ModelError(f"PARAM,COUPMASS must be a number, got {cm!r}")
         info.mass = "consistent" if cm > 0 else "lumped"
-        info.mass_reason = f"PARAM,COUPMASS,{cm} ({'> 0: coupled' if cm > 0 else '<= 0: lumped'} mass)"
+        info.mass_reason = f"PARAM,COUPMASS,{cm}: {'> 0, coupled' if cm > 0 else '<= 0, lumped'} mass"
     auto = _param(bdf, "AUTOSPC")
     if auto is None:
         info.autospc, info.autospc_reason = True, "NASTRAN's default (AUTOSPC=YES in SOL 103)"

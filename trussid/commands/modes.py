@@ -1,0 +1,149 @@
+"""``trussid modes [MODEL] [--n N] [--json]``: natural frequencies of a model.
+
+MODEL is a NASTRAN bulk-data deck (.bdf/.dat/.nas/.blk/.bulk), a testbed parameter file
+(.toml) or omitted (the default testbed). :func:`load_model` turns any of these into a
+:class:`LoadedModel`; other commands that take a MODEL (render, plant) can use it too.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from trussid.errors import UserError
+
+#: File suffixes read as NASTRAN bulk data.
+BULK_SUFFIXES = (".bdf", ".dat", ".nas", ".blk", ".bulk")
+#: Modes computed when neither --n nor the model asks for a number.
+DEFAULT_N_MODES = 20
+
+
+@dataclass
+class LoadedModel:
+    """A model ready to assemble, with what a report should say about it.
+
+    Attributes
+    ----------
+    model : fem.Model
+    source : str
+        The file it came from, or "default testbed".
+    autospc : bool
+        Remove DOFs with neither stiffness nor mass when assembling (NASTRAN's AUTOSPC).
+    n_modes : int or None
+        Number of modes the source asks for (a deck's EIGRL ND), if any.
+    units : str
+        How to read the numbers ("SI", or the deck's own units).
+    notes : list of str
+        One-line facts for the report (mass formulation and why, beam theory, WTMASS...).
+    info : object or None
+        Source-specific details (:class:`fem.nastran.BdfInfo` for decks).
+    """
+
+    model: object
+    source: str
+    autospc: bool = False
+    n_modes: int | None = None
+    units: str = "SI"
+    notes: list = field(default_factory=list)
+    info: object | None = None
+
+
+def load_model(path: str | os.PathLike | None) -> LoadedModel:
+    """Load MODEL as the command line gives it: None, a .toml testbed file or a bulk-data deck."""
+    if path is None:
+        return load_testbed(None)
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix == ".toml":
+        return load_testbed(p)
+    if suffix in BULK_SUFFIXES:
+        return load_bulk_data(p)
+    raise UserError(f"{p}: unknown model file type {suffix or '(no suffix)'!r}; give a NASTRAN deck "
+                    f"({', '.join(BULK_SUFFIXES)}) or a testbed parameter file (.toml)")
+
+
+def load_testbed(path: Path | None) -> LoadedModel:
+    """The testbed model from a parameter file, or the default testbed when ``path`` is None."""
+    what = ("the default testbed is" if path is None
+            else f"{path}: testbed parameter files (.toml) are")
+    raise UserError(f"{what} not available yet in this version; give a NASTRAN bulk-data deck "
+                    f"({', '.join(BULK_SUFFIXES)})")
+
+
+def load_bulk_data(path: Path) -> LoadedModel:
+    """A NASTRAN deck through :func:`fem.nastran.read_bdf`."""
+    from fem.nastran import read_bdf
+
+    model, info = read_bdf(path)
+    notes = [f"mass: {info.mass} ({info.mass_reason})",
+             f"beam theory: {info.beam_theory} ({info.beam_theory_reason})",
+             f"supports: {info.spc_reason}"]
+    if info.wtmass != 1.0:
+        notes.append(f"PARAM,WTMASS,{info.wtmass:g} applied to every mass")
+    if info.eigen is not None:
+        e = info.eigen
+        rng = "" if e.f_low is None and e.f_high is None else \
+            f", range {'' if e.f_low is None else f'{e.f_low:g}'}..{'' if e.f_high is None else f'{e.f_high:g}'} (not applied)"
+        notes.append(f"eigenvalue request: {e.card} {e.sid}, ND={e.n_modes}{rng}")
+    notes += info.notes
+    return LoadedModel(model=model, source=str(path), autospc=info.autospc,
+                       n_modes=info.eigen.n_modes if info.eigen is not None else None,
+                       units="the deck's units (frequencies in Hz if its time unit is s)",
+                       notes=notes, info=info)
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "modes", help="natural frequencies of a model",
+        description="Compute the lowest natural frequencies of MODEL: a NASTRAN bulk-data deck "
+        f"({', '.join(BULK_SUFFIXES)}), a testbed parameter file (.toml), or, when omitted, "
+        "the default testbed. Decks are read as NASTRAN would: PARAM,WTMASS scales every mass, "
+        "PARAM,COUPMASS > 0 selects consistent mass (lumped otherwise), AUTOSPC removes DOFs "
+        "with neither stiffness nor mass.")
+    p.add_argument("model", nargs="?", metavar="MODEL", help="bulk-data deck or testbed .toml file")
+    p.add_argument("--n", type=int, default=None, metavar="N",
+                   help=f"number of modes (default: the deck's EIGRL ND, else {DEFAULT_N_MODES})")
+    p.add_argument("--json", action="store_true", help="print a JSON object instead of a table")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from fem.assembly import assemble
+    from fem.modal import solve_modes
+
+    if args.n is not None and args.n < 1:
+        raise UserError(f"--n must be at least 1, got {args.n}")
+    loaded = load_model(args.model)
+    n = args.n or loaded.n_modes or DEFAULT_N_MODES
+    system = assemble(loaded.model, autospc=loaded.autospc)
+    modes = solve_modes(system, n_modes=n)
+    freqs = [float(f) for f in modes.frequencies_hz]
+    model = loaded.model
+    if args.json:
+        print(json.dumps({
+            "model": loaded.source,
+            "frequencies_hz": freqs,
+            "n_dof": int(system.n_dof),
+            "mass": model.mass_formulation,
+            "beam_theory": model.beam_theory,
+            "units": loaded.units,
+            "autospc_removed": len(system.autospc),
+            "notes": loaded.notes,
+        }, indent=2))
+        return 0
+    print(f"model: {loaded.source}: {len(model.node_ids)} nodes, {len(model.beams)} beams, "
+          f"{len(model.point_masses)} point masses, {len(model.springs)} springs, "
+          f"{len(model.rigid_bodies)} rigid bodies")
+    print(f"DOF: {system.n_dof} free" + (f" ({len(system.autospc)} removed by AUTOSPC)" if system.autospc else ""))
+    for note in loaded.notes:
+        print(note)
+    if len(freqs) < n:
+        print(f"only {len(freqs)} modes exist (asked for {n})")
+    print(f"units: {loaded.units}")
+    print()
+    print(f"{'mode':>5}  {'frequency [Hz]':>16}")
+    for i, f in enumerate(freqs, start=1):
+        print(f"{i:>5}  {f:>16.6g}")
+    return 0
