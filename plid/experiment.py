@@ -58,8 +58,8 @@ def excitation(kind: str, n_samples: int, n_channels: int = 1, fs: float = 1.0,
         of +-rms, each bit held ``max(1, floor(0.4 fs / f_high))`` samples so that the
         spectrum stays within 2.4 dB of flat up to the band's upper edge (the lower edge is
         ignored: a PRBS is flat down to 1/period). ``chirp``: a linear sweep from the band's
-        lower to upper edge over the record (channel j starts j N/m samples later, circularly,
-        so channels are not identical). ``multisine``: all FFT lines of the record inside
+        lower to upper edge over the record with a seeded random start phase (channel j starts
+        j N/m samples later, circularly, so channels are not identical). ``multisine``: all FFT lines of the record inside
         the band, equal amplitude, independent uniformly random phases per channel.
     n_samples, n_channels : int
         Record length N and number of channels m.
@@ -118,8 +118,10 @@ def excitation(kind: str, n_samples: int, n_channels: int = 1, fs: float = 1.0,
             x[:, j] = np.repeat(2.0 * seq - 1.0, hold)[:n]
     else:  # chirp
         t = np.arange(n) / fs
-        base = scipy.signal.chirp(t, f0=lo, t1=t[-1], f1=hi, method="linear", phi=-90)
-        x = np.column_stack([np.roll(base, j * n // m) for j in range(m)])
+        phase = rng.uniform(0, 360, m)
+        x = np.column_stack([
+            np.roll(scipy.signal.chirp(t, f0=lo, t1=t[-1], f1=hi, method="linear",
+                                       phi=phase[j]), j * n // m) for j in range(m)])
     x = x - x.mean(axis=0) if kind in ("white",) else x
     scale = np.sqrt(np.mean(x**2, axis=0))
     if np.any(scale == 0):
