@@ -178,6 +178,8 @@ def _udf_local_properties(side: float, height: float, member_size: float) -> tup
     # costs milliseconds.
     mesh = udf_frame_mesh_local(side, height, member_size)
     mp = mass_properties(mesh, 1.0, name="udf")
+    mp.cg.flags.writeable = False  # cached: shared by every caller
+    mp.inertia.flags.writeable = False
     return mp.mass, mp.cg, mp.inertia  # at unit density: mass = volume
 
 

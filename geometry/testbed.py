@@ -61,6 +61,8 @@ def _fail(path: str, message: str) -> None:
 def _check_value(path: str, value: Any, kind: type, check: str) -> Any:
     """Validate one parameter value and return it normalised (ints to float, lists to tuples)."""
     if kind is float:
+        if value is None and check == "positive_or_inf":
+            value = math.inf  # None reads naturally as "no spring": a rigid (clamped) end
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             _fail(path, f"must be a number, got {type(value).__name__} {value!r}")
         value = float(value)
@@ -134,8 +136,8 @@ class StrutParams(_Section):
         Tube material [Pa], [-], [kg/m^3]. Thesis: aluminium; suggested grade 6061-T6
         (68.9 GPa, 0.33, 2700 kg/m^3; ASM handbook values, as in ``fem.materials.ALUMINIUM``).
     base_rotational_stiffness, top_rotational_stiffness : float
-        Rotational spring of each strut end in both bending directions [N m/rad]; ``inf`` is a
-        clamped end. Suggested: clamped (thesis Fig. 2.2.1-2 shows flexures; their stiffness
+        Rotational spring of each strut end in both bending directions [N m/rad]; ``inf`` (or
+        ``None`` on construction) is a clamped end. Suggested: clamped (thesis Fig. 2.2.1-2 shows flexures; their stiffness
         is a calibration unknown).
     """
 

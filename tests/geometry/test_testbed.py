@@ -152,3 +152,9 @@ def test_integers_are_accepted_for_float_parameters_and_stored_as_float():
 def test_testbed_is_frozen():
     with pytest.raises(dataclasses.FrozenInstanceError):
         Testbed().struts.length = 1.0
+
+
+def test_none_end_stiffness_means_clamped():
+    tb = Testbed().replace(struts__base_rotational_stiffness=None, struts__top_rotational_stiffness=5e3)
+    assert tb.struts.base_rotational_stiffness == math.inf
+    assert tb.struts.top_rotational_stiffness == 5e3
