@@ -1,6 +1,6 @@
 """Points and members of the testbed: where everything is, as small numpy arrays.
 
-:func:`testbed_layout` is cheap (no meshes; tens of microseconds), since design sweeps call
+:func:`testbed_layout` is cheap (no meshes; about 0.1 ms), since design sweeps call
 it for every design.
 
 Frame and numbering
