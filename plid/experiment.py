@@ -58,9 +58,10 @@ def excitation(kind: str, n_samples: int, n_channels: int = 1, fs: float = 1.0,
         of +-rms, each bit held ``max(1, floor(0.4 fs / f_high))`` samples so that the
         spectrum stays within 2.4 dB of flat up to the band's upper edge (the lower edge is
         ignored: a PRBS is flat down to 1/period). ``chirp``: a linear sweep from the band's
-        lower to upper edge over the record with a seeded random start phase (channel j starts
-        j N/m samples later, circularly, so channels are not identical). ``multisine``: all FFT lines of the record inside
-        the band, equal amplitude, independent uniformly random phases per channel.
+        lower to upper edge over the record with a seeded random start phase (channel j
+        starts j N/m samples later, circularly, so channels are not identical).
+        ``multisine``: all FFT lines of the record inside the band, equal amplitude,
+        independent uniformly random phases per channel.
     n_samples, n_channels : int
         Record length N and number of channels m.
     fs : float
