@@ -137,17 +137,21 @@ def hermite_beam_displacements(x_a, x_b, u_a, u_b, xi, rod=None):
     return x, u
 
 
-def equivalent_radius(A, Iy, Iz):
+def equivalent_radius(A, Iy, Iz, J=None, rod=None):
     """Outer radius of the round tube with the section's area and mean second moment.
 
     For a tube or a solid circle this is exactly its outer radius: with
     ``I = pi (ro^4 - ri^4) / 4`` and ``A = pi (ro^2 - ri^2)``, ``ro^2 = (4 I / A + A / pi) / 2``.
-    Other shapes get the tube that has the same A and I.
+    Other shapes get the tube that has the same A and I. Rods (no bending stiffness, their
+    I is a placeholder) use the polar moment instead, ``I = J / 2``.
 
     Parameters
     ----------
     A, Iy, Iz : array-like
         [m^2, m^4, m^4].
+    J : array-like, optional
+        Torsion constant [m^4], used for rods.
+    rod : array-like of bool, optional
 
     Returns
     -------
@@ -155,6 +159,8 @@ def equivalent_radius(A, Iy, Iz):
     """
     A = np.asarray(A, float)
     inertia = 0.5 * (np.asarray(Iy, float) + np.asarray(Iz, float))
+    if J is not None and rod is not None:
+        inertia = np.where(np.asarray(rod, bool), 0.5 * np.asarray(J, float), inertia)
     with np.errstate(divide="ignore", invalid="ignore"):
         r2 = 0.5 * (4 * inertia / A + A / math.pi)
         r = np.sqrt(r2)
@@ -376,7 +382,13 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
         ends = model.index_of(beams.nodes, what=lambda k: f"beam {beams.ids[k // 2]}")
         x, u = hermite_beam_displacements(xyz[ends[:, 0]], xyz[ends[:, 1]], u_nodes[ends[:, 0]],
                                           u_nodes[ends[:, 1]], xi, rod=beams.rod)
-        radii = np.maximum(equivalent_radius(beams.A, beams.Iy, beams.Iz), 1e-3 * diagonal)
+        radii = equivalent_radius(beams.A, beams.Iy, beams.Iz, beams.J, beams.rod)
+        # A section whose properties are not a solid's (a deck's placeholder I, a stiffened
+        # dummy member) would hide the model: such tubes fall back to the area's circle,
+        # and the thinnest stay visible.
+        too_big = radii > 0.05 * diagonal
+        radii[too_big] = np.sqrt(beams.A[too_big] / math.pi)
+        radii = np.clip(radii, 1e-3 * diagonal, 0.05 * diagonal)
         parts.append(_Part("beams", "tubes", x, u, radius=radii,
                            data={"beam_id": beams.ids.astype(np.int64)}))
     typical = float(np.median(radii)) if radii.size else 4e-3 * diagonal
@@ -503,7 +515,7 @@ def _add_scene(plotter, scene: ModeScene, factor: float, cmap: str, show_ghost: 
                              scalars=None, show_scalar_bar=False)
     deformed = scene.meshes(factor)
     cmap = default_cmap() if cmap is None else cmap
-    bar_args = dict(title="displacement / max", n_labels=6, fmt="%.1f", vertical=True, position_x=0.86,
+    bar_args = dict(title="displacement\n/ max", n_labels=6, fmt="%.1f", vertical=True, position_x=0.87,
                     position_y=0.1, height=0.62, width=0.05, color="black",
                     title_font_size=max(font_size, 12), label_font_size=max(font_size - 1, 12),
                     unconstrained_font_size=True)
