@@ -1,0 +1,129 @@
+"""PLID recursion in direct (covariance) form: one sample per call, in place.
+
+Follows ``docs/plid.md`` exactly, on ``z = [theta; x]``:
+
+1. Measurement update with ``H = [0, C]``; the posterior output noise is then
+   ``v = y - C x`` exactly (``Cov(z, v) = -K R = -P+ H^T``, ``S_v = H P+ H^T``), so the joint
+   ``[z; v]`` propagation reduces to ``A_hat = F + Abar_hat C`` acting on ``x``.
+2. Time update ``x+ = F x + Phi(y - v_hat, u) theta - Abar v - B n + w`` with the mean and
+   covariance of the product ``Abar v`` propagated exactly (Isserlis):
+   mean ``+ sum_j P[a_j, x] C_j^T``; covariance
+   ``sum_jl S_v[j,l] P[a_j,a_l] + Cov(a_j,v_l) Cov(a_l,v_j)^T``, input noise
+   ``sum_jl N[j,l] (b_j b_l^T + P[b_j,b_l])``, ``Q`` and ``Q_theta``.
+
+``F P F^T`` uses ``F = [[I, 0], [Phi, A_hat]]`` with ``Phi = [c^T (x) I_n]``: ``Phi X`` is a
+sum of ``p + m`` scaled row blocks, never a dense product, so a sample costs
+O((n + q) n (p + m)) for the time update and O((n + q)^2 p) for the measurement update.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg.blas import dgemm
+
+from plid.recursion_common import Problem
+
+__all__ = ["DirectState", "direct_init", "direct_step", "direct_covariance"]
+
+
+@dataclass
+class DirectState:
+    """Estimate ``z = [theta; x]`` (one-step prediction) and its covariance ``P``."""
+
+    z: np.ndarray
+    P: np.ndarray
+
+
+def direct_init(pb: Problem, z0: np.ndarray, P0: np.ndarray) -> DirectState:
+    """Start from a prior mean ``z0`` and covariance ``P0`` (copied)."""
+    return DirectState(np.array(z0, dtype=float), np.array(P0, dtype=float, order="C"))
+
+
+def direct_covariance(st: DirectState) -> np.ndarray:
+    """The covariance of ``z`` (a copy)."""
+    return st.P.copy()
+
+
+def direct_step(pb: Problem, st: DirectState, u: np.ndarray, y: np.ndarray,
+                e: np.ndarray) -> None:
+    """Process one sample (scaled units): measurement then time update, in place.
+
+    ``e`` receives the innovation ``y - C x^-`` (p,).
+    """
+    n, p, m, q = pb.n, pb.p, pb.m, pb.q
+    z, P = st.z, st.P
+    sel = pb.sel
+
+    # ---- measurement update -------------------------------------------------------
+    if sel is not None:
+        xs = q + sel
+        np.subtract(y, z[xs], out=e)
+        PH = P[:, xs]
+        S = PH[xs] + pb.R
+    else:
+        np.subtract(y, pb.C @ z[q:], out=e)
+        PH = P[:, q:] @ pb.C.T
+        S = pb.C @ PH[q:] + pb.R
+    Sinv = np.linalg.inv(S)
+    K = PH @ Sinv
+    z += K @ e
+    # P -= K PH^T in place (BLAS on the Fortran view of the C-ordered array).
+    dgemm(-1.0, PH, K, 1.0, P.T, trans_b=True, overwrite_c=True)
+
+    # ---- time update --------------------------------------------------------------
+    np_ = n * p
+    th = z[:q]
+    x = z[q:]
+    Abar = th[:np_].reshape(p, n).T
+    Bm = th[np_:].reshape(m, n).T
+    if sel is not None:
+        yc = x[sel]
+        Ahat = pb.F.copy()
+        Ahat[:, sel] += Abar
+        PAXC = P[:np_, xs]                        # P[a, x] C^T, (n p, p)
+        Sv = P[xs][:, xs]                         # C P_xx C^T
+    else:
+        yc = pb.C @ x
+        Ahat = pb.F + Abar @ pb.C
+        PAXC = P[:np_, q:] @ pb.C.T
+        Sv = pb.C @ P[q:, q:] @ pb.C.T
+    coef = np.concatenate((yc, u))
+    c3 = PAXC.reshape(p, n, p)                    # c3[j, :, l] = -Cov(a_j, v_l)
+
+    x_new = pb.F @ x + Abar @ yc + Bm @ u
+    for j in range(p):
+        x_new += c3[j, :, j]
+
+    Pxt = P[q:, :q]
+    Mt = Ahat @ Pxt                               # becomes the new P[x, theta]
+    Mx = Ahat @ P[q:, q:]
+    for k in range(p + m):
+        ck = coef[k]
+        if ck != 0.0:
+            r0 = k * n
+            Mt += ck * P[r0:r0 + n, :q]
+            Mx += ck * P[r0:r0 + n, q:]
+    Pxx = Mx @ Ahat.T
+    for k in range(p + m):
+        ck = coef[k]
+        if ck != 0.0:
+            Pxx += ck * Mt[:, k * n:(k + 1) * n]
+
+    # second-order moments of Abar v (Isserlis)
+    PAA = P[:np_, :np_].reshape(p, n, p, n)
+    Pxx += np.tensordot(Sv, PAA, axes=([0, 1], [0, 2]))
+    Pxx += c3.transpose(1, 0, 2).reshape(n, p * p) @ c3.transpose(1, 2, 0).reshape(n, p * p).T
+    if pb.N is not None:
+        PBB = P[np_:q, np_:q].reshape(m, n, m, n)
+        Pxx += np.tensordot(pb.N, PBB, axes=([0, 1], [0, 2])) + Bm @ pb.N @ Bm.T
+    Pxx += pb.Q
+
+    P[q:, :q] = Mt
+    P[:q, q:] = Mt.T
+    P[q:, q:] = 0.5 * (Pxx + Pxx.T)
+    if pb.Q_theta is not None:
+        idx = np.arange(q)
+        P[idx, idx] += pb.Q_theta
+    z[q:] = x_new

@@ -1,0 +1,180 @@
+"""PLID recursion in square-root form: the covariance is carried as ``P = L L^T``, never formed.
+
+Same model and moments as :mod:`plid.recursion_direct` (see ``docs/plid.md``); only the
+arithmetic differs.
+
+- ``L`` is lower triangular with ``z = [theta; x]`` (parameters first), stored in Fortran
+  order (columns contiguous, which the column recurrences below walk along).
+- Measurement update: outputs are whitened by the Cholesky factor of ``R`` and processed
+  one at a time with Carlson's triangular rank-one update (Carlson 1973,
+  "Fast triangular formulation of the square root filter", AIAA J. 11(9)). For
+  ``M = I - f f^T / (1 + f^T f)`` its lower-triangular factor is
+  ``T = diag(d) + tril(f beta^T, -1)`` with ``a_j = 1 + sum_{i>=j} f_i^2``,
+  ``d_j = sqrt(a_{j+1} / a_j)`` and ``beta_j = -f_j / sqrt(a_j a_{j+1})``; ``L T`` is a
+  column-wise reverse cumulative sum, O((n + q)^2) per output and fully vectorised. A QR
+  array update of the (n + q + p)-square pre-array would cost O((n + q)^3) per sample.
+  The posterior output noise is ``v = y - C x`` exactly, so "appending v to the state"
+  needs no extra columns: its factor rows are ``-C L_x``.
+- Time update: ``F = [[I, 0], [Phi, A_hat]]`` leaves the theta rows of ``L`` unchanged
+  (still triangular), so only the n x rows are rebuilt: ``L_xt <- Phi L_tt + A_hat L_xt``
+  and ``L_xx`` from the LQ factorisation of ``[A_hat L_xx, W]`` with ``W W^T`` the noise and
+  second-order moment terms, O(n^2 (2n)) plus O(n q (p + m)) for the products.
+- A parameter drift ``Q_theta`` changes the theta rows too; it is applied by an LQ of
+  ``[L_tt, Q_theta^(1/2)]`` whose rotation is carried into the x rows (O(q^3): the
+  drift option costs time in this form).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from plid.recursion_common import Problem, psd_factor
+
+__all__ = ["SqrtState", "sqrt_init", "sqrt_step", "sqrt_covariance"]
+
+
+@dataclass
+class SqrtState:
+    """Estimate ``z = [theta; x]`` (one-step prediction) and lower-triangular ``L``."""
+
+    z: np.ndarray
+    L: np.ndarray
+    # whitening of the outputs and the per-output data the measurement update needs
+    Rw: np.ndarray          # inverse Cholesky factor of R, (p, p)
+    Hw: np.ndarray          # Rw @ C, (p, n)
+    jmax: list              # columns of L touched by each whitened output
+    single: list            # (state index, weight) when a whitened row has one entry
+
+
+def sqrt_init(pb: Problem, z0: np.ndarray, P0: np.ndarray) -> SqrtState:
+    """Start from a prior mean ``z0`` and covariance ``P0`` (factored here)."""
+    L = np.asfortranarray(psd_factor(np.asarray(P0, dtype=float)))
+    if not np.allclose(L, np.tril(L)):
+        # psd_factor fell back to a symmetric root: re-triangularise it.
+        L = np.asfortranarray(np.linalg.qr(L.T, mode="r").T)
+    Rw = np.linalg.inv(np.linalg.cholesky(pb.R))
+    Hw = Rw @ pb.C
+    jmax, single = [], []
+    for i in range(pb.p):
+        nz = np.flatnonzero(Hw[i])
+        jmax.append(pb.q + int(nz.max()) + 1)
+        single.append((int(nz[0]), float(Hw[i, nz[0]])) if nz.size == 1 else None)
+    return SqrtState(np.array(z0, dtype=float), L, Rw, Hw, jmax, single)
+
+
+def sqrt_covariance(st: SqrtState) -> np.ndarray:
+    """The covariance ``L L^T`` of ``z`` (formed only on request)."""
+    return st.L @ st.L.T
+
+
+def _measurement(pb: Problem, st: SqrtState, yw: np.ndarray) -> None:
+    q = pb.q
+    z, L = st.z, st.L
+    for i in range(pb.p):
+        J = st.jmax[i]
+        LJ = L[:, :J]
+        if st.single[i] is not None:
+            s, w = st.single[i]
+            f = w * L[q + s, :J]
+            innov = yw[i] - w * z[q + s]
+        else:
+            f = st.Hw[i] @ L[q:, :J]
+            innov = yw[i] - st.Hw[i] @ z[q:]
+        f2 = f * f
+        tail = np.cumsum(f2[::-1])[::-1]          # sum_{i >= j} f_i^2
+        a = 1.0 + tail
+        a1 = np.empty_like(a)
+        a1[:-1] = a[1:]
+        a1[-1] = 1.0
+        d = np.sqrt(a1 / a)
+        beta = -f / np.sqrt(a * a1)
+        g = LJ @ f                                 # P h (unnormalised gain)
+        z += g * (innov / a[0])
+        G = LJ * f
+        # exclusive reverse cumulative sum over columns: Cc[:, j] = sum_{i>j} G[:, i]
+        rc = np.cumsum(G[:, :0:-1], axis=1)
+        LJ *= d
+        rc *= beta[-2::-1]
+        LJ[:, :-1] += rc[:, ::-1]
+
+
+def _lq_lower(M: np.ndarray) -> np.ndarray:
+    """Lower-triangular ``L`` (rows of M) with ``L L^T = M M^T``."""
+    return np.linalg.qr(M.T, mode="r").T
+
+
+def sqrt_step(pb: Problem, st: SqrtState, u: np.ndarray, y: np.ndarray,
+              e: np.ndarray) -> None:
+    """Process one sample (scaled units): measurement then time update, in place.
+
+    ``e`` receives the innovation ``y - C x^-`` (p,).
+    """
+    n, p, m, q = pb.n, pb.p, pb.m, pb.q
+    z, L = st.z, st.L
+    sel = pb.sel
+    if sel is not None:
+        np.subtract(y, z[q + sel], out=e)
+    else:
+        np.subtract(y, pb.C @ z[q:], out=e)
+    _measurement(pb, st, st.Rw @ y)
+
+    np_ = n * p
+    th = z[:q]
+    x = z[q:]
+    Abar = th[:np_].reshape(p, n).T
+    Bm = th[np_:].reshape(m, n).T
+    if sel is not None:
+        yc = x[sel]
+        Ahat = pb.F.copy()
+        Ahat[:, sel] += Abar
+        CL = L[q + sel, :]                         # factor rows of C x (= -v)
+    else:
+        yc = pb.C @ x
+        Ahat = pb.F + Abar @ pb.C
+        CL = pb.C @ L[q:, :]
+    coef = np.concatenate((yc, u))
+    Sv = CL @ CL.T
+    # The a-rows of L are zero beyond column n p (lower triangular, a first).
+    LA = L[:np_, :np_]
+    PAXC = LA @ CL[:, :np_].T                      # P[a, x] C^T, (n p, p)
+    c3 = PAXC.reshape(p, n, p)
+
+    x_new = pb.F @ x + Abar @ yc + Bm @ u
+    for j in range(p):
+        x_new += c3[j, :, j]
+
+    # Second-order term sum_jl Sv[j,l] L_aj L_al^T + c_jl c_lj^T, input noise, Q.
+    LA3 = LA.reshape(p, n, np_)
+    Y3 = np.tensordot(Sv, LA3, axes=(1, 0))
+    W = np.tensordot(LA3, Y3, axes=([0, 2], [0, 2]))
+    W += c3.transpose(1, 0, 2).reshape(n, p * p) @ c3.transpose(1, 2, 0).reshape(n, p * p).T
+    if pb.N is not None:
+        LB3 = L[np_:q, :q].reshape(m, n, q)
+        W += np.tensordot(LB3, np.tensordot(pb.N, LB3, axes=(1, 0)), axes=([0, 2], [0, 2]))
+        W += Bm @ pb.N @ Bm.T
+    W += pb.Q
+    Wf = psd_factor(0.5 * (W + W.T))
+
+    Lt = L[:q, :q]
+    Lxt_new = Ahat @ L[q:, :q]
+    for k in range(p + m):
+        ck = coef[k]
+        if ck != 0.0:
+            Lxt_new += ck * Lt[k * n:(k + 1) * n, :]
+    AL = Ahat @ L[q:, q:]
+
+    if pb.Q_theta is None:
+        L[q:, :q] = Lxt_new
+        L[q:, q:] = _lq_lower(np.hstack((AL, Wf)))
+    else:
+        # Theta rows change too: LQ of [L_tt, Qth^(1/2)], carry the rotation into x rows.
+        pre = np.hstack((Lt, np.diag(np.sqrt(pb.Q_theta))))
+        Qm, Rm = np.linalg.qr(pre.T, mode="complete")
+        L[:q, :q] = Rm[:q].T
+        X = np.hstack((Lxt_new, np.zeros((n, q)))) @ Qm   # rotated x rows, (n, 2q)
+        L[q:, :q] = X[:, :q]
+        L[q:, q:] = _lq_lower(np.hstack((X[:, q:], AL, Wf)))
+    z[q:] = x_new
