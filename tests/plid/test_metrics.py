@@ -1,0 +1,147 @@
+"""Metrics: prediction ratio, simulation fit, FRF error and pole matching against closed forms."""
+
+import control
+import numpy as np
+import pytest
+
+from plid.errors import DataError
+from plid.experiment import run_experiment, simulate
+from plid.frf import FRF, frequency_response
+from plid.metrics import (compare_poles, frf_error, modal_parameters, one_step_predict,
+                          prediction_ratio_db, predictor_gain, simulation_fit)
+
+FS = 1000.0
+MODES = [(60.0, 0.02), (210.0, 0.01), (330.0, 0.05)]
+
+
+def continuous_plant(modes=MODES, n_in=1):
+    k = len(modes)
+    A = np.zeros((2 * k, 2 * k))
+    for i, (f, z) in enumerate(modes):
+        w = 2 * np.pi * f
+        A[2 * i:2 * i + 2, 2 * i:2 * i + 2] = [[0, 1], [-w**2, -2 * z * w]]
+    rng = np.random.default_rng(1)
+    B = np.zeros((2 * k, n_in))
+    B[1::2] = rng.uniform(0.5, 1.5, (k, n_in))
+    C = np.zeros((2, 2 * k))
+    C[:, 0::2] = 1e4 * rng.uniform(0.5, 1.5, (2, k))
+    return control.ss(A, B, C, np.zeros((2, n_in)))
+
+
+@pytest.fixture
+def plant():
+    return control.c2d(continuous_plant(), 1 / FS)
+
+
+def test_modal_parameters_of_a_zoh_plant_are_the_continuous_ones(plant):
+    f, z, _ = modal_parameters(plant)
+    np.testing.assert_allclose(f, [m[0] for m in MODES], rtol=1e-10)
+    np.testing.assert_allclose(z, [m[1] for m in MODES], rtol=1e-8)
+    fc, zc, _ = modal_parameters(continuous_plant())
+    np.testing.assert_allclose(fc, f, rtol=1e-10)
+
+
+def test_pole_matching_pairs_each_true_mode_with_its_estimate(plant):
+    # An "identified" model: the modes shifted a little, listed in another order, plus a
+    # spurious real pole.
+    shifted = [(330.0 * 1.001, 0.051), (60.0 * 0.999, 0.021), (210.0 * 1.002, 0.0105)]
+    ident = control.append(control.c2d(continuous_plant(shifted), 1 / FS),
+                           control.ss([[0.3]], [[1.0]], [[1.0]], [[0.0]], 1 / FS))
+    rows = compare_poles(ident, plant)
+    assert len(rows) == 4
+    for row, (f, z) in zip(rows[:3], MODES):
+        assert row["true_frequency_hz"] == pytest.approx(f)
+        est = next(s for s in shifted if abs(s[0] - f) < 2)
+        assert row["frequency_hz"] == pytest.approx(est[0], rel=1e-9)
+        assert row["damping"] == pytest.approx(est[1], rel=1e-6)
+        assert row["frequency_error_percent"] == pytest.approx(100 * (est[0] / f - 1), rel=1e-6)
+    spurious = rows[3]
+    assert spurious["true_frequency_hz"] is None
+    assert spurious["frequency_hz"] == pytest.approx(np.log(0.3) * -FS / (2 * np.pi))
+
+
+def test_frf_error_of_a_gain_error_is_that_gain_in_db(plant):
+    err = frf_error(plant * 1.1, plant, band=(10, 450))
+    assert err["max_db"] == pytest.approx(20 * np.log10(1.1), rel=1e-9)
+    assert err["rms_db"] == pytest.approx(20 * np.log10(1.1), rel=1e-9)
+    assert err["max_deg"] < 1e-9
+    assert np.shape(err["per_channel"]["max_db"]) == (2, 1)
+
+
+def test_frf_error_of_a_one_sample_delay_is_a_linear_phase(plant):
+    delay = control.ss([[0.0]], [[1.0]], [[1.0]], [[0.0]], 1 / FS)  # z^-1
+    err = frf_error(plant * delay, plant, band=(10, 450))
+    assert err["max_db"] < 1e-9
+    assert err["max_deg"] == pytest.approx(360 * 450 / FS, rel=1e-6)
+
+
+def test_frf_error_against_an_estimate_uses_its_grid(plant):
+    f = np.linspace(0, 500, 101)
+    ref = FRF(f=f, H=frequency_response(plant, f) * 10 ** (0.5 / 20))
+    err = frf_error(plant, ref, band=(20, 400))
+    assert err["max_db"] == pytest.approx(0.5, rel=1e-9)
+    assert err["band"] == [20.0, 400.0]
+
+
+def test_frf_error_refuses_mismatched_sizes(plant):
+    with pytest.raises(DataError, match="the model has 1 inputs and 2 outputs, the reference 1 "
+                                        "and 1"):
+        frf_error(plant, plant[0, 0])
+
+
+def test_simulation_fit_of_a_gain_error_is_closed_form(plant, rng):
+    u = rng.standard_normal((2000, 1))
+    y = simulate(plant, u)
+    fit = simulation_fit(plant * (1 + 1e-3), u, y)
+    np.testing.assert_allclose(fit["per_channel_db"], [60.0, 60.0], rtol=1e-9)
+    assert fit["overall_db"] == pytest.approx(60.0, rel=1e-9)
+    np.testing.assert_allclose(fit["nrmse_percent"], 99.9, atol=1e-3)
+
+
+def test_prediction_ratio_of_the_true_plant_is_the_sensor_snr(plant):
+    e = run_experiment(plant, 20000, seed=2, snr_db=30.0)
+    sigma2 = e.sensor_noise_rms**2
+    # No state noise: the optimal predictor is the plant itself (K = 0); its error is the
+    # sensor noise, so the ratio is RMS(y)/RMS(noise) = sqrt(1 + 10^-3) * 10^(30/20).
+    K = predictor_gain(plant, np.zeros((6, 6)), np.diag(sigma2))
+    assert np.max(np.abs(K)) < 1e-12
+    r = prediction_ratio_db(plant, e.data.u, e.data.y, K=K)
+    noise = e.data.y - e.y_clean
+    realised = 20 * np.log10(np.sqrt(np.mean(e.data.y**2, 0) / np.mean(noise**2, 0)))
+    np.testing.assert_allclose(r["per_channel"], realised, rtol=1e-9)
+    overall = -10 * np.log10(np.mean(np.mean(noise**2, 0) / np.mean(e.data.y**2, 0)))
+    assert r["overall"] == pytest.approx(overall, rel=1e-9)
+    # and that is the requested SNR up to the sampling spread of the noise power
+    # (relative std 1/sqrt(2 N) = 0.5 %, i.e. 0.03 dB; allow 4 sigma)
+    np.testing.assert_allclose(realised, 30.0 + 10 * np.log10(1 + 1e-3), atol=0.13)
+
+
+def test_predictor_gain_agrees_with_python_control_dlqe(plant):
+    Q = 1e-6 * np.eye(6)
+    R = np.diag([1e-4, 4e-4])
+    K = predictor_gain(plant, Q, R)
+    L, _, _ = control.dlqe(plant.A, np.eye(6), plant.C, Q, R)  # its L is the predictor gain
+    np.testing.assert_allclose(K, L, rtol=1e-8, atol=1e-10 * np.abs(K).max())
+
+
+def test_optimal_predictor_errors_are_white_with_state_noise(plant, rng):
+    n = 30000
+    Q = 1e-8 * np.eye(6)
+    R = np.diag([1e-4, 1e-4])
+    w = rng.standard_normal((n, 6)) * 1e-4
+    u = rng.standard_normal((n, 1))
+    aug = control.ss(plant.A, np.hstack([plant.B, np.eye(6)]), plant.C, np.zeros((2, 7)), 1 / FS)
+    y = simulate(aug, np.hstack([u, w])) + rng.standard_normal((n, 2)) * 1e-2
+    K = predictor_gain(plant, Q, R)
+    e = y - one_step_predict(plant, u, y, K=K)
+    e = e[1000:, 0] - e[1000:, 0].mean()
+    lags = [np.dot(e[:-k], e[k:]) / np.dot(e, e) for k in range(1, 11)]
+    assert np.max(np.abs(lags)) < 4 / np.sqrt(e.size)  # white within sampling error
+    # and the simulation (K = 0) error is far from white
+    e0 = y - simulate(plant, u)
+    assert np.dot(e0[:-1, 0], e0[1:, 0]) / np.dot(e0[:, 0], e0[:, 0]) > 0.5
+
+
+def test_prediction_needs_matching_sizes(plant, rng):
+    with pytest.raises(DataError, match="the model has 2 outputs but the data has 3"):
+        prediction_ratio_db(plant, rng.standard_normal((10, 1)), rng.standard_normal((10, 3)))
