@@ -211,14 +211,21 @@ def _parse(path: Path):
         text = path.read_text(errors="replace")
     except OSError as exc:
         raise ModelError(f"{path}: cannot read ({exc.strerror})") from None
-    # Without executive/case control pyNastran must be told the file is bulk data only.
-    punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, re.IGNORECASE | re.MULTILINE) is None
+    # Without executive/case control pyNastran must be told the file is bulk data only; a
+    # lone BEGIN BULK (no CEND before it) it refuses either way, so such a deck gets an
+    # empty executive deck in front (read from memory: INCLUDEs then resolve from the
+    # current directory).
+    source: str | io.StringIO = str(path)
+    flags = re.IGNORECASE | re.MULTILINE
+    punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, flags) is None
+    if not punch and re.search(r"^\s*CEND\b", text, flags) is None:
+        source = io.StringIO("CEND\n" + text)
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     try:
         # pyNastran also print()s some complaints; keep them off the user's terminal (the
         # exception carries the message).
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            bdf.read_bdf(str(path), xref=False, validate=False, punch=punch)
+            bdf.read_bdf(source, xref=False, validate=False, punch=punch)
     except Exception as exc:  # pyNastran raises many types for malformed decks
         msg = " ".join(str(exc).split())[:300] or type(exc).__name__
         raise ModelError(f"{path}: not a readable bulk-data deck ({msg})") from None
@@ -812,7 +819,7 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     (a rigid body's mass as a CONM2 at its master, CID = 0, offset to its cg); SPC1 (set 1);
     PARAM,COUPMASS (1 consistent, -1 lumped); EIGRL. Element ids that clash across kinds are
     renumbered above the largest id. Values are written in 16-character fields so that a
-    re-read model matches to about 1e-14.
+    re-read model matches to about 1e-12 (16-character fields).
     """
     from cpylog import SimpleLogger
     from pyNastran.bdf.bdf import BDF

@@ -1,0 +1,441 @@
+"""NASTRAN bulk data: cards map onto the model as NASTRAN defines them, and write -> read is
+the identity.
+
+Reference results are independent of the reader: Euler-Bernoulli closed forms, hand-computed
+spring-mass frequencies, the QRG's CONM2 inertia form checked through a rotated spring, and
+pyNastran's own PBARL section properties.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fem import Model, ModelError, Section
+from fem.materials import Material
+from fem.modal import solve_modes
+from fem.nastran import read_bdf, write_bdf
+
+FRAME = Path(__file__).resolve().parents[2] / "examples" / "decks" / "frame.bdf"
+BETA_L = (1.8751040687119611, 4.694091132974174)  # cantilever eigenvalues beta_n L
+
+
+def real(x: float) -> str:
+    """A free-field real that pyNastran reads back exactly."""
+    s = repr(float(x))
+    return s if ("." in s or "e" in s) else s + "."
+
+
+def write(tmp_path: Path, text: str, name: str = "deck.bdf") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def freqs(model, info=None, n=10):
+    return solve_modes(model, n_modes=n, autospc=True if info is None else info.autospc).frequencies_hz
+
+
+def cantilever_deck(n_el=20, L=1.0, E=68.9e9, rho=2700.0, A=1e-4, I1=2e-9, I2=2e-9, J=4e-9,
+                    coupmass="1", wtmass=None, extra="") -> str:
+    """Cantilever along x, clamped at grid 1, PBAR (no shear flexibility), v = global z."""
+    lines = ["BEGIN BULK"]
+    if coupmass is not None:
+        lines.append(f"PARAM,COUPMASS,{coupmass}")
+    if wtmass is not None:
+        lines.append(f"PARAM,WTMASS,{wtmass}")
+    lines.append(f"MAT1,1,{real(E)},,0.33,{real(rho)}")
+    lines.append(f"PBAR,1,1,{real(A)},{real(I1)},{real(I2)},{real(J)}")
+    for i in range(n_el + 1):
+        lines.append(f"GRID,{i + 1},,{real(L * i / n_el)},0.,0.")
+    for i in range(n_el):
+        lines.append(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,0.,1.")
+    lines.append("SPC1,1,123456,1")
+    lines.append(extra)
+    lines.append("ENDDATA")
+    return "\n".join(lines) + "\n"
+
+
+def eb_cantilever(n, E, I, rho, A, L):
+    return BETA_L[n] ** 2 / (2 * math.pi * L**2) * math.sqrt(E * I / (rho * A))
+
+
+def tip_direction(modes, k):
+    """"y" or "z": which transverse tip displacement dominates mode k."""
+    u = modes.shapes_full[:, k].reshape(-1, 6)[-1]
+    return "y" if abs(u[1]) > abs(u[2]) else "z"
+
+
+# ----------------------------------------------------------------- independent references
+def test_cantilever_tube_deck_matches_euler_bernoulli_closed_form(tmp_path):
+    r, t = 0.00635, 0.001
+    ri = r - t
+    A = math.pi * (r**2 - ri**2)
+    I = math.pi * (r**4 - ri**4) / 4
+    model, info = read_bdf(write(tmp_path, cantilever_deck(A=A, I1=I, I2=I, J=2 * I)))
+    assert info.mass == "consistent" and info.beam_theory == "euler-bernoulli"
+    f = freqs(model, info, n=4)
+    f1 = eb_cantilever(0, 68.9e9, I, 2700.0, A, 1.0)
+    f2 = eb_cantilever(1, 68.9e9, I, 2700.0, A, 1.0)
+    # Both bending planes. Cubic elements with consistent mass converge as h^4: with 20
+    # elements that leaves ~1e-7 on mode 1 and ~2e-6 on mode 2 (beta h = 0.23).
+    np.testing.assert_allclose(f[:2], [f1, f1], rtol=1e-6)
+    np.testing.assert_allclose(f[2:], [f2, f2], rtol=1e-5)
+
+
+def test_pbar_i1_is_bending_in_the_plane_of_the_orientation_vector(tmp_path):
+    # v = global z: plane 1 (element x-y) is the global x-z plane, so I1 governs the
+    # vertical (z) bending and I2 the horizontal (y) one.
+    A, I1, I2 = 1e-4, 8e-9, 2e-9
+    model, info = read_bdf(write(tmp_path, cantilever_deck(A=A, I1=I1, I2=I2, J=5e-9)))
+    modes = solve_modes(model, n_modes=2)
+    got = {tip_direction(modes, k): modes.frequencies_hz[k] for k in range(2)}
+    assert got["z"] == pytest.approx(eb_cantilever(0, 68.9e9, I1, 2700.0, A, 1.0), rel=1e-6)
+    assert got["y"] == pytest.approx(eb_cantilever(0, 68.9e9, I2, 2700.0, A, 1.0), rel=1e-6)
+
+
+def test_conm2_on_celas2_gives_the_spring_mass_frequencies(tmp_path):
+    m, k, Ixx, kt = 3.0, 1200.0, 0.2, 50.0
+    deck = f"""BEGIN BULK
+GRID,1,,0.,0.,0.
+CONM2,10,1,,{real(m)},,,,
+,{real(Ixx)},,1.,,,1.
+CELAS2,20,{real(k)},1,1
+CELAS2,21,{real(kt)},1,4
+SPC1,1,2356,1
+ENDDATA
+"""
+    model, info = read_bdf(write(tmp_path, deck))
+    f = freqs(model, info, n=2)
+    np.testing.assert_allclose(f, np.sort([math.sqrt(k / m), math.sqrt(kt / Ixx)]) / (2 * np.pi),
+                               rtol=1e-12)
+
+
+def test_celas1_between_two_grids_couples_equal_components(tmp_path):
+    m1, m2, k0, k12 = 2.0, 5.0, 300.0, 700.0
+    deck = f"""BEGIN BULK
+GRID,1,,0.,0.,0.,,23456
+GRID,2,,1.,0.,0.,,23456
+CONM2,1,1,,{real(m1)}
+CONM2,2,2,,{real(m2)}
+PELAS,7,{real(k12)}
+CELAS1,3,7,1,1,2,1
+CELAS2,4,{real(k0)},1,1
+ENDDATA
+"""
+    model, info = read_bdf(write(tmp_path, deck))
+    K = np.array([[k0 + k12, -k12], [-k12, k12]])
+    M = np.diag([m1, m2])
+    ref = np.sqrt(np.sort(np.linalg.eigvals(np.linalg.solve(M, K)).real)) / (2 * np.pi)
+    np.testing.assert_allclose(freqs(model, info, n=2), ref, rtol=1e-12)
+
+
+def test_conm2_products_of_inertia_take_nastrans_minus_sign(tmp_path):
+    # The QRG: tensor = [[I11, -I21, ...], ...]. A body with I21 > 0 has its smallest inertia
+    # about the (1, 1, 0) diagonal: I - p. A grounded CBUSH whose CID is rotated 45 deg
+    # about z puts stiffness ka about that diagonal and kb about (-1, 1, 0).
+    I, p, I33, ka, kb, kc = 2.0, 0.5, 3.0, 100.0, 400.0, 900.0
+    s = math.sqrt(0.5)
+    deck = f"""BEGIN BULK
+GRID,1,,0.,0.,0.,,123
+CORD2R,5,,0.,0.,0.,0.,0.,1.,
+,{real(s)},{real(s)},0.
+CONM2,10,1,,1.,,,,
+,{real(I)},{real(p)},{real(I)},0.,0.,{real(I33)}
+PBUSH,2,K,0.,0.,0.,{real(ka)},{real(kb)},{real(kc)}
+CBUSH,3,2,1,,,,,5
+ENDDATA
+"""
+    model, info = read_bdf(write(tmp_path, deck))
+    np.testing.assert_allclose(model.point_masses.inertia[0][0, 1], -p)
+    ref = np.sqrt(sorted([ka / (I - p), kb / (I + p), kc / I33])) / (2 * np.pi)
+    np.testing.assert_allclose(freqs(model, info, n=3), ref, rtol=1e-10)
+
+
+def test_rbe2_slave_mass_moves_with_the_master(tmp_path):
+    m, k = 4.0, 1000.0
+    deck = f"""BEGIN BULK
+GRID,1,,0.,0.,0.,,23456
+GRID,2,,0.,1.,0.
+RBE2,5,1,123456,2
+CONM2,6,2,,{real(m)}
+CELAS2,7,{real(k)},1,1
+ENDDATA
+"""
+    model, info = read_bdf(write(tmp_path, deck))
+    rb = model.rigid_bodies[0]
+    assert (rb.master, rb.slaves.tolist(), rb.dofs.all(), rb.mass) == (1, [2], True, 0.0)
+    np.testing.assert_allclose(freqs(model, info, n=1), [math.sqrt(k / m) / (2 * np.pi)], rtol=1e-12)
+
+
+def test_pbarl_sections_match_pyNastrans_own_section_properties(tmp_path):
+    from pyNastran.bdf.bdf import BDF
+
+    deck = """BEGIN BULK
+MAT1,1,70.+9,,0.3,2700.
+PBARL,1,1,,ROD
+,0.01
+PBARL,2,1,,TUBE
+,0.01,0.008
+PBARL,3,1,,BAR
+,0.03,0.01
+PBARL,4,1,,BOX
+,0.04,0.02,0.002,0.002
+PBEAML,5,1,,BAR
+,0.03,0.01
+""" + "".join(f"GRID,{2 * i + 1},,0.,0.,{real(i)}\nGRID,{2 * i + 2},,1.,0.,{real(i)}\n"
+               f"{'CBEAM' if i == 4 else 'CBAR'},{i + 1},{i + 1},{2 * i + 1},{2 * i + 2},0.,1.,0.\n"
+               for i in range(5)) + "ENDDATA\n"
+    path = write(tmp_path, deck)
+    model, _ = read_bdf(path)
+    ref = BDF(debug=None)
+    ref.read_bdf(str(write(tmp_path, deck.replace("BEGIN BULK\n", ""), "punch.bdf")), punch=True)
+    b = model.beams
+    for i, pid in enumerate(range(1, 6)):
+        prop = ref.properties[pid]
+        assert b.A[i] == pytest.approx(prop.Area(), rel=1e-12)
+        i1, i2 = (prop.I11(), prop.I22()) if prop.type == "PBEAML" else (prop.I1(), prop.I2())
+        assert b.Iz[i] == pytest.approx(i1, rel=1e-12)  # I1: plane 1, about element z
+        assert b.Iy[i] == pytest.approx(i2, rel=1e-12)
+
+
+def test_grid_in_a_cylindrical_system_is_placed_in_basic_coordinates(tmp_path):
+    deck = """BEGIN BULK
+CORD2C,7,,1.,2.,3.,1.,2.,4.,
+,2.,2.,3.
+GRID,5,7,2.,30.,0.5
+GRID,6,,1.,1.,1.
+ENDDATA
+"""
+    model, _ = read_bdf(write(tmp_path, deck))
+    xyz = dict(zip(model.node_ids.tolist(), model.xyz))
+    th = math.radians(30)
+    np.testing.assert_allclose(xyz[5], [1 + 2 * math.cos(th), 2 + 2 * math.sin(th), 3.5], atol=1e-12)
+    np.testing.assert_allclose(xyz[6], [1, 1, 1])
+
+
+def test_conm2_offsets_in_basic_absolute_and_rotated_systems(tmp_path):
+    deck = """BEGIN BULK
+GRID,1,,1.,1.,1.
+CORD2R,3,,0.,0.,0.,0.,0.,1.,
+,0.,1.,0.
+CONM2,1,1,,2.,0.1,0.2,0.3
+CONM2,2,1,-1,2.,1.5,1.,1.
+CONM2,3,1,3,2.,1.,0.,0.,
+,1.,,2.,,,3.
+ENDDATA
+"""
+    model, _ = read_bdf(write(tmp_path, deck))
+    pm = model.point_masses
+    np.testing.assert_allclose(pm.offset[0], [0.1, 0.2, 0.3])
+    np.testing.assert_allclose(pm.offset[1], [0.5, 0.0, 0.0])
+    # CID 3: x3 along basic y, z along basic z -> its x axis along basic y.
+    np.testing.assert_allclose(pm.offset[2], [0.0, 1.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(np.diag(pm.inertia[2]), [2.0, 1.0, 3.0], atol=1e-15)
+
+
+def test_mat1_blank_field_follows_nastrans_rule(tmp_path):
+    deck = """BEGIN BULK
+MAT1,1,200.+9,,0.25,7800.
+MAT1,2,,80.+9,0.25,7800.
+MAT1,3,200.+9,70.+9,,7800.
+PBAR,1,1,1.-4,1.-9,1.-9,2.-9
+PBAR,2,2,1.-4,1.-9,1.-9,2.-9
+PBAR,3,3,1.-4,1.-9,1.-9,2.-9
+GRID,1,,0.,0.,0.
+GRID,2,,1.,0.,0.
+CBAR,1,1,1,2,0.,0.,1.
+CBAR,2,2,1,2,0.,0.,1.
+CBAR,3,3,1,2,0.,0.,1.
+ENDDATA
+"""
+    model, _ = read_bdf(write(tmp_path, deck))
+    b = model.beams
+    np.testing.assert_allclose(b.E, [200e9, 2 * 1.25 * 80e9, 200e9])
+    np.testing.assert_allclose(b.G, [200e9 / 2.5, 80e9, 70e9])
+
+
+def test_spc_set_selected_by_case_control_else_all_sets(tmp_path):
+    body = """GRID,1,,0.,0.,0.
+GRID,2,,1.,0.,0.
+SPC1,1,123,1
+SPC,2,2,456,0.
+SPCADD,3,2
+ENDDATA
+"""
+    model, info = read_bdf(write(tmp_path, "SOL 103\nCEND\nSUBCASE 1\n  SPC = 3\nBEGIN BULK\n" + body))
+    assert info.spc_sets == [2, 3]
+    np.testing.assert_array_equal(model.fixed_mask(), [[0] * 6, [0, 0, 0, 1, 1, 1]])
+    model, info = read_bdf(write(tmp_path, "BEGIN BULK\n" + body, "all.bdf"))
+    np.testing.assert_array_equal(model.fixed_mask(), [[1, 1, 1, 0, 0, 0], [0, 0, 0, 1, 1, 1]])
+
+
+def test_eigrl_request_is_reported(tmp_path):
+    model, info = read_bdf(FRAME)
+    assert (info.eigen.card, info.eigen.n_modes) == ("EIGRL", 10)
+
+
+# ----------------------------------------------------------------- WTMASS and COUPMASS
+def test_wtmass_scales_frequencies_by_inverse_square_root(tmp_path):
+    # The example frame has densities and a CONM2 with inertia: all must be scaled.
+    text = FRAME.read_text()
+    scaled = text.replace("PARAM,COUPMASS,1", "PARAM,COUPMASS,1\nPARAM,WTMASS,0.00259")
+    m0, i0 = read_bdf(FRAME)
+    m1, i1 = read_bdf(write(tmp_path, scaled))
+    assert (i0.wtmass, i1.wtmass) == (1.0, 0.00259)
+    f0, f1 = freqs(m0, i0), freqs(m1, i1)
+    np.testing.assert_allclose(f1, f0 / math.sqrt(0.00259), rtol=1e-10)
+
+
+def test_coupmass_selects_consistent_mass_and_lumped_is_the_default(tmp_path):
+    r = {}
+    for key, value in (("absent", None), ("on", "1"), ("off", "-1")):
+        model, info = read_bdf(write(tmp_path, cantilever_deck(coupmass=value), f"{key}.bdf"))
+        assert model.mass_formulation == info.mass
+        r[key] = (info, freqs(model, info, n=1)[0])
+    assert r["absent"][0].mass == "lumped" and "default" in r["absent"][0].mass_reason
+    assert r["on"][0].mass == "consistent" and "COUPMASS,1" in r["on"][0].mass_reason
+    assert r["off"][0].mass == "lumped" and "COUPMASS,-1" in r["off"][0].mass_reason
+    exact = eb_cantilever(0, 68.9e9, 2e-9, 2700.0, 1e-4, 1.0)
+    # Consistent mass converges as h^4, lumped (no rotary inertia) only as h^2.
+    err_c = abs(r["on"][1] / exact - 1)
+    err_l = abs(r["off"][1] / exact - 1)
+    assert err_c < 1e-6 < err_l < 1e-2
+    assert r["absent"][1] == r["off"][1]
+
+
+# ----------------------------------------------------------------- write -> read
+def _frame_model(theory="euler-bernoulli", mass="consistent") -> Model:
+    """A 3-D frame with every kind of item the writer handles."""
+    m = Model(beam_theory=theory, mass=mass, name="roundtrip")
+    al = Material.isotropic(68.9e9, 0.33, 2700.0, "al")
+    st = Material.isotropic(200e9, 0.29, 7850.0, "steel")
+    pts = {1: (0, 0, 0), 2: (0.4, 0, 0), 3: (0.4, 0.3, 0), 4: (0, 0.3, 0),
+           5: (0, 0, 0.5), 6: (0.4, 0, 0.5), 7: (0.4, 0.3, 0.5), 8: (0, 0.3, 0.5),
+           9: (0.2, 0.15, 0.6), 10: (0.2, 0.15, 0.6)}
+    m.add_nodes(list(pts), list(pts.values()))
+    tube = Section.tube(0.01, 0.0015, name="tube")
+    rect = Section.rectangle(0.02, 0.008, name="rect")
+    m.add_beams([1, 2, 3, 4], [[1, 5], [2, 6], [3, 7], [4, 8]], tube, al, orient=[1, 0.2, 0])
+    m.add_beams([5, 6, 7, 8], [[5, 6], [6, 7], [7, 8], [8, 5]], rect, st, orient=[0.1, 0.3, 1],
+                nsm=0.05)
+    m.add_beams([9], [[5, 7]], Section.general(2e-5, 1, 1, 1e-10), al, orient=[0, 0, 1], rod=True)
+    m.add_point_masses([6, 9], [0.3, 1.5],
+                       inertia=[np.diag([1e-4, 2e-4, 3e-4]),
+                                [[0.02, 0.003, -0.001], [0.003, 0.03, 0.002], [-0.001, 0.002, 0.04]]],
+                       offset=[[0, 0, 0.01], [0.01, -0.02, 0.03]])
+    m.add_rigid_body(50, 9, [7, 8], mass=0.8, cg=[0.15, 0.2, 0.62],
+                     inertia=[[0.01, -0.001, 0], [-0.001, 0.012, 0.0005], [0, 0.0005, 0.015]])
+    c, s = math.cos(0.3), math.sin(0.3)
+    m.add_springs([60], [[10, 9]], [1e5, 2e5, 3e5, 50, 60, 70],
+                  frame=[[c, s, 0], [-s, c, 0], [0, 0, 1]])
+    m.add_springs([61, 62], [[10, -1], [5, 6]], [[1e4, 1e4, 2e4, 0, 0, 0], [0, 3e3, 0, 0, 0, 0]])
+    m.add_point_masses([10], [0.2])
+    m.fix([1, 2, 3, 4], "123456")
+    m.fix([10], "456")
+    return m
+
+
+@pytest.mark.parametrize("theory,mass", [("euler-bernoulli", "consistent"),
+                                         ("euler-bernoulli", "lumped"),
+                                         ("timoshenko", "consistent")])
+def test_written_deck_reads_back_to_the_same_frequencies(tmp_path, theory, mass):
+    model = _frame_model(theory, mass)
+    path = tmp_path / "rt.bdf"
+    write_bdf(model, path, n_modes=12)
+    back, info = read_bdf(path)
+    assert (info.mass, back.beam_theory, info.eigen.n_modes) == (mass, theory, 12)
+    f0 = solve_modes(model, n_modes=12).frequencies_hz
+    f1 = solve_modes(back, n_modes=12, autospc=info.autospc).frequencies_hz
+    np.testing.assert_allclose(f1, f0, rtol=1e-10)
+
+
+def test_written_deck_reads_back_to_the_same_model_arrays(tmp_path):
+    model = _frame_model("timoshenko")
+    write_bdf(model, tmp_path / "rt.bdf")
+    back, _ = read_bdf(tmp_path / "rt.bdf")
+    np.testing.assert_array_equal(back.node_ids, model.node_ids)
+    # 16-character fields hold 12 to 14 significant digits (fewer with a 2-digit exponent).
+    np.testing.assert_allclose(back.xyz, model.xyz, rtol=1e-12)
+    b0, b1 = model.beams, back.beams
+    o0, o1 = np.argsort(b0.ids), np.argsort(b1.ids)
+    for key in ("nodes", "A", "E", "G", "rho", "nsm", "rod"):
+        np.testing.assert_allclose(getattr(b1, key)[o1], getattr(b0, key)[o0], rtol=1e-12, err_msg=key)
+    frame = ~b0.rod[o0]  # a rod has no orientation or bending properties
+    for key in ("orient", "Iy", "Iz", "J", "Asy", "Asz"):
+        np.testing.assert_allclose(getattr(b1, key)[o1][frame], getattr(b0, key)[o0][frame], rtol=1e-12)
+    np.testing.assert_array_equal(back.fixed_mask(), model.fixed_mask())
+    # The rigid body's mass comes back as a CONM2 at its master: same node, mass, cg, inertia.
+    pm = back.point_masses
+    rb = model.rigid_bodies[0]
+    at_master = np.flatnonzero((pm.nodes == rb.master) & np.isclose(pm.mass, rb.mass))
+    assert len(at_master) == 1
+    xyz = dict(zip(model.node_ids.tolist(), model.xyz))
+    np.testing.assert_allclose(pm.offset[at_master[0]], rb.cg - xyz[rb.master], rtol=1e-12)
+    np.testing.assert_allclose(pm.inertia[at_master[0]], rb.inertia, rtol=1e-12)
+
+
+def test_written_deck_is_a_runnable_sol103_deck(tmp_path):
+    write_bdf(_frame_model(mass="lumped"), tmp_path / "rt.bdf", n_modes=8)
+    text = (tmp_path / "rt.bdf").read_text()
+    for token in ("SOL 103", "CEND", "METHOD = 1", "SPC = 1", "BEGIN BULK", "COUPMASS", "EIGRL",
+                  "ENDDATA"):
+        assert token in text
+
+
+def test_writer_refuses_a_spring_nastran_cannot_express_and_leaves_no_file(tmp_path):
+    m = Model()
+    m.add_nodes([1, 2], [[0, 0, 0], [1, 0, 0]])
+    c, s = math.cos(0.3), math.sin(0.3)
+    m.add_springs([1], [[1, 2]], [1, 1, 1, 0, 0, 0], frame=[[c, s, 0], [-s, c, 0], [0, 0, 1]])
+    with pytest.raises(ModelError, match="spring 1"):
+        write_bdf(m, tmp_path / "out.bdf")
+    assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------- bad input
+def test_unsupported_cards_are_all_listed_with_counts(tmp_path):
+    deck = cantilever_deck(n_el=2, extra="CQUAD4,100,1,1,2,3,1\nCQUAD4,101,1,1,2,3,1\n"
+                                         "CTRIA3,102,1,1,2,3\nMPC,7,1,1,1.,2,1,-1.\nPARAM,LGDISP,1")
+    with pytest.raises(ModelError) as exc:
+        read_bdf(write(tmp_path, deck))
+    msg = str(exc.value)
+    for item in ("CQUAD4 (2)", "CTRIA3 (1)", "MPC (1)", "PARAM,LGDISP"):
+        assert item in msg
+    assert "\n" not in msg
+
+
+@pytest.mark.parametrize("extra,replace,match", [
+    ("", ("CBAR,2,1,2,3,0.,0.,1.", "CBAR,2,1,2,99,0.,0.,1."), "CBAR 2: grid 99 is not defined"),
+    ("", ("CBAR,1,1,1,2,0.,0.,1.", "CBAR,1,1,1,2,0.,0.,1.\n,,,,0.,0.,0.1"), "CBAR 1: offsets"),
+    ("", ("CBAR,1,1,1,2,0.,0.,1.", "CBAR,1,1,1,2,0.,0.,1.,,\n,6"), "CBAR 1: pin flags"),
+    ("CELAS2,50,10.,2,1,3,2", ("", ""), "CELAS2 50: couples component 1 of grid 2 with component 2"),
+    ("", ("GRID,3,,", "GRID,3,,0.,0.,0.,5\nCORD2R,5,,0.,0.,0.,0.,0.,1.,\n,1.,0.,0.\nGRID,33,,"),
+     "GRID 3: displacement coordinate system CD=5"),
+    ("", ("PBAR,1,1,", "PBAR,1,77,"), "PBAR 1: material 77 is not defined"),
+    ("CBUSH,60,61,2,3,0.,1.,0.\nPBUSH,61,K,1.,1.,1.", ("", ""), "CBUSH 60: translational stiffness across"),
+])
+def test_bad_deck_errors_name_the_card(tmp_path, extra, replace, match):
+    deck = cantilever_deck(n_el=4, extra=extra).replace(*replace)
+    with pytest.raises(ModelError, match=match):
+        read_bdf(write(tmp_path, deck))
+
+
+def test_tapered_and_unsupported_sections_are_refused(tmp_path):
+    base = "BEGIN BULK\nMAT1,1,70.+9,,0.3,2700.\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\n"
+    with pytest.raises(ModelError, match="PBEAM 4: tapered"):
+        read_bdf(write(tmp_path, base + "PBEAM,4,1,1.-4,1.-9,1.-9,,2.-9\n,YES,1.,2.-4,1.-9,1.-9,,2.-9\n"
+                                        "CBEAM,1,4,1,2,0.,0.,1.\nENDDATA\n"))
+    with pytest.raises(ModelError, match="PBARL 4: section type I "):
+        read_bdf(write(tmp_path, base + "PBARL,4,1,,I\n,0.1,0.1,0.1,0.01,0.01,0.01\n"
+                                        "CBAR,1,4,1,2,0.,0.,1.\nENDDATA\n", "i.bdf"))
+
+
+def test_missing_and_unreadable_files_are_user_errors(tmp_path):
+    with pytest.raises(ModelError, match="no such file"):
+        read_bdf(tmp_path / "nope.bdf")
+    with pytest.raises(ModelError, match="not a readable bulk-data deck"):
+        read_bdf(write(tmp_path, "BEGIN BULK\nGRID,1,,0,0,0\nENDDATA\n"))
