@@ -456,7 +456,9 @@ def _format_power(exps: Mapping[str, float], log_names, tol=INVOLVEMENT_TOL) -> 
 
 def _combination(direction, space: _Space, sv=None, reason="determined") -> Combination:
     d = np.asarray(direction, float)
-    d = d / d[np.argmax(np.abs(d))]  # largest component +1
+    big = np.abs(d)
+    lead = int(np.flatnonzero(big >= (1 - 1e-6) * big.max())[0])  # ties: the first one
+    d = d / d[lead]  # largest component +1
     d[np.abs(d) < 1e-9] = 0.0
     exps = {n: float(e) for n, e in zip(space.free, d)}
     log_names = {n for n, lg in zip(space.free, space.log) if lg}
@@ -774,7 +776,7 @@ def _analyse(safe_r, jfun, cvec, space, theta, r, results, starts, constraints,
         if constraints:
             v = np.concatenate([cvec(th, ("eq",)), np.minimum(cvec(th, ("ineq",)), 0.0)])
             feasible = not v.size or float(np.max(np.abs(v))) <= 10 * ctol
-        eq = feasible and c - best_cost <= thresh
+        eq = bool(feasible and c - best_cost <= thresh)
         start_results.append(StartResult(dict(space.params(th0)), dict(space.params(th)), c,
                                          ok, eq, msg))
         if eq:
