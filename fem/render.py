@@ -232,6 +232,7 @@ def _tubes(points: np.ndarray, radius: np.ndarray, data: dict[str, np.ndarray], 
     for key, value in data.items():
         value = np.asarray(value)
         poly.point_data[key] = np.repeat(value, s) if value.shape == (n,) else value.reshape(n * s)
+    poly.point_data["sample"] = np.arange(n * s)
     return poly.tube(scalars="radius", absolute=True, n_sides=n_sides, capping=True)
 
 
@@ -295,8 +296,9 @@ class ModeScene:
         """Deformed meshes at ``factor`` times the drawn amplitude.
 
         Each mesh carries the point array ``"|u| / max"`` (displacement magnitude over the
-        largest displacement of the mode at ``factor=1``); beam tubes also carry
-        ``"beam_id"``, the element id of every point.
+        largest displacement of the mode at ``factor=1``); tubes also carry ``"sample"``,
+        the index of the centreline point each surface point belongs to (row-major over
+        the part's ``x0``), and beam tubes ``"beam_id"``, the element id of every point.
         """
         return {p.name: self._mesh(p, factor) for p in self.parts}
 
@@ -619,8 +621,9 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
                     show_ghost: bool = True, cmap=None, n_samples: int = 9) -> np.ndarray:
     """Render one period of a mode's vibration as an animated GIF (looping).
 
-    Frame ``j`` shows the deformation ``sin(2 pi j / frames)`` times the drawn amplitude;
-    the colour range and the camera are fixed across frames.
+    Frame ``j`` shows the deformation ``sin(2 pi (j + 1/8) / frames)`` times the drawn
+    amplitude (the 1/8 keeps consecutive frames distinct, so none is merged away); the
+    colour range and the camera are fixed across frames.
 
     Parameters
     ----------
@@ -645,7 +648,11 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
         raise RenderError(f"period must be positive, got {period!r}")
     scene = mode_scene(model, modes, mode, scale=scale, amplitude=amplitude, decorations=decorations,
                        label=label, labels=labels, n_samples=n_samples)
-    factors = np.sin(2 * np.pi * np.arange(frames) / frames)
+    # Harmonic motion sampled at 2 pi j / F repeats values in consecutive frames (sin 60 deg
+    # = sin 120 deg), and GIF writers merge identical consecutive frames, so the file would
+    # hold fewer frames than asked. A phase offset of pi / (4 F) never gives two consecutive
+    # equal values: sin(a) = sin(b) needs a + b = pi (mod 2 pi), i.e. 2 F - 8 j - 4 = 1 (mod 4 F).
+    factors = np.sin(2 * np.pi * (np.arange(frames) + 0.125) / frames)
     images = []
     with offscreen_backend():
         p = _new_plotter(size)
