@@ -465,23 +465,27 @@ def _combination(direction, space: _Space, sv=None, reason="determined") -> Comb
     return Combination(exps, _format_power(exps, log_names), sv, reason)
 
 
-def _readable_basis(null: np.ndarray, n: int) -> np.ndarray:
-    """Rows spanning the complement of ``null`` (n x r), in reduced row-echelon form.
+def _rref(rows: np.ndarray) -> np.ndarray:
+    """Reduced row-echelon form of a basis (rows) of a subspace, for readable names.
 
     Written by hand because neither numpy nor scipy offers a numeric RREF; column-pivoted
-    QR picks the pivots (the parameters least involved in the null space come first), so
-    the rows read as "this parameter (times small powers of others) is determined".
+    QR picks the pivots (the parameters most present in the subspace), so each row reads
+    as "this parameter, times powers of the non-pivot ones".
     """
+    if rows.shape[0] == 0:
+        return rows
+    _, _, piv = scipy.linalg.qr(rows, pivoting=True, mode="economic")
+    cols = np.sort(piv[: rows.shape[0]])
+    out = np.linalg.solve(rows[:, cols], rows)
+    out[np.abs(out) < 1e-9] = 0.0
+    return out
+
+
+def _readable_basis(null: np.ndarray, n: int) -> np.ndarray:
+    """Rows spanning the orthogonal complement of the columns of ``null`` (n x r), RREF."""
     if null.shape[1] == 0:
         return np.eye(n)
-    comp = scipy.linalg.null_space(null.T).T  # (n - r) x n, orthonormal rows
-    if comp.shape[0] == 0:
-        return comp
-    _, _, piv = scipy.linalg.qr(comp, pivoting=True, mode="economic")
-    cols = np.sort(piv[: comp.shape[0]])
-    rref = np.linalg.solve(comp[:, cols], comp)
-    rref[np.abs(rref) < 1e-9] = 0.0
-    return rref
+    return _rref(scipy.linalg.null_space(null.T).T)
 
 
 def _sample_starts(space: _Space, theta0, n_starts, seed) -> np.ndarray:
@@ -811,11 +815,13 @@ def _analyse(safe_r, jfun, cvec, space, theta, r, results, starts, constraints,
             intervals[n] = None
             std_errors[n] = None
 
-    undetermined = [
-        _combination(null_dirs[:, j], space, float(s_rel[undet][j]),
-                     "structural" if structural[undet][j] else "practical")
-        for j in range(null_dirs.shape[1])
-    ]
+    undetermined = []
+    for reason, mask in (("structural", structural), ("practical", practical)):
+        if np.any(mask):
+            # several invisible directions: any basis is as true, the RREF one reads best
+            basis = _rref((z @ wt[mask].T).T)
+            largest = float(s_rel[mask].max())
+            undetermined += [_combination(row, space, largest, reason) for row in basis]
     if not undetermined:  # ambiguity only the multi-start sees (e.g. separate minima)
         for n in by_starts:
             e = np.zeros(n_free)

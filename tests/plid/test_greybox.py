@@ -145,7 +145,9 @@ def test_power_product_names_use_exponents():
     (det,) = rep.determined_combinations
     assert det.exponents == pytest.approx({"b": -0.5, "R": -0.5, "k": 1.0}, abs=1e-6)
     assert det.name == "k / (b^0.5*R^0.5)"
-    assert len(rep.undetermined) == 2
+    # the two invisible directions, in reduced row-echelon form: b and R each move with
+    # sqrt(k) without changing k^2/(b R)
+    assert [c.name for c in rep.undetermined] == ["b*k^0.5", "R*k^0.5"]
     assert rep.estimates["k"] ** 2 / (rep.estimates["b"] * rep.estimates["R"]) == \
         pytest.approx(2.0, rel=1e-8)
 
