@@ -8,7 +8,11 @@ extras="${1:-}"
 if command -v apt-get >/dev/null 2>&1; then
     sudo=""
     [ "$(id -u)" -eq 0 ] || sudo="sudo"
-    pkgs="libgl1 libglx-mesa0 libosmesa6 libegl1 libxrender1 libxext6 libgomp1"
+    # VTK (PyPI wheels >= 9.4) loads its OpenGL backend at run time; fem.render asks for
+    # OSMesa (software llvmpipe, no X server, no GPU), which needs only libosmesa6 (its
+    # dependencies libglapi-mesa and libllvm15 come with it). No libGL/libEGL/X11 library is
+    # loaded on that path. libgomp1 is not for VTK; kept from the original list.
+    pkgs="libosmesa6 libgomp1"
     missing=""
     for p in $pkgs; do dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"; done
     if [ -n "$missing" ]; then
