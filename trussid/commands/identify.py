@@ -1,0 +1,153 @@
+"""``trussid identify DATA --order N --out MODEL.npz``: PLID on a data file.
+
+Reads CSV/NPZ/MAT data (:mod:`plid.datafile`), runs :class:`plid.estimator.PLID` in batch,
+writes the identified discrete model with its one-step predictor gain K
+(:mod:`plid.modelfile`) and reports the identified poles and the one-step
+signal-to-prediction-error ratio of the final model on the same data (after a burn-in, see
+:func:`prediction_burn_in`; definitions in :mod:`plid.metrics`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+import warnings
+
+import numpy as np
+
+from plid.canonical import check_order
+from plid.datafile import check_enough_samples, read_data
+from plid.errors import DataError, IdentificationError
+from plid.metrics import modal_parameters, prediction_ratio_db, predictor_gain
+from plid.modelfile import save_model
+
+
+def json_safe(obj):
+    """Replace non-finite floats (which JSON cannot hold) by None, recursively."""
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.ndarray):
+        return json_safe(obj.tolist())
+    return obj
+
+
+def names_arg(values):
+    """``--inputs a b`` and ``--inputs a,b`` both give ['a', 'b']."""
+    if values is None:
+        return None
+    out = [s.strip() for v in values for s in v.split(",") if s.strip()]
+    return out or None
+
+
+def prediction_burn_in(n_samples: int, order: int) -> int:
+    """Samples left out of the prediction ratio while the predictor forgets x0 = 0:
+    10 states' worth of samples per state (10 n), at most a tenth of the record."""
+    return int(min(10 * order, n_samples // 10))
+
+
+def pole_table(sys_) -> list[dict]:
+    f, z, _ = modal_parameters(sys_)
+    return [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(f, z)]
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "identify", help="identify a state-space model from input/output data with PLID",
+        description="Identify a discrete state-space model of order N from a data file "
+        "(CSV with u*/y* columns and optional time column t, or NPZ/MAT with u, y, fs) by "
+        "PLID, and write it as a model file with its one-step predictor gain. Noise "
+        "covariances are in units of the data scaled to unit RMS per channel.")
+    p.add_argument("data", metavar="DATA", help="data file: .csv, .npz or .mat")
+    p.add_argument("--order", type=int, required=True, metavar="N",
+                   help="model order (number of states; a multiple of the number of outputs)")
+    p.add_argument("--out", required=True, metavar="MODEL.npz", help="output model file")
+    p.add_argument("--fs", type=float, metavar="HZ",
+                   help="sampling frequency, if the file has neither fs nor a time column")
+    p.add_argument("--inputs", nargs="+", metavar="NAME",
+                   help="input columns/channels to use (names; space or comma separated)")
+    p.add_argument("--outputs", nargs="+", metavar="NAME",
+                   help="output columns/channels to use")
+    p.add_argument("--form", choices=("sqrt", "direct"), default="sqrt",
+                   help="PLID recursion: square-root (default) or direct covariance form")
+    p.add_argument("--R", type=float, default=1e-4, metavar="VAR",
+                   help="output-noise variance, scaled units (default 1e-4: 40 dB SNR)")
+    p.add_argument("--Q", type=float, default=1e-6, metavar="VAR",
+                   help="state-noise variance, scaled units (default 1e-6)")
+    p.add_argument("--passes", type=int, default=1, metavar="P",
+                   help="batch passes over the data (default 1)")
+    p.add_argument("--json", action="store_true",
+                   help="print poles and the prediction ratio as JSON")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args) -> int:
+    from plid.estimator import PLID, PLIDWarning
+
+    out = str(args.out)
+    if not out.lower().endswith(".npz"):
+        raise DataError(f"--out {out}: model files are .npz")
+    if args.order < 1:
+        raise IdentificationError(f"--order must be a positive integer, got {args.order}")
+    data = read_data(args.data, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
+                     fs=args.fs)
+    n, m, p = args.order, data.n_inputs, data.n_outputs
+    check_order(n, p)
+    check_enough_samples(data, n * (m + p), f"an order-{n} model with {m} inputs and "
+                         f"{p} outputs")
+    est = PLID(n, form=args.form, dt=data.dt, Q=args.Q, R=args.R, passes=args.passes,
+               progress=None if sys.stderr.isatty() else False)
+    t0 = time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PLIDWarning)
+        res = est.fit(data.u, data.y)
+    seconds = time.perf_counter() - t0
+    if not res.finite:
+        raise IdentificationError(
+            f"PLID ({args.form} form) diverged on {data.n_samples} samples: the estimate is "
+            "not finite; try --form sqrt, a larger --Q or --R, or another --order")
+    notes = [str(w.message) for w in caught if issubclass(w.category, PLIDWarning)]
+    model = res.model
+    K = res.K
+    if K is None:
+        K = predictor_gain(model, res.Q + model.B @ res.N @ model.B.T, res.R)
+    skip = prediction_burn_in(data.n_samples, n)
+    ratio = prediction_ratio_db(model, data.u, data.y, K=K, skip=skip)
+    poles_z = np.linalg.eigvals(model.A)
+    unstable = int(np.sum(np.abs(poles_z) >= 1))
+    save_model(out, model, K=K, input_names=data.input_names, output_names=data.output_names)
+    summary = {
+        "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
+        "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
+        "form": args.form, "passes": args.passes, "Q": args.Q, "R": args.R,
+        "seconds": seconds, "K_source": res.K_source,
+        "signal_to_prediction_error_db": ratio["overall"],
+        "signal_to_prediction_error_db_per_output": ratio["per_channel"],
+        "prediction_skip_samples": skip, "unstable_poles": unstable,
+        "poles": pole_table(model), "warnings": notes,
+    }
+    for note in notes:
+        print(f"trussid identify: warning: {note}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(json_safe(summary), indent=2))
+        return 0
+    print(f"identified an order-{n} model ({m} input(s), {p} output(s)) from "
+          f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s ({args.form} form)")
+    print(f"wrote {out}")
+    per = ", ".join(f"{name} {v:.2f}" for name, v in zip(data.output_names, ratio["per_channel"]))
+    print(f"one-step signal-to-prediction-error ratio: {ratio['overall']:.2f} dB ({per}; "
+          f"first {skip} samples left out)")
+    if unstable:
+        print(f"note: {unstable} pole(s) on or outside the unit circle")
+    print("poles (frequency [Hz], damping):")
+    for row in summary["poles"]:
+        print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")
+    return 0
