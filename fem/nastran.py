@@ -221,6 +221,9 @@ def _parse(path: Path):
     if not punch and re.search(r"^\s*CEND\b", text, flags) is None:
         source = io.StringIO("CEND\n" + text)
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
+    # Cards this reader does not translate are only counted, never parsed, so that a
+    # malformed one is reported as unsupported rather than failing the parse.
+    bdf.disable_cards(sorted(set(bdf.cards_to_read) - SUPPORTED_CARDS))
     try:
         # pyNastran also print()s some complaints; keep them off the user's terminal (the
         # exception carries the message).

@@ -1,0 +1,126 @@
+"""``trussid modes``: frequencies of a bulk-data deck as a table or JSON; bad input ends in
+one line on stderr, a non-zero exit and no traceback."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from trussid.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+FRAME = ROOT / "examples" / "decks" / "frame.bdf"
+
+
+def run(*args, cwd=ROOT):
+    """The real command line in a fresh interpreter (what a user sees, tracebacks included)."""
+    return subprocess.run([sys.executable, "-m", "trussid", "modes", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd)
+
+
+class Result:
+    def __init__(self, returncode, out, err):
+        self.returncode, self.stdout, self.stderr = returncode, out, err
+
+
+@pytest.fixture
+def cli(capsys):
+    """``trussid modes ...`` in this process (each subprocess costs seconds of imports)."""
+    def call(*args):
+        code = main(["modes", *map(str, args)])
+        out, err = capsys.readouterr()
+        return Result(code, out, err)
+    return call
+
+
+def one_line_error(res):
+    assert res.returncode != 0
+    assert res.stdout == ""
+    assert "Traceback" not in res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1, res.stderr
+    assert lines[0].startswith("trussid modes: error: ")
+    return lines[0]
+
+
+SPRING_MASS = """BEGIN BULK
+PARAM,WTMASS,0.5
+EIGRL,1,,,1
+GRID,1,,0.,0.,0.,,23456
+CONM2,1,1,,2.
+CELAS2,2,800.,1,1
+ENDDATA
+"""
+
+
+def test_json_gives_ascending_frequencies_dof_count_and_mass_formulation(tmp_path, cli):
+    # Independent reference: one spring and one mass, with WTMASS scaling the mass.
+    deck = tmp_path / "sm.bdf"
+    deck.write_text(SPRING_MASS)
+    res = cli(deck, "--json")
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    assert out["n_dof"] == 1 and out["mass"] == "lumped" and out["model"] == str(deck)
+    assert out["frequencies_hz"] == pytest.approx([math.sqrt(800.0 / (2.0 * 0.5)) / (2 * math.pi)],
+                                                  rel=1e-12)
+
+
+def test_example_frame_uses_the_decks_eigrl_count_and_consistent_mass(cli):
+    res = cli(FRAME, "--json")
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout)
+    f = out["frequencies_hz"]
+    assert len(f) == 10  # EIGRL ND
+    assert f == sorted(f) and f[0] > 0
+    assert out["mass"] == "consistent"
+    assert out["n_dof"] == 6 * 33 - 6 * 4 - 6 * 4  # 33 grids, 4 clamped feet, 4 RBE2 slaves
+
+
+def test_n_overrides_the_deck_and_the_table_names_mass_and_units():
+    res = run(FRAME, "--n", "3")  # the installed command line, end to end
+    assert res.returncode == 0, res.stderr
+    rows = [line.split() for line in res.stdout.splitlines() if line.strip()[:1].isdigit()]
+    assert [r[0] for r in rows] == ["1", "2", "3"]
+    assert "frequency [Hz]" in res.stdout
+    assert "mass: consistent" in res.stdout and "COUPMASS" in res.stdout
+    assert "units" in res.stdout
+
+
+@pytest.mark.parametrize("text,match", [
+    ("BEGIN BULK\nGRID,1,,0.,0.,0.\nCQUAD4,1,1,1,2,3,4\nCHEXA,2,1,1,2,3,4,5,6\nENDDATA\n",
+     "unsupported bulk-data entries: CHEXA (1), CQUAD4 (1)"),
+    ("BEGIN BULK\nGRID,1,,0.,0.,0.\nCELAS2,2,800.,7,1\nENDDATA\n", "spring 2: grid 7 is not defined"),
+    ("BEGIN BULK\nGRID,1,,0,0,0\nENDDATA\n", "not a readable bulk-data deck"),
+])
+def test_bad_deck_exits_nonzero_with_one_line(tmp_path, cli, text, match):
+    deck = tmp_path / "bad.bdf"
+    deck.write_text(text)
+    assert match in one_line_error(cli(deck))
+
+
+def test_bad_deck_from_the_shell_prints_one_line_and_no_traceback(tmp_path):
+    deck = tmp_path / "bad.bdf"
+    deck.write_text("BEGIN BULK\nGRID,1,,0.,0.,0.\nCQUAD4,1,1,1,2,3,4\nMPC,3,1,1,1.\nENDDATA\n")
+    line = one_line_error(run(deck))
+    assert "CQUAD4 (1)" in line and "MPC (1)" in line
+
+
+def test_missing_file_and_unknown_suffix_exit_with_one_line(tmp_path, cli):
+    assert "no such file" in one_line_error(cli(tmp_path / "missing.bdf"))
+    other = tmp_path / "model.xyz"
+    other.write_text("")
+    assert "unknown model file type" in one_line_error(cli(other))
+
+
+def test_bad_n_exits_with_one_line(cli):
+    assert "--n must be at least 1" in one_line_error(cli(FRAME, "--n", "0"))
+
+
+def test_default_testbed_placeholder_is_a_clear_error_until_the_testbed_lands(cli):
+    # The testbed helper replaces trussid.commands.modes.load_testbed; then this test goes.
+    assert "default testbed" in one_line_error(cli())
