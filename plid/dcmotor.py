@@ -258,6 +258,11 @@ def identify_dc_motor(
     for name, val in (("J", J), ("R", R)):
         if val is not None and not (np.isfinite(val) and val > 0):
             raise DataError(f"{name} must be a positive number, got {val!r}")
+    if bounds:
+        unknown = [n for n in bounds if n not in ("b", "R", "k")]
+        if unknown:
+            raise DataError(f"unknown parameter {unknown[0]!r} in bounds; the DC motor "
+                            "has b, R, k (J is given)")
     fo = fit_first_order(t, u, y, hold=hold, confidence=confidence)
     T, G = fo.estimates["T"], fo.estimates["G"]
     if G <= 0:
@@ -272,10 +277,6 @@ def identify_dc_motor(
     given = ("J",) if R is None else ("J", "R")
     bnds = dict(DEFAULT_BOUNDS)
     if bounds:
-        unknown = [n for n in bounds if n not in ("b", "R", "k")]
-        if unknown:
-            raise DataError(f"unknown parameter {unknown[0]!r} in bounds; the DC motor "
-                            "has b, R, k (J is given)")
         bnds.update(bounds)
     for n in given:
         bnds.pop(n, None)
