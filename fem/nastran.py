@@ -537,14 +537,13 @@ def _add_rods(bdf, model: Model, nodes: _NodeTable, props: dict, mats: dict, wtm
         prop = props[pid]
         eids = np.array([e.eid for e in group], dtype=np.int64)
         ends = np.array([e.nodes for e in group], dtype=np.int64)
-        nodes.index(ends, "CROD", eids)
-        model.add_beams(eids, ends, prop.section, prop.mat, [1.0, 0.0, 0.0], nsm=prop.nsm,
+        model.add_beams(eids, ends, prop.section, prop.mat, _rod_orient(nodes, ends, "CROD", eids),
+                        nsm=prop.nsm,
                         rod=True, label=prop.label)
     conrods = [e for e in bdf.elements.values() if e.type == "CONROD"]
     if conrods:
         eids = np.array([e.eid for e in conrods], dtype=np.int64)
         ends = np.array([e.nodes for e in conrods], dtype=np.int64)
-        nodes.index(ends, "CONROD", eids)
         m = [_material(mats, e.mid, f"CONROD {e.eid}") for e in conrods]
         sec = {"A": [e.A for e in conrods], "Iy": 1.0, "Iz": 1.0, "J": [e.j or 0.0 for e in conrods],
                "Asy": math.inf, "Asz": math.inf}
@@ -552,7 +551,15 @@ def _add_rods(bdf, model: Model, nodes: _NodeTable, props: dict, mats: dict, wtm
         nsm = np.array([e.nsm or 0.0 for e in conrods]) * wtmass
         model.add_beams(eids, ends, {k: np.broadcast_to(np.asarray(v, float), (len(eids),))
                                      for k, v in sec.items()},
-                        mat, [1.0, 0.0, 0.0], nsm=nsm, rod=True, label="CONROD")
+                        mat, _rod_orient(nodes, ends, "CONROD", eids), nsm=nsm, rod=True,
+                        label="CONROD")
+
+
+def _rod_orient(nodes: _NodeTable, ends: np.ndarray, card: str, eids: np.ndarray) -> np.ndarray:
+    """Some vector not parallel to each rod (rods have no bending; the element wants axes)."""
+    xyz = nodes.coords(ends, card, eids)
+    d = np.abs(xyz[:, 1] - xyz[:, 0])
+    return np.eye(3)[np.argmin(d, axis=1)]
 
 
 def _rect_frame(bdf, cid: int, card: str) -> np.ndarray:
@@ -661,6 +668,8 @@ def _add_bushes(bdf, model: Model, nodes: _NodeTable) -> None:
         d = xb - xa
         L = float(np.linalg.norm(d))
         coincident = L <= 1e-9 * max(1.0, float(np.abs(nodes.xyz).max()))
+        if e.ocid not in (None, -1) and any(v not in (None, 0.0) for v in (e.si or [])):
+            raise ModelError(f"{card}: spring offset OCID/S1-S3 is not supported (it adds a lever arm)")
         if e.cid is not None and e.cid >= 0:
             frame = _rect_frame(bdf, int(e.cid), card)
         elif coincident:
@@ -754,12 +763,15 @@ def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     for sid in used:
         for c in bdf.spcs.get(sid, []):
             if c.type == "SPC1":
-                by_comp[str(c.components)].append(np.asarray(c.nodes, dtype=np.int64))
+                ids = np.asarray(c.nodes, dtype=np.int64)
+                nodes.index(ids, "SPC1", np.full(len(ids), sid))
+                by_comp[str(c.components)].append(ids)
             elif c.type == "SPC":
                 for nid, comp, d in zip(c.nodes, c.components, c.enforced):
                     if d:
                         info.notes.append(f"SPC {sid}: enforced displacement {d:g} at grid {nid} "
                                           f"(irrelevant to modes) treated as a support")
+                    nodes.index([nid], "SPC", [sid])
                     by_comp[str(comp)].append(np.array([nid], dtype=np.int64))
             else:
                 raise ModelError(f"{c.type} {sid}: not supported")
@@ -767,11 +779,9 @@ def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
         if g.ps:
             by_comp[str(g.ps)].append(np.array([g.nid], dtype=np.int64))
     for comp, chunks in sorted(by_comp.items()):
-        ids = np.concatenate(chunks)
-        nodes.index(ids, "SPC set with components", np.full(len(ids), comp))
-        if comp.strip("0") == "":
-            continue
-        model.fix(np.unique(ids), comp.replace("0", ""))
+        comp = comp.replace("0", "")  # component 0 is a scalar point's: nothing to fix
+        if comp:
+            model.fix(np.unique(np.concatenate(chunks)), comp)
 
 
 def _select_eigen(bdf, info: BdfInfo) -> None:

@@ -439,3 +439,55 @@ def test_missing_and_unreadable_files_are_user_errors(tmp_path):
         read_bdf(tmp_path / "nope.bdf")
     with pytest.raises(ModelError, match="not a readable bulk-data deck"):
         read_bdf(write(tmp_path, "BEGIN BULK\nGRID,1,,0,0,0\nENDDATA\n"))
+
+
+# ----------------------------------------------------------------- more card semantics
+def test_g0_orientation_equals_the_vector_to_the_third_grid(tmp_path):
+    deck = cantilever_deck(n_el=2, extra="GRID,99,,0.3,0.4,5.\nCBAR,10,1,1,2,99")
+    model, _ = read_bdf(write(tmp_path, deck))
+    b = model.beams
+    np.testing.assert_allclose(b.orient[b.ids == 10][0], [0.3, 0.4, 5.0])
+
+
+def test_rod_cards_give_the_axial_closed_form_and_agree_with_each_other(tmp_path):
+    # Fixed-free bar, 40 linear rod elements, consistent mass: f_n = (2n - 1) c / (4 L).
+    E, rho, L, n_el = 70e9, 2700.0, 2.0, 40
+    od, t = 0.02, 0.002
+    A = math.pi / 4 * (od**2 - (od - 2 * t) ** 2)
+    c = math.sqrt(E / rho)
+    ref = np.array([(2 * k - 1) * c / (4 * L) for k in (1, 2)])
+    grids = "".join(f"GRID,{i + 1},,{real(L * i / n_el)},0.,0.,,23\n" for i in range(n_el + 1))
+    head = f"BEGIN BULK\nPARAM,COUPMASS,1\nMAT1,1,{real(E)},,0.3,{real(rho)}\n" + grids
+    tail = "SPC1,1,1,1\nENDDATA\n"
+    decks = {
+        "PROD": f"PROD,5,1,{real(A)}\n" + "".join(f"CROD,{i + 1},5,{i + 1},{i + 2}\n" for i in range(n_el)),
+        "PTUBE": f"PTUBE,5,1,{real(od)},{real(t)}\n"
+                 + "".join(f"CROD,{i + 1},5,{i + 1},{i + 2}\n" for i in range(n_el)),
+        "CONROD": "".join(f"CONROD,{i + 1},{i + 1},{i + 2},1,{real(A)}\n" for i in range(n_el)),
+    }
+    got = {}
+    for name, body in decks.items():
+        model, info = read_bdf(write(tmp_path, head + body + tail, f"{name}.bdf"))
+        assert model.beams.rod.all()
+        got[name] = freqs(model, info, n=2)
+    # Linear elements converge as h^2: (pi/2 / 40)^2 / 24 ~ 6e-5 on mode 1.
+    np.testing.assert_allclose(got["PROD"], ref, rtol=1e-3)
+    np.testing.assert_allclose(got["PTUBE"], got["PROD"], rtol=1e-12)
+    np.testing.assert_allclose(got["CONROD"], got["PROD"], rtol=1e-12)
+
+
+def test_pbeam_shear_flexibility_follows_nastrans_k_defaults(tmp_path):
+    # PBEAM K1 = K2 = 1.0 by default (shear area = A): Timoshenko, lower frequencies.
+    # K1 = K2 = 0.0 means no shear flexibility: the same beam as a PBAR.
+    bar = cantilever_deck(n_el=10, A=4e-4, I1=1.3e-8, I2=1.3e-8, J=2.6e-8)
+    beam_default = bar.replace("PBAR,1,1,0.0004,1.3e-08,1.3e-08,2.6e-08",
+                               "PBEAM,1,1,0.0004,1.3e-08,1.3e-08,,2.6e-08").replace("CBAR", "CBEAM")
+    beam_rigid = beam_default.replace(",2.6e-08\n", ",2.6e-08\n,,,,,,,,\n,0.,0.\n", 1)
+    assert beam_default != bar and beam_rigid != beam_default
+    f = {}
+    for name, text in (("bar", bar), ("default", beam_default), ("rigid", beam_rigid)):
+        model, info = read_bdf(write(tmp_path, text, f"{name}.bdf"))
+        f[name] = (info.beam_theory, freqs(model, info, n=1)[0])
+    assert f["bar"][0] == f["rigid"][0] == "euler-bernoulli" and f["default"][0] == "timoshenko"
+    assert f["rigid"][1] == pytest.approx(f["bar"][1], rel=1e-12)
+    assert f["default"][1] < f["bar"][1]
