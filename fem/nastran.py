@@ -174,7 +174,8 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[M
     props = _properties(bdf, mats, info.wtmass)
 
     if beam_theory is None:
-        shear = sorted({p.label for p in props.values() if p.shear})
+        used = {e.pid for e in bdf.elements.values() if e.type in ("CBAR", "CBEAM")}
+        shear = sorted({props[pid].label for pid in used if pid in props and props[pid].shear})
         if shear:
             info.beam_theory = "timoshenko"
             info.beam_theory_reason = (f"shear flexibility given by {', '.join(shear[:5])}"
@@ -182,9 +183,11 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[M
         else:
             info.beam_theory = "euler-bernoulli"
             info.beam_theory_reason = "no property gives shear flexibility"
-    else:
+    elif beam_theory in ("euler-bernoulli", "timoshenko"):
         info.beam_theory = beam_theory
         info.beam_theory_reason = "requested by the caller"
+    else:
+        raise ModelError(f"beam_theory must be 'euler-bernoulli' or 'timoshenko', got {beam_theory!r}")
 
     model = Model(beam_theory=info.beam_theory, mass=info.mass, name=path.stem)
     model.add_nodes(node_ids, xyz)

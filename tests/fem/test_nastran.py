@@ -491,3 +491,17 @@ def test_pbeam_shear_flexibility_follows_nastrans_k_defaults(tmp_path):
     assert f["bar"][0] == f["rigid"][0] == "euler-bernoulli" and f["default"][0] == "timoshenko"
     assert f["rigid"][1] == pytest.approx(f["bar"][1], rel=1e-12)
     assert f["default"][1] < f["bar"][1]
+
+
+def test_inch_pound_example_deck_with_wtmass_matches_the_closed_form_in_its_units():
+    # examples/decks/cantilever_inch.bdf: E in psi, RHO a weight density in lbf/in^3, and
+    # WTMASS = 0.00259 s^2/in turning it into mass; frequencies come out in Hz.
+    model, info = read_bdf(FRAME.parent / "cantilever_inch.bdf")
+    assert info.wtmass == 0.00259 and info.eigen.n_modes == 6
+    ro, ri, L = 0.25, 0.215, 40.0
+    A = math.pi * (ro**2 - ri**2)
+    I = math.pi * (ro**4 - ri**4) / 4
+    ref = [eb_cantilever(k, 1.0e7, I, 0.0975 * 0.00259, A, L) for k in (0, 1)]
+    f = freqs(model, info, n=4)
+    np.testing.assert_allclose(f[:2], [ref[0]] * 2, rtol=1e-6)  # h^4 convergence, as above
+    np.testing.assert_allclose(f[2:], [ref[1]] * 2, rtol=1e-5)
