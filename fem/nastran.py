@@ -20,8 +20,9 @@ Conventions that matter
   ``Iy = I2``. Shear areas are ``K1 A`` (along y) and ``K2 A`` (along z).
 * Shear flexibility follows NASTRAN: PBAR without K1/K2 has none (infinite shear area);
   PBEAM has K1 = K2 = 1.0 by default (0.0 means none); PBARL/PBEAML compute shear
-  factors from the shape (here: the Cowper factors of :mod:`fem.sections`). The model is
-  Timoshenko when any element has a finite shear area, else Euler-Bernoulli.
+  factors from the shape (here: the Cowper factors of :mod:`fem.sections`, whose torsion
+  constants are used too). The model is Timoshenko when any CBAR/CBEAM has a finite shear
+  area, else Euler-Bernoulli.
 * CONM2 inertia: the deck gives I11, I21, I22, I31, I32, I33 with the products of inertia as
   positive integrals (I21 = int x1 x2 dm); NASTRAN supplies the minus signs, so the tensor
   is ``[[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]]`` (MSC/Autodesk QRG, CONM2
@@ -53,13 +54,15 @@ SUPPORTED_CARDS = frozenset({
     "SPC", "SPC1", "SPCADD", "EIGRL", "EIGR", "PARAM", "ENDDATA",
 })
 
-#: PARAMs read, and PARAMs that only steer output or solver book-keeping (no effect on the
-#: model or its modes), accepted and listed in :attr:`BdfInfo.ignored`.
+#: PARAMs read, and PARAMs without effect on the model's real modes (output and solver
+#: book-keeping, damping, shell-only settings: shells are refused anyway), accepted and
+#: listed in :attr:`BdfInfo.ignored`. Any other PARAM is refused like an unsupported card.
 HANDLED_PARAMS = frozenset({"WTMASS", "COUPMASS", "AUTOSPC"})
 OUTPUT_PARAMS = frozenset({
     "POST", "PRTMAXIM", "GRDPNT", "OGEOM", "NOCOMPS", "PATVER", "SRCOMPS", "EST", "OUGCORD",
     "MAXRATIO", "BAILOUT", "NEWSEQ", "LMODES", "RESVEC", "PRGPST", "SEMAPPRT", "USETPRT",
-    "AUTOMSET", "DDRMM", "POSTEXT", "PRINT", "NASPRT", "SOLADJC",
+    "AUTOMSET", "DDRMM", "POSTEXT", "PRINT", "NASPRT", "SOLADJC", "G", "W3", "W4", "K6ROT",
+    "SNORM",
 })
 
 #: PBARL/PBEAML shapes with a matching :class:`fem.sections.Section` constructor.

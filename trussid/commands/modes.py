@@ -87,6 +87,8 @@ def load_bulk_data(path: Path) -> LoadedModel:
         rng = "" if e.f_low is None and e.f_high is None else \
             f", range {'' if e.f_low is None else f'{e.f_low:g}'}..{'' if e.f_high is None else f'{e.f_high:g}'} (not applied)"
         notes.append(f"eigenvalue request: {e.card} {e.sid}, ND={e.n_modes}{rng}")
+    if info.ignored:
+        notes.append(f"ignored (no effect on the modes): {', '.join(info.ignored)}")
     notes += info.notes
     return LoadedModel(model=model, source=str(path), autospc=info.autospc,
                        n_modes=info.eigen.n_modes if info.eigen is not None else None,
