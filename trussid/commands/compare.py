@@ -17,18 +17,14 @@ import json
 import re
 from pathlib import Path
 
-import control
 import numpy as np
 
-from plid.datafile import read_data
-from plid.errors import DataError
-from plid.experiment import run_experiment
-from plid.frf import frequency_response, h1
-from plid.metrics import (compare_poles, frf_error, modal_parameters, prediction_ratio_db,
-                          simulation_fit)
-from plid.modelfile import is_model_file, load_model
 from trussid.commands.identify import json_safe, names_arg, pole_table, prediction_burn_in
+from trussid.errors import UserError
 from trussid.files import atomic_path
+
+# plid, python-control and matplotlib are imported inside the functions: they take seconds
+# and `trussid --help` imports every command module.
 
 #: Samples of the seeded white-noise validation record used against a plant reference.
 VALIDATION_SAMPLES = 4000
@@ -61,12 +57,14 @@ def add_parser(subparsers):
 
 
 def _reference_kind(path: Path) -> str:
+    from plid.modelfile import is_model_file
+
     if not path.exists():
-        raise DataError(f"no such reference file: {path}")
+        raise UserError(f"no such reference file: {path}")
     if path.suffix.lower() in (".csv", ".mat"):
         return "data"
     if path.suffix.lower() != ".npz":
-        raise DataError(f"{path}: unknown reference file type '{path.suffix}' (a model .npz or "
+        raise UserError(f"{path}: unknown reference file type '{path.suffix}' (a model .npz or "
                         "a data file .csv/.npz/.mat)")
     if is_model_file(path):
         return "plant"
@@ -74,10 +72,10 @@ def _reference_kind(path: Path) -> str:
         with np.load(path, allow_pickle=False) as z:
             keys = set(z.files)
     except Exception as exc:  # numpy raises several types for a foreign file
-        raise DataError(f"{path}: not a readable .npz file ({exc})") from None
+        raise UserError(f"{path}: not a readable .npz file ({exc})") from None
     if {"u", "y"} <= keys:
         return "data"
-    raise DataError(f"{path}: neither a model file (no array 'A' and 'dt') nor a data file "
+    raise UserError(f"{path}: neither a model file (no array 'A' and 'dt') nor a data file "
                     "(no arrays 'u' and 'y')")
 
 
@@ -85,7 +83,7 @@ def _check_channels(model_meta, ref_names, kind):
     m_in, m_out = model_meta["input_names"], model_meta["output_names"]
     r_in, r_out = ref_names
     if len(m_in) != len(r_in) or len(m_out) != len(r_out):
-        raise DataError(f"the model has {len(m_in)} input(s) and {len(m_out)} output(s) but "
+        raise UserError(f"the model has {len(m_in)} input(s) and {len(m_out)} output(s) but "
                         f"the {kind} has {len(r_in)} and {len(r_out)}")
 
 
@@ -97,11 +95,19 @@ def run(args) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
+    import control
     import matplotlib.pyplot as plt
+
+    from plid.datafile import read_data
+    from plid.experiment import run_experiment
+    from plid.frf import frequency_response, h1
+    from plid.metrics import (compare_poles, frf_error, modal_parameters, prediction_ratio_db,
+                              simulation_fit)
+    from plid.modelfile import load_model
 
     model, meta = load_model(args.model)
     if not control.isdtime(model, strict=True):
-        raise DataError(f"{args.model}: the model is continuous (dt = 0); compare needs a "
+        raise UserError(f"{args.model}: the model is continuous (dt = 0); compare needs a "
                         "discrete (identified) model")
     ref_path = Path(args.reference)
     kind = _reference_kind(ref_path)
@@ -109,7 +115,7 @@ def run(args) -> int:
     nyq = fs / 2
     band = tuple(args.band) if args.band else (0.0, nyq)
     if not 0 <= band[0] < band[1] <= nyq * (1 + 1e-9):
-        raise DataError(f"--band {band[0]:g} {band[1]:g}: need 0 <= LO < HI <= Nyquist "
+        raise UserError(f"--band {band[0]:g} {band[1]:g}: need 0 <= LO < HI <= Nyquist "
                         f"({nyq:g} Hz)")
     metrics = {"model": str(args.model), "reference": str(ref_path), "reference_kind": kind,
                "states": model.nstates, "inputs": meta["input_names"],
@@ -122,7 +128,7 @@ def run(args) -> int:
             truth = control.c2d(truth, model.dt, "zoh")
             metrics["reference_discretised"] = "zoh"
         elif abs(truth.dt - model.dt) > 1e-9 * model.dt:
-            raise DataError(f"the model samples at {fs:g} Hz but the plant at "
+            raise UserError(f"the model samples at {fs:g} Hz but the plant at "
                             f"{1 / truth.dt:g} Hz")
         _check_channels(meta, (rmeta["input_names"], rmeta["output_names"]), "plant")
         metrics["frf_error"] = frf_error(model, truth, band)
@@ -140,7 +146,7 @@ def run(args) -> int:
         data = read_data(ref_path, inputs=names_arg(args.inputs),
                          outputs=names_arg(args.outputs), fs=args.fs)
         if abs(data.fs - fs) > 1e-6 * fs:
-            raise DataError(f"the model samples at {fs:g} Hz but the data at {data.fs:g} Hz")
+            raise UserError(f"the model samples at {fs:g} Hz but the data at {data.fs:g} Hz")
         _check_channels(meta, (data.input_names, data.output_names), "data")
         skip = prediction_burn_in(data.n_samples, model.nstates)
         metrics["signal_to_prediction_error"] = prediction_ratio_db(
@@ -204,7 +210,7 @@ def run(args) -> int:
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():
-        raise DataError(f"--out {out} exists and is not a directory")
+        raise UserError(f"--out {out} exists and is not a directory")
     written = []
     try:
         for fname, fig in figs.items():

@@ -17,11 +17,8 @@ import warnings
 
 import numpy as np
 
-from plid.canonical import check_order
-from plid.datafile import check_enough_samples, read_data
-from plid.errors import DataError, IdentificationError
-from plid.metrics import modal_parameters, prediction_ratio_db, predictor_gain
-from plid.modelfile import save_model
+# plid (and through it python-control and scipy.signal) is imported inside the functions:
+# it takes seconds, and `trussid --help` imports every command module.
 
 
 def json_safe(obj):
@@ -54,6 +51,9 @@ def prediction_burn_in(n_samples: int, order: int) -> int:
 
 
 def pole_table(sys_) -> list[dict]:
+    """Frequency [Hz] and damping of each pole (one per complex pair) of ``sys_``."""
+    from plid.metrics import modal_parameters
+
     f, z, _ = modal_parameters(sys_)
     return [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(f, z)]
 
@@ -90,7 +90,12 @@ def add_parser(subparsers):
 
 
 def run(args) -> int:
+    from plid.canonical import check_order
+    from plid.datafile import check_enough_samples, read_data
+    from plid.errors import DataError, IdentificationError
     from plid.estimator import PLID, PLIDWarning
+    from plid.metrics import prediction_ratio_db, predictor_gain
+    from plid.modelfile import save_model
 
     out = str(args.out)
     if not out.lower().endswith(".npz"):

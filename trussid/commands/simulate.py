@@ -12,10 +12,11 @@ import json
 
 import numpy as np
 
-from plid.datafile import SUFFIXES, write_data
-from plid.errors import DataError
-from plid.experiment import EXCITATIONS, run_experiment
-from plid.modelfile import load_model
+# Kept in step with plid.experiment.EXCITATIONS / plid.datafile.SUFFIXES (a test checks);
+# plid is imported inside run() because it pulls in python-control and scipy.signal, which
+# take seconds, and `trussid --help` imports every command module.
+EXCITATIONS = ("white", "prbs", "chirp", "multisine")
+SUFFIXES = (".csv", ".npz", ".mat")
 
 
 def add_parser(subparsers):
@@ -56,6 +57,11 @@ def add_parser(subparsers):
 
 
 def run(args) -> int:
+    from plid.datafile import write_data
+    from plid.errors import DataError
+    from plid.experiment import run_experiment
+    from plid.modelfile import load_model
+
     out = args.out
     if not str(out).lower().endswith(SUFFIXES):
         raise DataError(f"--out {out}: the data file type must be one of {', '.join(SUFFIXES)}")
