@@ -345,7 +345,8 @@ def _nodes(bdf) -> tuple[np.ndarray, np.ndarray]:
         _icd, icp, xyz_cp, nid_cp_cd = bdf.get_displacement_index_xyz_cp_cd()
         xyz = bdf.transform_xyzcp_to_xyz_cid(xyz_cp, nid_cp_cd[:, 0], icp, cid=0)
     except Exception as exc:
-        raise ModelError(f"cannot resolve grid coordinate systems: {' '.join(str(exc).split())[:200]}") from None
+        msg = " ".join(str(exc).split())[:200]
+        raise ModelError(f"cannot resolve grid coordinate systems: {msg}") from None
     order = {int(n): i for i, n in enumerate(nid_cp_cd[:, 0])}
     return ids, np.asarray(xyz, float)[[order[int(n)] for n in ids]]
 

@@ -84,8 +84,11 @@ def load_bulk_data(path: Path) -> LoadedModel:
         notes.append(f"PARAM,WTMASS,{info.wtmass:g} applied to every mass")
     if info.eigen is not None:
         e = info.eigen
-        rng = "" if e.f_low is None and e.f_high is None else \
-            f", range {'' if e.f_low is None else f'{e.f_low:g}'}..{'' if e.f_high is None else f'{e.f_high:g}'} (not applied)"
+        rng = ""
+        if e.f_low is not None or e.f_high is not None:
+            lo = "" if e.f_low is None else f"{e.f_low:g}"
+            hi = "" if e.f_high is None else f"{e.f_high:g}"
+            rng = f", range {lo}..{hi} Hz (not applied: the lowest N modes are listed)"
         notes.append(f"eigenvalue request: {e.card} {e.sid}, ND={e.n_modes}{rng}")
     if info.ignored:
         notes.append(f"ignored (no effect on the modes): {', '.join(info.ignored)}")
@@ -138,7 +141,8 @@ def run(args) -> int:
     print(f"model: {loaded.source}: {len(model.node_ids)} nodes, {len(model.beams)} beams, "
           f"{len(model.point_masses)} point masses, {len(model.springs)} springs, "
           f"{len(model.rigid_bodies)} rigid bodies")
-    print(f"DOF: {system.n_dof} free" + (f" ({len(system.autospc)} removed by AUTOSPC)" if system.autospc else ""))
+    removed = f" ({len(system.autospc)} removed by AUTOSPC)" if system.autospc else ""
+    print(f"DOF: {system.n_dof} free{removed}")
     for note in loaded.notes:
         print(note)
     if len(freqs) < n:
