@@ -32,9 +32,10 @@ import numpy as np
 from plid.errors import DataError
 
 DIMS_HELP = (
-    "flywheel dimensions 'disc_radius,disc_thickness,shaft_radius,shaft_length[,density]' "
-    "in metres and kg/m^3 (default density 7850, steel); the disc is centred on the "
-    "shaft and J is computed from its trimesh solid, e.g. --flywheel 0.1,0.02,0.01,0.2"
+    "flywheel as comma-separated numbers: disc radius, disc thickness, shaft radius, "
+    "shaft length [m] and optionally density [kg/m^3] (default 7850, steel), e.g. "
+    "--flywheel 0.1,0.02,0.01,0.2; the disc is centred on the shaft and J is computed "
+    "from their trimesh solid"
 )
 
 
