@@ -240,3 +240,12 @@ def test_compare_refuses_foreign_files_and_rates(work, tmp_path, capsys):
     code, err = cli(capsys, "compare", tmp_path / "none.npz", work / "plant.npz", "--out", out)
     assert code == 2 and "no such model file" in err[0], err
     assert not out.exists()
+
+
+def test_simulate_offers_exactly_the_excitations_and_formats_plid_has():
+    from plid.datafile import SUFFIXES
+    from plid.experiment import EXCITATIONS
+    from trussid.commands import simulate
+
+    assert simulate.EXCITATIONS == EXCITATIONS
+    assert simulate.SUFFIXES == SUFFIXES
