@@ -487,6 +487,17 @@ def _rod_sec(A, J) -> dict:
     return _sec(A, 1.0, 1.0, J or 0.0)
 
 
+def _rod_material(mat: dict, J) -> dict:
+    """A rod without torsion (J = 0) never uses G, which a MAT1 with E alone leaves at 0.
+
+    The element checks G > 0 for every element, so such a rod gets G = E / 2 (multiplied
+    by J = 0 it changes nothing); a rod with torsion keeps its G and its check.
+    """
+    J = np.asarray(J, float)
+    G = np.asarray(mat["G"], float)
+    return {**mat, "G": np.where((J == 0) & (G <= 0), np.asarray(mat["E"], float) / 2.0, G)}
+
+
 def _group(items, key):
     groups = defaultdict(list)
     for item in items:
@@ -513,7 +524,7 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         if props[e.pid].kind != "bar":
             raise ModelError(f"{card}: property {e.pid} is a {props[e.pid].label.split()[0]}, "
                              f"not a bar/beam property")
-    for pid, group in _group(elems, lambda e: e.pid).items():
+    for (_card, pid), group in _group(elems, lambda e: (e.type, e.pid)).items():
         prop = props[pid]
         eids = np.array([e.eid for e in group], dtype=np.int64)
         ends = np.array([[e.ga, e.gb] if e.type == "CBAR" else e.nodes for e in group], dtype=np.int64)
@@ -544,9 +555,9 @@ def _add_rods(bdf, model: Model, nodes: _NodeTable, props: dict, mats: dict, wtm
         prop = props[pid]
         eids = np.array([e.eid for e in group], dtype=np.int64)
         ends = np.array([e.nodes for e in group], dtype=np.int64)
-        model.add_beams(eids, ends, prop.section, prop.mat, _rod_orient(nodes, ends, "CROD", eids),
-                        nsm=prop.nsm,
-                        rod=True, label=prop.label)
+        model.add_beams(eids, ends, prop.section, _rod_material(prop.mat, prop.section["J"]),
+                        _rod_orient(nodes, ends, "CROD", eids), nsm=prop.nsm, rod=True,
+                        label=prop.label)
     conrods = [e for e in bdf.elements.values() if e.type == "CONROD"]
     if conrods:
         eids = np.array([e.eid for e in conrods], dtype=np.int64)
@@ -554,7 +565,7 @@ def _add_rods(bdf, model: Model, nodes: _NodeTable, props: dict, mats: dict, wtm
         m = [_material(mats, e.mid, f"CONROD {e.eid}") for e in conrods]
         sec = {"A": [e.A for e in conrods], "Iy": 1.0, "Iz": 1.0, "J": [e.j or 0.0 for e in conrods],
                "Asy": math.inf, "Asz": math.inf}
-        mat = {k: [mi[k] for mi in m] for k in ("E", "G", "rho")}
+        mat = _rod_material({k: [mi[k] for mi in m] for k in ("E", "G", "rho")}, sec["J"])
         nsm = np.array([e.nsm or 0.0 for e in conrods]) * wtmass
         model.add_beams(eids, ends, {k: np.broadcast_to(np.asarray(v, float), (len(eids),))
                                      for k, v in sec.items()},
