@@ -74,7 +74,7 @@ def _spectra(u, y, fs, nperseg, window, noverlap):
               detrend="constant")
     f, Suu = scipy.signal.csd(u[:, :, None], u[:, None, :], **kw)  # (nf, m, m)
     _, Suy = scipy.signal.csd(u[:, :, None], y[:, None, :], **kw)  # (nf, m, p)
-    _, Syy = scipy.signal.welch(y, **{k: v for k, v in kw.items()})  # (nf, p)
+    _, Syy = scipy.signal.welch(y, **kw)  # (nf, p)
     step = nperseg - (nperseg // 2 if noverlap is None else noverlap)
     n_avg = (n - nperseg) // step + 1
     return f, Suu, Suy, Syy, n_avg
@@ -113,12 +113,16 @@ def h1(u, y, fs: float, nperseg: int = 1024, window="hann", noverlap=None) -> FR
     except np.linalg.LinAlgError:
         raise DataError(f"the {m} inputs are linearly dependent at some frequency; H1 needs "
                         "independent inputs") from None
-    H = np.swapaxes(Ht, 1, 2)
-    # Multiple coherence: power of y_i explained by all inputs over the power of y_i.
+    return FRF(f=f, H=np.swapaxes(Ht, 1, 2), coherence=_coherence(Suy, Ht, Syy),
+               n_averages=n_avg)
+
+
+def _coherence(Suy, Ht, Syy):
+    """Multiple coherence: power of y_i explained by all inputs over the power of y_i."""
     explained = np.real(np.einsum("fji,fji->fi", np.conj(Suy), Ht))
     with np.errstate(invalid="ignore", divide="ignore"):
         coh = np.where(Syy > 0, explained / Syy, 0.0)
-    return FRF(f=f, H=H, coherence=np.clip(coh, 0.0, 1.0), n_averages=n_avg)
+    return np.clip(coh, 0.0, 1.0)
 
 
 def h2(u, y, fs: float, nperseg: int = 1024, window="hann", noverlap=None) -> FRF:
@@ -143,8 +147,11 @@ def h2(u, y, fs: float, nperseg: int = 1024, window="hann", noverlap=None) -> FR
     else:
         raise DataError(f"H2 needs one input or as many outputs as inputs; got {m} inputs "
                         f"and {p} outputs")
-    h1_est = h1(u, y, fs, nperseg, window, noverlap)
-    return FRF(f=f, H=H, coherence=h1_est.coherence, n_averages=n_avg)
+    try:
+        coh = _coherence(Suy, np.linalg.solve(Suu, Suy), Syy)
+    except np.linalg.LinAlgError:
+        raise DataError(f"the {m} inputs are linearly dependent at some frequency") from None
+    return FRF(f=f, H=H, coherence=coh, n_averages=n_avg)
 
 
 def stepped_sine(plant: control.StateSpace, f, amplitude: float = 1.0, cycles: int = 20,
