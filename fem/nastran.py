@@ -487,15 +487,18 @@ def _rod_sec(A, J) -> dict:
     return _sec(A, 1.0, 1.0, J or 0.0)
 
 
-def _rod_material(mat: dict, J) -> dict:
-    """A rod without torsion (J = 0) never uses G, which a MAT1 with E alone leaves at 0.
+def _rod_torsion(section: dict, mat: dict) -> tuple[dict, dict]:
+    """Rods whose G is 0 (a MAT1 with E alone): no torsional stiffness, as in NASTRAN.
 
-    The element checks G > 0 for every element, so such a rod gets G = E / 2 (multiplied
-    by J = 0 it changes nothing); a rod with torsion keeps its G and its check.
+    The element checks G > 0 for every element, so such a rod gets J = 0 and a placeholder
+    G = E / 2: its torsional stiffness G J is 0 either way, and nothing else uses G.
     """
-    J = np.asarray(J, float)
     G = np.asarray(mat["G"], float)
-    return {**mat, "G": np.where((J == 0) & (G <= 0), np.asarray(mat["E"], float) / 2.0, G)}
+    zero = G == 0
+    if not zero.any():
+        return section, mat
+    J = np.where(zero, 0.0, np.asarray(section["J"], float))
+    return {**section, "J": J}, {**mat, "G": np.where(zero, np.asarray(mat["E"], float) / 2.0, G)}
 
 
 def _group(items, key):
@@ -555,9 +558,9 @@ def _add_rods(bdf, model: Model, nodes: _NodeTable, props: dict, mats: dict, wtm
         prop = props[pid]
         eids = np.array([e.eid for e in group], dtype=np.int64)
         ends = np.array([e.nodes for e in group], dtype=np.int64)
-        model.add_beams(eids, ends, prop.section, _rod_material(prop.mat, prop.section["J"]),
-                        _rod_orient(nodes, ends, "CROD", eids), nsm=prop.nsm, rod=True,
-                        label=prop.label)
+        section, mat = _rod_torsion(prop.section, prop.mat)
+        model.add_beams(eids, ends, section, mat, _rod_orient(nodes, ends, "CROD", eids),
+                        nsm=prop.nsm, rod=True, label=prop.label)
     conrods = [e for e in bdf.elements.values() if e.type == "CONROD"]
     if conrods:
         eids = np.array([e.eid for e in conrods], dtype=np.int64)
@@ -565,12 +568,11 @@ def _add_rods(bdf, model: Model, nodes: _NodeTable, props: dict, mats: dict, wtm
         m = [_material(mats, e.mid, f"CONROD {e.eid}") for e in conrods]
         sec = {"A": [e.A for e in conrods], "Iy": 1.0, "Iz": 1.0, "J": [e.j or 0.0 for e in conrods],
                "Asy": math.inf, "Asz": math.inf}
-        mat = _rod_material({k: [mi[k] for mi in m] for k in ("E", "G", "rho")}, sec["J"])
+        sec = {k: np.broadcast_to(np.asarray(v, float), (len(eids),)) for k, v in sec.items()}
+        sec, mat = _rod_torsion(sec, {k: np.array([mi[k] for mi in m]) for k in ("E", "G", "rho")})
         nsm = np.array([e.nsm or 0.0 for e in conrods]) * wtmass
-        model.add_beams(eids, ends, {k: np.broadcast_to(np.asarray(v, float), (len(eids),))
-                                     for k, v in sec.items()},
-                        mat, _rod_orient(nodes, ends, "CONROD", eids), nsm=nsm, rod=True,
-                        label="CONROD")
+        model.add_beams(eids, ends, sec, mat, _rod_orient(nodes, ends, "CONROD", eids), nsm=nsm,
+                        rod=True, label="CONROD")
 
 
 def _rod_orient(nodes: _NodeTable, ends: np.ndarray, card: str, eids: np.ndarray) -> np.ndarray:
