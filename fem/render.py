@@ -545,10 +545,13 @@ def _frame_camera(plotter, scene: ModeScene, view) -> None:
     plotter.reset_camera(bounds=tuple(b.ravel()))
 
 
-def _new_plotter(window_size, shape=(1, 1)):
+def _new_plotter(window_size, shape=(1, 1), antialias: bool = True):
     import pyvista as pv
 
     p = pv.Plotter(off_screen=True, window_size=list(window_size), shape=shape, border=False)
+    # 4x multisampling smooths edges; in a software rasteriser it costs about 0.6 s per
+    # 800x600 frame of a 540-beam lattice (benchmarks/results/render.md), so GIFs skip it.
+    p.ren_win.SetMultiSamples(4 if antialias else 0)
     p.set_background("white")
     return p
 
@@ -575,7 +578,7 @@ def render_mode(model: Model, modes, mode: int = 1, out=None, *, window_size=DEF
                 scale: float | None = None, amplitude: float = DEFAULT_AMPLITUDE,
                 label: str | None = None, labels: Sequence[str] | None = None,
                 decorations: Sequence = (), view="iso", show_ghost: bool = True,
-                cmap=None, n_samples: int = 9) -> np.ndarray:
+                cmap=None, n_samples: int = 9, antialias: bool = True) -> np.ndarray:
     """Render one mode shape offscreen as a still image.
 
     Parameters
@@ -592,6 +595,8 @@ def render_mode(model: Model, modes, mode: int = 1, out=None, *, window_size=DEF
         Draw the undeformed structure faintly.
     cmap : str or matplotlib colormap, optional
         Colour map for ``|u| / max |u|``; default :func:`default_cmap`.
+    antialias : bool
+        4x multisample anti-aliasing.
 
     Returns
     -------
@@ -602,7 +607,7 @@ def render_mode(model: Model, modes, mode: int = 1, out=None, *, window_size=DEF
     scene = mode_scene(model, modes, mode, scale=scale, amplitude=amplitude, decorations=decorations,
                        label=label, labels=labels, n_samples=n_samples)
     with offscreen_backend():
-        p = _new_plotter(size)
+        p = _new_plotter(size, antialias=antialias)
         try:
             _add_scene(p, scene, 1.0, cmap, show_ghost, True, _font_size(size))
             _frame_camera(p, scene, view)
@@ -618,7 +623,8 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
                     period: float = 1.5, window_size=(800, 600), scale: float | None = None,
                     amplitude: float = DEFAULT_AMPLITUDE, label: str | None = None,
                     labels: Sequence[str] | None = None, decorations: Sequence = (), view="iso",
-                    show_ghost: bool = True, cmap=None, n_samples: int = 9) -> np.ndarray:
+                    show_ghost: bool = True, cmap=None, n_samples: int = 9,
+                    antialias: bool = False) -> np.ndarray:
     """Render one period of a mode's vibration as an animated GIF (looping).
 
     Frame ``j`` shows the deformation ``sin(2 pi (j + 1/8) / frames)`` times the drawn
@@ -633,6 +639,9 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
         Playback duration of one period [s].
     out : path-like, optional
         GIF file to write (atomically).
+    antialias : bool
+        4x multisampling; off by default for GIFs (it more than doubles the time per frame
+        in software rendering, and the 255-colour palette blurs the gain).
     Others
         As :func:`render_mode`.
 
@@ -655,7 +664,7 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
     factors = np.sin(2 * np.pi * (np.arange(frames) + 0.125) / frames)
     images = []
     with offscreen_backend():
-        p = _new_plotter(size)
+        p = _new_plotter(size, antialias=antialias)
         try:
             deformed = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size))
             _frame_camera(p, scene, view)
@@ -677,7 +686,11 @@ def _write_gif(images: np.ndarray, out, frame_seconds: float) -> None:
     # open_gif needs imageio, which is not a dependency.
     from PIL import Image
 
-    pics = [Image.fromarray(im).quantize(colors=255, method=Image.Quantize.MEDIANCUT) for im in images]
+    # One palette for all frames (from a few frames spread over the period) so colours do
+    # not flicker between frames; octree quantisation is ~20x faster than median cut.
+    sample = Image.fromarray(np.concatenate(list(images[:: max(1, len(images) // 4)]), axis=0))
+    palette = sample.quantize(colors=255, method=Image.Quantize.FASTOCTREE)
+    pics = [Image.fromarray(im).quantize(palette=palette) for im in images]
     with atomic_path(out, suffix=".gif") as tmp:
         pics[0].save(tmp, format="GIF", save_all=True, append_images=pics[1:],
                      duration=max(int(round(1000 * frame_seconds)), 20), loop=0, disposal=1,
