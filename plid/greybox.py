@@ -98,7 +98,9 @@ class Combination:
         not singular directions).
     reason : str
         ``"structural"`` (invisible to the model), ``"practical"`` (invisible at this
-        noise level: 95 % half-width wider than a factor e), or ``"determined"``.
+        noise level: 95 % half-width wider than a factor e for log parameters, than
+        100 % of the initial magnitude for linear ones), ``"multi-start"`` (equally good
+        fits from different starts disagree) or ``"determined"``.
     """
 
     exponents: dict[str, float]
@@ -626,8 +628,15 @@ def fit_parameters(
         results.append(_solve(safe_r, jfun, cvec, space, th, bool(constraints), ctol,
                               r0 @ r0 / 2))
 
-    best = min(range(len(results)), key=lambda i: results[i][1])
-    theta, cost = results[best][0], results[best][1]
+    def infeasible(theta):
+        if not constraints:
+            return False
+        v = np.concatenate([cvec(theta, ("eq",)), np.minimum(cvec(theta, ("ineq",)), 0.0)])
+        return bool(v.size and np.max(np.abs(v)) > 10 * ctol)
+
+    # the best feasible end point (SLSQP may stop off the constraints from a bad start)
+    best = min(range(len(results)), key=lambda i: (infeasible(results[i][0]), results[i][1]))
+    theta = results[best][0]
     r = safe_r(theta)
     return _analyse(safe_r, jfun, cvec, space, theta, r, results, starts, constraints,
                     confidence, ctol, "slsqp" if constraints else "least_squares")
