@@ -102,6 +102,16 @@ def test_h2_is_unbiased_by_input_noise_where_h1_is_biased_low():
     assert ratio2 == pytest.approx(1.0, abs=0.02)
 
 
+def test_square_mimo_h2_recovers_the_plant():
+    plant = control.c2d(modal_plant([60.0, 210.0], [0.05, 0.05], n_in=2, seed=3), 1 / FS)
+    e = run_experiment(plant, 40000, seed=2)
+    # Noise-free, the only error is window leakage, which H2 (output spectra in the
+    # numerator) feels more than H1: at 2 Hz resolution it was 8 %, at 0.5 Hz 0.7 %.
+    est = h2(e.data.u, e.data.y, FS, nperseg=2048)
+    assert est.H.shape[1:] == (2, 2)
+    assert rel_error(est, plant) < 0.01
+
+
 def test_h2_refuses_non_square_mimo(rng):
     with pytest.raises(DataError, match="H2 needs one input or as many outputs as inputs"):
         h2(rng.standard_normal((2000, 2)), rng.standard_normal((2000, 3)), FS, nperseg=256)
