@@ -91,6 +91,78 @@ def _safe_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name) or "input"
 
 
+def bode_figure(curves, j: int, input_name: str, output_names, title: str = ""):
+    """Bode overlay of one input column: one row per output, magnitude and phase.
+
+    Parameters
+    ----------
+    curves : list of (label, f [Hz], H (n_freq, p, m))
+        Drawn in order: the first wide and grey (the reference), the last thin and blue
+        (the model), any between in orange, so agreement shows as a blue line inside a grey
+        band.
+    j : int
+        Input column.
+    input_name : str
+    output_names : list of str
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure (not shown; the caller saves and closes it)
+    """
+    import matplotlib.pyplot as plt
+
+    p = len(output_names)
+    fig, axes = plt.subplots(p, 2, figsize=(10, 2.4 * p + 0.6), squeeze=False)
+    ref, mid, last = dict(color="0.55", lw=2.4), dict(color="C1", lw=1.4), dict(color="C0", lw=1.0)
+    styles = [last] if len(curves) == 1 else [ref] + [mid] * (len(curves) - 2) + [last]
+    lo = min(float(np.min(c[1])) for c in curves)
+    hi = max(float(np.max(c[1])) for c in curves)
+    for i in range(p):
+        ax_m, ax_p = axes[i]
+        for (label, f, H), st in zip(curves, styles):
+            ax_m.semilogy(f, np.abs(H[:, i, j]), label=label, **st)
+            ax_p.plot(f, np.degrees(np.angle(H[:, i, j])), **st)
+        ax_m.set_ylabel(f"|{output_names[i]}/{input_name}|")
+        ax_p.set_ylabel("phase [deg]")
+        ax_p.set_ylim(-190, 190)
+        for ax in (ax_m, ax_p):
+            ax.grid(True, which="both", alpha=0.3)
+            ax.set_xlim(lo, hi)
+    axes[0, 0].legend(loc="best", fontsize=8)
+    axes[-1, 0].set_xlabel("frequency [Hz]")
+    axes[-1, 1].set_xlabel("frequency [Hz]")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def pole_map_figure(systems, title: str = "poles (z-plane)"):
+    """z-plane pole map with the unit circle; ``systems`` a list of (label, discrete model).
+
+    The first system is drawn as open circles (the reference), later ones as crosses.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 6))
+    th = np.linspace(0, 2 * np.pi, 400)
+    ax.plot(np.cos(th), np.sin(th), color="0.6", lw=0.8)
+    for k, (label, sys_) in enumerate(systems):
+        z = np.linalg.eigvals(np.asarray(sys_.A)) if sys_.nstates else np.array([])
+        if k == 0 and len(systems) > 1:
+            ax.plot(z.real, z.imag, "o", mfc="none", color="k", label=label)
+        else:
+            ax.plot(z.real, z.imag, "x", color=f"C{(k + 2) % 10}", label=label)
+    ax.set_aspect("equal")
+    ax.set_xlabel("Re z")
+    ax.set_ylabel("Im z")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="lower left")
+    ax.set_title(title)
+    return fig
+
+
 def run(args) -> int:
     import matplotlib
 
@@ -171,42 +243,13 @@ def run(args) -> int:
 
     # ---- figures (built in memory, then written)
     figs = {}
+    curves = [(ref_label, f_ref, H_ref), ("model", f_plot, H_model)]
     for j, name in enumerate(meta["input_names"]):
-        p = model.noutputs
-        fig, axes = plt.subplots(p, 2, figsize=(10, 2.4 * p + 0.6), squeeze=False)
-        for i in range(p):
-            ax_m, ax_p = axes[i]
-            ax_m.semilogy(f_ref, np.abs(H_ref[:, i, j]), color="0.55", lw=1.6, label=ref_label)
-            ax_m.semilogy(f_plot, np.abs(H_model[:, i, j]), color="C0", lw=1.0, label="model")
-            ax_p.plot(f_ref, np.degrees(np.angle(H_ref[:, i, j])), color="0.55", lw=1.6)
-            ax_p.plot(f_plot, np.degrees(np.angle(H_model[:, i, j])), color="C0", lw=1.0)
-            ax_m.set_ylabel(f"|{meta['output_names'][i]}/{name}|")
-            ax_p.set_ylabel("phase [deg]")
-            ax_p.set_ylim(-190, 190)
-            for ax in (ax_m, ax_p):
-                ax.grid(True, which="both", alpha=0.3)
-                ax.set_xlim(f_plot[0], f_plot[-1])
-        axes[0, 0].legend(loc="best", fontsize=8)
-        axes[-1, 0].set_xlabel("frequency [Hz]")
-        axes[-1, 1].set_xlabel("frequency [Hz]")
-        fig.suptitle(f"Bode overlay, input {name}: model vs {ref_label}")
-        fig.tight_layout()
-        figs[f"bode_{_safe_name(name)}.png"] = fig
-    fig, ax = plt.subplots(figsize=(6, 6))
-    th = np.linspace(0, 2 * np.pi, 400)
-    ax.plot(np.cos(th), np.sin(th), color="0.6", lw=0.8)
-    if truth is not None:
-        pt = np.linalg.eigvals(truth.A) if truth.nstates else np.array([])
-        ax.plot(pt.real, pt.imag, "o", mfc="none", color="k", label="plant")
-    pm = np.linalg.eigvals(model.A) if model.nstates else np.array([])
-    ax.plot(pm.real, pm.imag, "x", color="C3", label="model")
-    ax.set_aspect("equal")
-    ax.set_xlabel("Re z")
-    ax.set_ylabel("Im z")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower left")
-    ax.set_title("poles (z-plane)")
-    figs["poles.png"] = fig
+        figs[f"bode_{_safe_name(name)}.png"] = bode_figure(
+            curves, j, name, meta["output_names"],
+            title=f"Bode overlay, input {name}: model vs {ref_label}")
+    poles = [("plant", truth), ("model", model)] if truth is not None else [("model", model)]
+    figs["poles.png"] = pole_map_figure(poles)
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():
