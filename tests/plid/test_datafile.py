@@ -160,3 +160,10 @@ def test_write_is_atomic_on_bad_data(tmp_path, data):
     with pytest.raises(DataError):
         write_data(data, tmp_path / "d.csv")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_wrong_array_rank_is_named(tmp_path):
+    path = tmp_path / "d.npz"
+    np.savez(path, u=np.ones((4, 2, 2)), y=np.ones((4, 1)), fs=1.0)
+    with pytest.raises(DataError, match="array 'u' must be 2-D .* got shape \\(4, 2, 2\\)"):
+        read_data(path)
