@@ -100,9 +100,9 @@ class SPDFactor:
     def pivots(self) -> np.ndarray:
         """Diagonal of U in the original DOF order (for singularity diagnosis)."""
         d = self.lu.U.diagonal()
-        # U's diagonal is in the column-permuted order of the permuted matrix.
+        # SuperLU factors Pr A Pc with column i of A moved to position perm_c[i].
         out = np.empty(self.n)
-        out[self.perm[self.lu.perm_c]] = d
+        out[self.perm] = d[self.lu.perm_c]
         return out
 
 
@@ -153,33 +153,59 @@ def _eigh(K, M, k, system):
 
 
 def _shift_invert(system: System, k: int, sigma: float | None, tol: float):
+    """Lowest ``k`` eigenpairs by ARPACK shift-invert; also returns whether ``K`` was
+    proven positive definite (factorised at ``sigma = 0`` without a tiny pivot)."""
     K, M = system.K, system.M
-    if sigma is None:
-        sigma = -default_shift(system)
-    A = (K - sigma * M).tocsc()
-    try:
-        fac = SPDFactor(A)
-    except RuntimeError as exc:  # exactly singular: only possible for sigma >= 0
-        raise ModelError(f"K - sigma M is singular at sigma={sigma:g}: {exc}") from None
+    fac, proven = None, False
+    if sigma is None and system.has_supports:
+        # A supported model should have a positive definite K: factorising it at sigma = 0
+        # gives the best-separated spectrum and doubles as NASTRAN's MAXRATIO mechanism test.
+        ok, _ = factor_stiffness(system)
+        if ok is not None:
+            fac, proven = ok, True
+            sigma = 0.0
+    if fac is None:
+        if sigma is None:
+            sigma = -default_shift(system)
+        try:
+            fac = SPDFactor((K - sigma * M).tocsc())
+        except RuntimeError as exc:  # exactly singular: only possible for sigma >= 0
+            raise ModelError(f"K - sigma M is singular at sigma={sigma:g}: {exc}") from None
     op = sla.LinearOperator(K.shape, matvec=fac.solve, dtype=float)
     v0 = np.random.default_rng(0).standard_normal(K.shape[0])  # reproducible start
     lam, x = sla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0, tol=tol)
     order = np.argsort(lam)
-    return lam[order], x[:, order]
+    return lam[order], x[:, order], proven
+
+
+#: A factorisation pivot below this fraction of its diagonal entry means K is singular
+#: there (NASTRAN's MAXRATIO test, with a stricter threshold than its default 1e7).
+SINGULAR_PIVOT = 1e-10
+
+
+def factor_stiffness(system: System):
+    """Factorise ``K``; return ``(factor, None)`` if it is positive definite, else
+    ``(None, j)`` with ``j`` the reduced DOF of the smallest relative pivot (or None)."""
+    diag = system.K.diagonal()
+    try:
+        fac = SPDFactor(system.K.tocsc())
+    except RuntimeError:
+        return None, None
+    ratio = fac.pivots() / np.where(diag > 0, diag, 1.0)
+    if (ratio < SINGULAR_PIVOT).any():
+        return None, int(np.argmin(ratio))
+    return fac, None
 
 
 def default_shift(system: System) -> float:
     """Magnitude of the negative shift used for shift-invert [rad^2/s^2].
 
-    A small fraction of the median diagonal ratio ``K_ii / M_ii`` (which scales with the
-    element-level frequencies): small against the lowest flexible eigenvalues of any
-    reasonable mesh, large enough to keep ``K - sigma M`` well conditioned when ``K`` is
-    singular (free-free).
+    ``1e-12 max K_ii / M_ii``: the largest eigenvalue is at least ``max K_ii / M_ii``, so
+    ``K - sigma M`` has a condition number of at most about 1e12 even when ``K`` is
+    singular (free-free), while the shift stays far below the lowest flexible eigenvalues
+    of any practical mesh, which keeps the inverted spectrum well separated.
     """
-    kd, md = system.K.diagonal(), system.M.diagonal()
-    ok = md > 0
-    ratio = np.median(kd[ok] / md[ok]) if ok.any() else 1.0
-    return 1e-8 * max(ratio, 1e-300)
+    return 1e-12 * eigenvalue_scale(system)
 
 
 def eigenvalue_scale(system: System) -> float:
@@ -189,9 +215,11 @@ def eigenvalue_scale(system: System) -> float:
     return float(np.max(kd[ok] / md[ok])) if ok.any() else 1.0
 
 
-#: Eigenvalues below this fraction of :func:`eigenvalue_scale` are rigid-body (zero)
-#: modes: the round-off level of the eigensolvers is ~1e-16..1e-14 of it.
-ZERO_EIGENVALUE = 1e-11
+#: Eigenvalues below this fraction of :func:`eigenvalue_scale` are candidates for
+#: zero-frequency modes (round-off of the eigensolvers is ~1e-16..1e-14 of it). They are
+#: clamped to exactly 0 if their shape is a rigid-body motion; otherwise, in a supported
+#: model, they are a mechanism unless K factorises without a tiny pivot.
+ZERO_EIGENVALUE = 1e-12
 
 
 def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, autospc: bool = False,
@@ -232,42 +260,47 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
     if k < 1:
         raise ValueError(f"n_modes must be >= 1, got {n_modes}")
     use_dense = method == "dense" or (method == "auto" and n <= DENSE_MAX_DOF) or k >= n - 1
+    proven = False
     if use_dense:
         lam, X = _dense(system, k)
         used = "dense"
     else:
-        lam, X = _shift_invert(system, k, sigma, tol)
+        lam, X, proven = _shift_invert(system, k, sigma, tol)
         used = "shift-invert"
     # Mass-normalise explicitly (ARPACK's normalisation is only as good as its tolerance).
     mm = np.einsum("ij,ij->j", X, system.M @ X)
     X = X / np.sqrt(mm)
-    scale = eigenvalue_scale(system)
-    lam = np.where(lam < ZERO_EIGENVALUE * scale, 0.0, lam)
     shapes_full = system.T @ X
-    if system.has_supports and (lam == 0).any():
-        _raise_mechanism(system, shapes_full[:, lam == 0])
+    lam = _zero_modes(system, lam, X, shapes_full, proven)
     omega = np.sqrt(lam)
     return Modes(frequencies_hz=omega / (2 * np.pi), omega=omega, shapes=X, shapes_full=shapes_full,
                  node_ids=system.node_ids, xyz=system.xyz, n_dof=n, method=used)
 
 
-def _raise_mechanism(system: System, Z: np.ndarray) -> None:
-    """Raise unless every zero-frequency shape in ``Z`` (full DOFs) is rigid-body motion.
+def _zero_modes(system: System, lam, X, shapes_full, proven: bool) -> np.ndarray:
+    """Clamp rigid-body eigenvalues to 0; raise for mechanisms of supported models."""
+    lam = np.array(lam, dtype=float)
+    small = np.flatnonzero(lam < ZERO_EIGENVALUE * eigenvalue_scale(system))
+    if small.size:
+        rigid = _is_rigid(system.xyz, shapes_full[:, small])
+        lam[small[rigid]] = 0.0
+        other = small[~rigid]
+        if system.has_supports and other.size and not proven:
+            ok, j = factor_stiffness(system)
+            if ok is None:
+                if j is None:  # exactly singular: name what moves most in the first such mode
+                    j = int(np.argmax(np.abs(X[:, other[0]])))
+                raise ModelError(f"mechanism: {system.dof_label(j)} has no stiffness (it can move "
+                                 f"without straining the structure)")
+    return np.maximum(lam, 0.0)
 
-    A partially supported model may keep rigid-body freedom (e.g. a model supported only
-    against vertical motion); anything else with zero strain energy is a mechanism.
-    """
-    xyz = system.xyz
+
+def _is_rigid(xyz: np.ndarray, Z: np.ndarray, tol: float = 1e-5) -> np.ndarray:
+    """Which columns of ``Z`` (full DOF vectors) are rigid-body motions of the nodes."""
     size = float(np.ptp(xyz, axis=0).max()) or 1.0
     w = np.tile(np.r_[np.ones(3), np.full(3, size)], len(xyz))  # rotations in length units
     R = rigid_body_modes(xyz) * w[:, None]
     Zs = Z * w[:, None]
     coef, *_ = np.linalg.lstsq(R, Zs, rcond=None)
-    res = Zs - R @ coef
-    rel = np.linalg.norm(res, axis=0) / np.linalg.norm(Zs, axis=0)
-    bad = rel > 1e-6
-    if bad.any():
-        r = res[:, int(np.flatnonzero(bad)[0])]
-        d = int(np.argmax(np.abs(r)))
-        raise ModelError(f"mechanism: {dof_label(system.node_ids, d)} can move without straining "
-                         f"the structure (a zero-frequency mode that is not rigid-body motion)")
+    res = np.linalg.norm(Zs - R @ coef, axis=0)
+    return res <= tol * np.linalg.norm(Zs, axis=0)

@@ -1,0 +1,46 @@
+"""Linear static solution ``K q = T^T f`` by sparse direct factorisation."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fem.assembly import System, assemble
+from fem.errors import ModelError
+from fem.modal import factor_stiffness
+
+
+def solve_static(model_or_system, f_full, *, autospc: bool = False) -> np.ndarray:
+    """Displacements under nodal loads.
+
+    Parameters
+    ----------
+    model_or_system : fem.Model or System
+        A model is assembled first (with ``autospc``).
+    f_full : (6 n_nodes,) or (6 n_nodes, k) float
+        Nodal forces and moments on every node's six DOFs [N, N m]. Loads on supported DOFs
+        go to the supports; loads on rigid-body slaves act through their master.
+
+    Returns
+    -------
+    (6 n_nodes,) or (6 n_nodes, k) float
+        Displacements and rotations of every node [m, rad] (supported DOFs zero).
+
+    Raises
+    ------
+    ModelError
+        The stiffness is singular (free rigid-body motion or a mechanism), naming the
+        node and component where the factorisation broke down.
+    """
+    system = model_or_system if isinstance(model_or_system, System) else assemble(model_or_system, autospc=autospc)
+    f_full = np.asarray(f_full, dtype=float)
+    n_full = system.T.shape[0]
+    if f_full.shape[0] != n_full:
+        raise ModelError(f"load vector has {f_full.shape[0]} rows; the model has {n_full} DOFs "
+                         f"(6 per node)")
+    f = system.T.T @ f_full
+    fac, j = factor_stiffness(system)
+    if fac is None:
+        where = f" at {system.dof_label(j)}" if j is not None else ""
+        raise ModelError(f"the stiffness is singular{where}: the model can move freely (add "
+                         f"supports) or is a mechanism")
+    return system.T @ fac.solve(f)
