@@ -634,12 +634,27 @@ def fit_parameters(
         v = np.concatenate([cvec(theta, ("eq",)), np.minimum(cvec(theta, ("ineq",)), 0.0)])
         return bool(v.size and np.max(np.abs(v)) > 10 * ctol)
 
-    # the best feasible end point (SLSQP may stop off the constraints from a bad start)
+    # the best feasible end point (SLSQP may stop off the constraints from a bad start) ...
     best = min(range(len(results)), key=lambda i: (infeasible(results[i][0]), results[i][1]))
+    # ... unless the fit from the user's own start is statistically as good: among equally
+    # good fits (an undetermined combination) report the one the user's guess leads to, so
+    # the representative point and the local analysis do not hinge on a random start.
+    best_cost = results[best][1]
+    s2 = 2 * best_cost / max(n_obs - n_free, 1)
+    if (best != 0 and not infeasible(results[0][0])
+            and results[0][1] - best_cost <= _equivalence_threshold(s2, n_free, best_cost)):
+        best = 0
     theta = results[best][0]
     r = safe_r(theta)
     return _analyse(safe_r, jfun, cvec, space, theta, r, results, starts, constraints,
                     confidence, ctol, "slsqp" if constraints else "least_squares")
+
+
+def _equivalence_threshold(s2, n_dims, best_cost, confidence=0.95):
+    """Cost excess below which a fit is as good as the best: the likelihood-ratio
+    threshold ``s^2 chi2_conf(n) / 2`` (cost is half the sum of squares)."""
+    return max(0.5 * s2 * scipy.stats.chi2.ppf(confidence, max(n_dims, 1)),
+               1e-9 * best_cost, 1e-300)
 
 
 def _feasible_starts(cvec, constraints, space, starts, ctol):
@@ -780,8 +795,8 @@ def _analyse(safe_r, jfun, cvec, space, theta, r, results, starts, constraints,
     # Starts whose fit is statistically indistinguishable from the best (likelihood-ratio
     # threshold): where they disagree, the data leave the parameters open, whatever the
     # local analysis at the best point says (a curved valley, or separate equal minima).
-    thresh = max(0.5 * s2 * scipy.stats.chi2.ppf(confidence, max(n_eff, 1)), 1e-9 * cost, 1e-300)
     best_cost = min(res[1] for res in results)
+    thresh = _equivalence_threshold(s2, n_eff, best_cost, confidence)
     start_results, eq_thetas = [], []
     for th0, res in zip(starts, results):
         th, c, ok, msg = res

@@ -78,7 +78,14 @@ def test_acceptance_2_inertia_alone_leaves_a_named_combination_undetermined():
     res = identify_dc_motor(t, u, y, J=J, n_starts=6, seed=4)
     # the report says b, R, k are not all determined and names what is free
     assert res.undetermined, res.summary()
-    assert any("R" in name and "k" in name for name in res.undetermined)
+    assert res.undetermined == ("R*k",)
+    # independent check: (T, G) are unchanged along d ln(b, R, k) = (-k^2/(b R), 1, 1),
+    # worked out by hand from T = J R/(b R + k^2), G = k/(b R + k^2)
+    (comb,) = res.physical.undetermined
+    p = res.representative
+    ratio = p["k"] ** 2 / (p["b"] * p["R"])
+    assert comb.exponents == pytest.approx({"b": -ratio, "R": 1.0, "k": 1.0}, abs=1e-4)
+    assert comb.reason == "structural"
     assert res.parameters["J"] == J
     assert res.parameters["R"] is None and res.parameters["k"] is None
     assert res.intervals["R"] is None
