@@ -150,6 +150,28 @@ def test_converters_quantise_and_report_clipping(plant):
     assert e.clipped_total == e.clipping["dac"][0] + sum(e.clipping["adc"])
 
 
+def test_auto_ranged_adc_fills_each_channel_range(plant):
+    analog = run_experiment(plant, 20000, seed=4, snr_db=50.0).data.y  # same noise, no ADC
+    e = run_experiment(plant, 20000, seed=4, snr_db=50.0, adc_bits=12, adc_full_scale="auto")
+    q = np.asarray(e.lsb["adc"])
+    rms = np.sqrt(np.mean(e.y_clean**2, axis=0))
+    # +-full scale = +-4 RMS per channel (the two outputs differ in size by orders)
+    np.testing.assert_allclose(q * 2**11, 4 * rms, rtol=1e-3)
+    np.testing.assert_allclose(e.data.y / q, np.round(e.data.y / q), atol=1e-9)
+    full = q * 2**11
+    beyond = (analog > full - q / 2) | (analog < -full - q / 2)  # past the end codes
+    assert e.clipping["adc"] == beyond.sum(axis=0).tolist()
+    assert 0 < sum(e.clipping["adc"]) < 20  # a few samples of a lightly damped response
+    # Off the clipped samples the error is the 50 dB sensor noise (3.16e-3 of the RMS) and
+    # the quantisation noise (q / sqrt(12) = 5.64e-4 of the RMS) in quadrature.
+    for j in range(2):
+        ok = ~beyond[:, j]
+        err = e.data.y[ok, j] - e.y_clean[ok, j]
+        rel = np.sqrt(np.mean(err**2)) / rms[j]
+        assert rel == pytest.approx(np.hypot(10 ** (-50 / 20), 4 / 2048 / np.sqrt(12)), rel=0.03)
+        assert np.max(np.abs(e.data.y[ok, j] - analog[ok, j])) <= q[j] / 2 * (1 + 1e-9)
+
+
 def test_continuous_plant_is_refused(plant):
     with pytest.raises(DataError, match="must be discrete-time"):
         run_experiment(control.ss(-1.0, 1.0, 1.0, 0.0), 10)
