@@ -92,7 +92,6 @@ def test_second_order_terms_are_significant_in_the_moment_check():
     first_order = Fx @ Pp @ Fx.T + pb.Q
     assert np.max(np.abs(first_order - cov_mc[q:, q:])) > 10 * np.max(
         np.abs(st.P[q:, q:] - cov_mc[q:, q:]))
-    del st0, rd
 
 
 @pytest.mark.parametrize("n,m,p,snr,extra", [
