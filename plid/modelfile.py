@@ -10,6 +10,7 @@ names ``c_A, c_B, c_C, c_D`` (the ``plant`` command stores the continuous plant 
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import control
@@ -45,6 +46,23 @@ def _check_abcd(A, B, C, D, source: str, prefix: str = ""):
     return A, B, C, D
 
 
+def _check_unique(input_names, output_names, source: str) -> None:
+    # python-control merges repeated signal names into one signal, so refuse them here.
+    for kind, names in (("input", input_names), ("output", output_names)):
+        dup = sorted({s for s in names if list(names).count(s) > 1})
+        if dup:
+            raise DataError(f"{source}: {kind} name '{dup[0]}' is used more than once")
+
+
+def _labels(sys, kind: str, letter: str) -> list[str]:
+    """Channel names carried by a python-control system, or u1../y1.. for its defaults."""
+    count = sys.ninputs if kind == "input" else sys.noutputs
+    labels = list(getattr(sys, f"{kind}_labels", []) or [])
+    if len(labels) != count or all(re.fullmatch(rf"{letter}\[\d+\]", s) for s in labels):
+        return [f"{letter}{j + 1}" for j in range(count)]
+    return [str(s) for s in labels]
+
+
 def save_model(path, sys: control.StateSpace, K=None, input_names=None, output_names=None,
                continuous: control.StateSpace | None = None, extra: dict | None = None) -> Path:
     """Write a state-space model file atomically.
@@ -58,7 +76,8 @@ def save_model(path, sys: control.StateSpace, K=None, input_names=None, output_n
     K : ndarray, shape (n, p), optional
         One-step predictor gain of a discrete model.
     input_names, output_names : sequence of str, optional
-        Channel names (default ``u1..``, ``y1..``).
+        Channel names (default: the system's signal labels, or ``u1..``, ``y1..`` when
+        those are python-control's defaults ``u[0]..``).
     continuous : control.StateSpace, optional
         A continuous model stored beside ``sys`` as ``c_A .. c_D`` (same channels).
     extra : dict of str -> array, optional
@@ -72,13 +91,13 @@ def save_model(path, sys: control.StateSpace, K=None, input_names=None, output_n
         raise DataError("the model's sampling interval is unspecified (dt=True); give a number")
     A, B, C, D = _check_abcd(sys.A, sys.B, sys.C, sys.D, "model")
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
-    input_names = [f"u{j + 1}" for j in range(m)] if input_names is None else list(input_names)
-    output_names = ([f"y{j + 1}" for j in range(p)] if output_names is None
-                    else list(output_names))
+    input_names = _labels(sys, "input", "u") if input_names is None else list(input_names)
+    output_names = _labels(sys, "output", "y") if output_names is None else list(output_names)
     if len(input_names) != m:
         raise DataError(f"model: {len(input_names)} input names for {m} inputs")
     if len(output_names) != p:
         raise DataError(f"model: {len(output_names)} output names for {p} outputs")
+    _check_unique(input_names, output_names, "model")
     arrays = dict(A=A, B=B, C=C, D=D, dt=np.float64(dt),
                   input_names=np.array(input_names, dtype=str),
                   output_names=np.array(output_names, dtype=str),
@@ -134,6 +153,7 @@ def load_model(path, which: str = "auto"):
     Returns
     -------
     sys : control.StateSpace
+        With the channel names as its input/output labels.
     meta : dict
         ``K`` (ndarray or None), ``dt``, ``input_names``, ``output_names``,
         ``format_version``, ``has_continuous`` and ``extra`` (dict of other arrays).
@@ -167,6 +187,7 @@ def load_model(path, which: str = "auto"):
         raise DataError(f"{source}: {len(in_names)} input_names for {m} inputs (columns of B)")
     if len(out_names) != p:
         raise DataError(f"{source}: {len(out_names)} output_names for {p} outputs (rows of C)")
+    _check_unique(in_names, out_names, source)
     K = arrays.get("K")
     if K is not None:
         K = np.asarray(K, dtype=float)
@@ -193,8 +214,8 @@ def load_model(path, which: str = "auto"):
                             f"{cC.shape[0]} outputs, the main model {m} and {p}")
         meta["K"] = None
         meta["dt"] = 0.0
-        return control.ss(cA, cB, cC, cD), meta
-    return control.ss(A, B, C, D, dt), meta
+        return control.ss(cA, cB, cC, cD, inputs=in_names, outputs=out_names), meta
+    return control.ss(A, B, C, D, dt, inputs=in_names, outputs=out_names), meta
 
 
 __all__ = ["save_model", "load_model", "is_model_file", "FORMAT_VERSION"]

@@ -33,6 +33,26 @@ def test_round_trip_discrete_with_gain_names_and_continuous(tmp_path, models):
     np.testing.assert_array_equal(csys.A, sc.A)
 
 
+def test_names_come_from_the_system_labels(tmp_path, models):
+    sc, sd = models
+    named = control.ss(sd.A, sd.B, sd.C, sd.D, sd.dt, inputs=["pzt1"], outputs=["a", "b"])
+    sys, meta = load_model(save_model(tmp_path / "n.npz", named))
+    assert meta["input_names"] == ["pzt1"] and meta["output_names"] == ["a", "b"]
+    assert list(sys.input_labels) == ["pzt1"] and list(sys.output_labels) == ["a", "b"]
+    _, meta = load_model(save_model(tmp_path / "d.npz", sd))  # python-control's u[0], y[0]
+    assert meta["input_names"] == ["u1"] and meta["output_names"] == ["y1", "y2"]
+
+
+def test_repeated_channel_names_are_refused(tmp_path, models):
+    _, sd = models
+    with pytest.raises(DataError, match="output name 'a' is used more than once"):
+        save_model(tmp_path / "m.npz", sd, output_names=["a", "a"])
+    path = tmp_path / "x.npz"
+    np.savez(path, A=sd.A, B=sd.B, C=sd.C, D=sd.D, dt=1e-3, output_names=["a", "a"])
+    with pytest.raises(DataError, match="output name 'a' is used more than once"):
+        load_model(path)
+
+
 def test_continuous_only_file(tmp_path, models):
     sc, _ = models
     path = save_model(tmp_path / "c.npz", sc)
