@@ -86,6 +86,87 @@ def _as_decoration(item) -> Decoration:
     return Decoration(*item)  # (mesh, colour, node[, opacity[, name]])
 
 
+#: Colours of named parts (a word of the solid's name); ``None``: coloured by displacement.
+PART_COLOURS = {"wafer": "#c8a23c", "adapter": None, "udf": None, "base": None}
+#: Colour of parts that do not move (attached to no node).
+FIXED_PART_COLOUR = "#8a8a8a"
+
+
+def decorations_from_solids(solids, attach, *, colours=None, skip=("tube",)) -> list[Decoration]:
+    """Decorations from named solids, e.g. :func:`geometry.solids.testbed_solids`.
+
+    Parameters
+    ----------
+    solids : iterable
+        Objects with ``name`` and ``mesh`` (``geometry.solids.Solid``) or ``(name, mesh)``
+        pairs; meshes in global coordinates [m].
+    attach : mapping or callable
+        Solid name -> id of the node whose rigid motion carries it, or ``None`` for a part
+        that does not move. A mapping must name every solid that is not skipped.
+    colours : mapping, optional
+        Word of the name -> colour (``None``: by displacement); default
+        :data:`PART_COLOURS` (PZT wafers in their own colour). Parts attached to no node
+        and without a colour are grey.
+    skip : sequence of str
+        Solids whose name contains one of these words are left out (strut tubes: the
+        beams are already drawn as tubes of their real radius).
+
+    Returns
+    -------
+    list of Decoration
+    """
+    colours = PART_COLOURS if colours is None else colours
+    out = []
+    for solid in solids:
+        name, mesh = (solid.name, solid.mesh) if hasattr(solid, "mesh") else solid
+        words = name.lower().split()
+        if any(w in words for w in skip):
+            continue
+        if callable(attach):
+            node = attach(name)
+        else:
+            if name not in attach:
+                raise RenderError(f"solid {name!r}: no node given to attach it to")
+            node = attach[name]
+        colour = next((c for word, c in colours.items() if word in words), None)
+        if colour is None and node is None:
+            colour = FIXED_PART_COLOUR
+        out.append(Decoration(mesh, colour, None if node is None else int(node), name=name))
+    return out
+
+
+def testbed_decorations(tbm, sections: int = 48) -> list[Decoration]:
+    """The testbed's solids (adapters, PZT wafers, UDF, base) attached to its FE nodes.
+
+    Each adapter block and its wafers ride on the strut node nearest the adapter's middle,
+    the UDF on its rigid body's master node, the base on its master node when suspended
+    (fixed when clamped). Strut tubes are not added: the beams are drawn as tubes of their
+    real radius.
+
+    Parameters
+    ----------
+    tbm : fem.testbed.TestbedModel
+    sections : int
+        Sides of round parts (a picture needs far fewer than mass properties do).
+    """
+    from geometry.solids import testbed_solids
+
+    mp, xyz = tbm.map, tbm.model.xyz
+    attach: dict[str, int | None] = {"udf": int(mp.udf_master),
+                                      "base": None if mp.base_master is None else int(mp.base_master)}
+    for i in range(6):
+        nodes = np.asarray(mp.strut_nodes[i])
+        a, b = (int(np.flatnonzero(nodes == n)[0]) for n in mp.adapter_nodes[i])
+        candidates = nodes[a:b + 1]
+        p = xyz[tbm.model.index_of(candidates)]
+        middle = 0.5 * (p[0] + p[-1])
+        node = int(candidates[np.argmin(np.linalg.norm(p - middle, axis=1))])
+        attach[f"strut {i} adapter"] = node
+        for j in range(16):
+            attach[f"strut {i} wafer {j}"] = node
+    return decorations_from_solids(testbed_solids(tbm.testbed, sections=sections), attach)
+
+
 # --------------------------------------------------------------------------- numerics
 def hermite_beam_displacements(x_a, x_b, u_a, u_b, xi, rod=None):
     """Displacements along frame elements from their end translations and rotations.
@@ -234,6 +315,17 @@ def _tubes(points: np.ndarray, radius: np.ndarray, data: dict[str, np.ndarray], 
         poly.point_data[key] = np.repeat(value, s) if value.shape == (n,) else value.reshape(n * s)
     poly.point_data["sample"] = np.arange(n * s)
     return poly.tube(scalars="radius", absolute=True, n_sides=n_sides, capping=True)
+
+
+def _with_normals(mesh):
+    """Triangulated surface with point normals split at sharp edges (flat faces stay flat).
+
+    Done once on the undeformed solid: solids move rigidly, and the small rotations drawn
+    do not visibly change the shading.
+    """
+    surf = mesh.extract_surface() if not hasattr(mesh, "faces") else mesh
+    return surf.triangulate().compute_normals(split_vertices=True, feature_angle=30.0,
+                                              auto_orient_normals=False, consistent_normals=False)
 
 
 def _replicate(template, centres: np.ndarray, sizes: np.ndarray):
@@ -411,6 +503,7 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
         tpl = _replicate(pv.Sphere(radius=1.0, theta_resolution=16, phi_resolution=12),
                          centres, np.full(len(idx), 1.8 * typical))
         per = tpl.n_points // len(idx)
+        tpl.point_data["Normals"] = (np.asarray(tpl.points) - np.repeat(centres, per, axis=0)) / (1.8 * typical)
         node_of_point = np.repeat(idx, per)
         parts.append(_Part("masses", "solid", np.asarray(tpl.points),
                            _rigid_motion(u_nodes[node_of_point], xyz[node_of_point], np.asarray(tpl.points)),
@@ -419,13 +512,13 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
     if show_supports and model.has_supports:
         fixed = np.flatnonzero(model.fixed_mask().any(axis=1))
         if fixed.size:
-            tpl = _replicate(pv.Cube(x_length=1, y_length=1, z_length=1), xyz[fixed],
-                             np.full(fixed.size, 3.0 * typical))
+            tpl = _with_normals(_replicate(pv.Cube(x_length=1, y_length=1, z_length=1), xyz[fixed],
+                                           np.full(fixed.size, 3.0 * typical)))
             parts.append(_Part("supports", "solid", np.asarray(tpl.points), np.zeros((tpl.n_points, 3)),
                                color=SUPPORT_COLOR, ghost=False, template=tpl))
 
     for k, (dec, mesh) in enumerate(zip(decorations, dec_meshes)):
-        mesh = mesh.extract_surface() if not isinstance(mesh, pv.PolyData) else mesh.copy()
+        mesh = _with_normals(mesh)
         pts = np.asarray(mesh.points, float)
         name = f"decoration {k}: {dec.name}" if dec.name else f"decoration {k}"
         if dec.node is None:
@@ -508,32 +601,59 @@ def _view_vector(view) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def _add_scene(plotter, scene: ModeScene, factor: float, cmap: str, show_ghost: bool,
-               scalar_bar: bool, font_size: int) -> dict[str, Any]:
-    """Add the ghost and the deformed meshes to the active subplot; return the deformed meshes."""
+def _groups(scene: ModeScene, meshes: dict[str, Any]) -> dict[tuple, Any]:
+    """Merge the parts' meshes by how they are drawn (kind, colour, opacity).
+
+    A testbed has some twenty solids; one actor per drawing style instead of one per part
+    saves most of pyvista's per-actor overhead.
+    """
+    import pyvista as pv
+
+    by_key: dict[tuple, list] = {}
+    for part in scene.parts:
+        if part.name in meshes:
+            key = (part.kind, str(part.color) if part.color is not None else None, part.opacity)
+            by_key.setdefault(key, []).append(meshes[part.name])
+    return {key: (items[0] if len(items) == 1 else pv.merge(items, merge_points=False))
+            for key, items in by_key.items()}
+
+
+def _add_scene(plotter, scene: ModeScene, factor: float, cmap, show_ghost: bool,
+               scalar_bar: bool, font_size: int) -> dict[tuple, Any]:
+    """Add the ghost and the deformed meshes to the active subplot.
+
+    Returns the datasets the actors draw, by group (:func:`_groups`), for animation.
+    """
+    import pyvista as pv
+
     if show_ghost:
-        for mesh in scene.ghost_meshes().values():
-            plotter.add_mesh(mesh, color=GHOST_COLOR, opacity=GHOST_OPACITY, smooth_shading=True,
+        ghosts = list(scene.ghost_meshes().values())
+        if ghosts:
+            ghost = ghosts[0] if len(ghosts) == 1 else pv.merge(ghosts, merge_points=False)
+            plotter.add_mesh(ghost, color=GHOST_COLOR, opacity=GHOST_OPACITY, smooth_shading=True,
                              scalars=None, show_scalar_bar=False)
-    deformed = scene.meshes(factor)
     cmap = default_cmap() if cmap is None else cmap
     bar_args = dict(title="displacement\n/ max", n_labels=6, fmt="%.1f", vertical=True, position_x=0.87,
                     position_y=0.1, height=0.62, width=0.05, color="black",
                     title_font_size=max(font_size, 12), label_font_size=max(font_size - 1, 12),
                     unconstrained_font_size=True)
     bar_done = False
-    for part in scene.parts:
-        mesh = deformed[part.name]
-        if part.color is not None:
-            plotter.add_mesh(mesh, color=part.color, opacity=part.opacity, smooth_shading=True,
-                             scalars=None, show_scalar_bar=False, specular=0.3)
+    handles = {}
+    for key, mesh in _groups(scene, scene.meshes(factor)).items():
+        _, color, opacity = key
+        if color is not None:
+            plotter.add_mesh(mesh, color=color, opacity=opacity, scalars=None, smooth_shading=True,
+                                     show_scalar_bar=False, specular=0.3)
         else:
-            plotter.add_mesh(mesh, scalars=SCALAR_NAME, cmap=cmap, clim=(0.0, 1.0), opacity=part.opacity,
-                             smooth_shading=True, specular=0.3, show_scalar_bar=scalar_bar and not bar_done,
-                             scalar_bar_args=bar_args)
+            plotter.add_mesh(mesh, scalars=SCALAR_NAME, cmap=cmap, clim=(0.0, 1.0), opacity=opacity,
+                                     smooth_shading=True, specular=0.3,
+                                     show_scalar_bar=scalar_bar and not bar_done, scalar_bar_args=bar_args)
             bar_done = True
+        # The actor draws this mesh through a pipeline (normals), so updating it in place
+        # (copy_from) re-executes the pipeline on the next render.
+        handles[key] = mesh
     plotter.add_text(scene.title, position="upper_left", font_size=font_size, color="black")
-    return deformed
+    return handles
 
 
 def _frame_camera(plotter, scene: ModeScene, view) -> None:
@@ -666,11 +786,11 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
     with offscreen_backend():
         p = _new_plotter(size, antialias=antialias)
         try:
-            deformed = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size))
+            drawn = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size))
             _frame_camera(p, scene, view)
             for c in factors:
-                for name, mesh in scene.meshes(c).items():
-                    deformed[name].copy_from(mesh, deep=True)
+                for key, mesh in _groups(scene, scene.meshes(c)).items():
+                    drawn[key].copy_from(mesh, deep=True)
                 p.render()
                 images.append(np.asarray(p.screenshot(return_img=True)))
         finally:
