@@ -160,23 +160,35 @@ def modal_parameters(sys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return wn[order] / (2 * np.pi), zeta[order], s[order]
 
 
-def compare_poles(identified, truth) -> list[dict]:
+def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) -> list[dict]:
     """Match identified poles to true ones and list frequencies and damping side by side.
 
-    Returns one dict per true pole (sorted by true frequency) with ``true_frequency_hz``,
-    ``true_damping``, ``frequency_hz``, ``damping`` (None when unmatched: fewer identified
-    poles) and ``frequency_error_percent``; identified poles left over follow with the true
-    fields None.
+    Parameters
+    ----------
+    identified, truth : control.StateSpace
+    max_relative_distance : float or None
+        A pair found by the assignment counts as a match only if the s-plane distance is at
+        most this fraction of the true pole's magnitude; farther pairs are reported as an
+        unmatched true pole and an extra identified one (None: keep every pair).
+
+    Returns
+    -------
+    list of dict
+        One per true pole (sorted by true frequency) with ``true_frequency_hz``,
+        ``true_damping``, ``frequency_hz``, ``damping`` (None when unmatched) and
+        ``frequency_error_percent``; unmatched identified poles follow with the true fields
+        None.
     """
     fi, zi, si = modal_parameters(identified)
     ft, zt, st = modal_parameters(truth)
     rows = []
+    match = {}
     if si.size and st.size:
         cost = np.abs(si[:, None] - st[None, :])
         r, c = scipy.optimize.linear_sum_assignment(cost)
-        match = dict(zip(c.tolist(), r.tolist()))
-    else:
-        match = {}
+        for i, j in zip(r.tolist(), c.tolist()):
+            if max_relative_distance is None or cost[i, j] <= max_relative_distance * abs(st[j]):
+                match[j] = i
     for j in range(st.size):
         i = match.get(j)
         row = {"true_frequency_hz": float(ft[j]), "true_damping": float(zt[j]),

@@ -60,6 +60,19 @@ def test_pole_matching_pairs_each_true_mode_with_its_estimate(plant):
     assert spurious["frequency_hz"] == pytest.approx(np.log(0.3) * -FS / (2 * np.pi))
 
 
+def test_far_pairs_are_not_called_matches(plant):
+    far = control.c2d(continuous_plant([(60.0, 0.02), (420.0, 0.02), (330.0, 0.05)]), 1 / FS)
+    rows = compare_poles(far, plant)
+    by_true = {round(r["true_frequency_hz"]): r for r in rows
+               if r["true_frequency_hz"] is not None}
+    assert by_true[60]["frequency_hz"] == pytest.approx(60.0)
+    assert by_true[210]["frequency_hz"] is None  # 420 Hz is 100 % away
+    extra = [r for r in rows if r["true_frequency_hz"] is None]
+    assert [r["frequency_hz"] for r in extra] == [pytest.approx(420.0)]
+    kept = compare_poles(far, plant, max_relative_distance=None)
+    assert all(r["frequency_hz"] is not None for r in kept) and len(kept) == 3
+
+
 def test_frf_error_of_a_gain_error_is_that_gain_in_db(plant):
     err = frf_error(plant * 1.1, plant, band=(10, 450))
     assert err["max_db"] == pytest.approx(20 * np.log10(1.1), rel=1e-9)

@@ -91,6 +91,24 @@ def test_simulate_counts_clipping_in_its_report(work, capsys):
     assert "warning: the converters clipped" in stdout
 
 
+def test_simulate_warns_when_outputs_drown_in_quantisation_and_auto_ranges(tmp_path, capsys):
+    sc, sd = small_plant()
+    tiny = tmp_path / "tiny.npz"
+    save_model(tiny, sd * 1e-6, output_names=["acc1", "acc2"])  # microvolt outputs
+    out = tmp_path / "d.npz"
+    assert main(["simulate", str(tiny), "--out", str(out), "--samples", "300",
+                 "--bits", "12"]) == 0
+    stdout = capsys.readouterr().out
+    assert "warning: output acc1 has RMS" in stdout and "under 4 A/D LSB" in stdout
+    assert not read_data(out).y.any()  # all zero: the warning was deserved
+    assert main(["simulate", str(tiny), "--out", str(out), "--samples", "300", "--bits", "12",
+                 "--adc-full-scale", "auto"]) == 0
+    stdout = capsys.readouterr().out
+    assert "A/D: 12 bits, auto (+-4 RMS per output)" in stdout and "under 4" not in stdout
+    y = read_data(out).y
+    assert np.unique(y[:, 0]).size > 100  # the record now resolves the signal
+
+
 @pytest.fixture(scope="module")
 def identified(work, simulated):
     res = run("identify", work / "data.npz", "--order", 4, "--out", work / "model.npz", "--json")

@@ -50,7 +50,10 @@ def add_parser(subparsers):
     p.add_argument("--bits", type=int, metavar="B",
                    help="D/A and A/D resolution (default: no quantisation)")
     p.add_argument("--full-scale", type=float, default=10.0, metavar="V",
-                   help="converter range +-V (default 10)")
+                   help="converter range +-V, D/A and A/D (default 10)")
+    p.add_argument("--adc-full-scale", metavar="V|auto",
+                   help="A/D range +-V instead of --full-scale; 'auto' ranges each output to "
+                   "+-4 times its RMS, as a lab sets its amplifier gains")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.set_defaults(func=run)
     return p
@@ -65,6 +68,16 @@ def run(args) -> int:
     out = args.out
     if not str(out).lower().endswith(SUFFIXES):
         raise DataError(f"--out {out}: the data file type must be one of {', '.join(SUFFIXES)}")
+    adc_fs = args.full_scale
+    if args.adc_full_scale is not None:
+        if args.adc_full_scale == "auto":
+            adc_fs = "auto"
+        else:
+            try:
+                adc_fs = float(args.adc_full_scale)
+            except ValueError:
+                raise DataError(f"--adc-full-scale must be volts or 'auto', got "
+                                f"'{args.adc_full_scale}'") from None
     if args.samples < 2:
         raise DataError(f"--samples must be at least 2, got {args.samples}")
     plant, meta = load_model(args.plant, which="discrete")
@@ -72,17 +85,25 @@ def run(args) -> int:
                          seed=args.seed, snr_db=args.snr_db, sensor_noise_rms=args.noise_rms,
                          input_noise_rms=args.input_noise_rms, dac_bits=args.bits,
                          adc_bits=args.bits, dac_full_scale=args.full_scale,
-                         adc_full_scale=args.full_scale, input_names=meta["input_names"],
+                         adc_full_scale=adc_fs, input_names=meta["input_names"],
                          output_names=meta["output_names"])
     write_data(exp.data, out)
     d = exp.data
+    # A signal far below one LSB records as quantisation only: say so, it is not clipping
+    # but just as fatal for identification.
+    under = []
+    if args.bits is not None:
+        rms_clean = np.sqrt(np.mean(exp.y_clean**2, axis=0))
+        q_adc = np.broadcast_to(np.asarray(exp.lsb["adc"], dtype=float), rms_clean.shape)
+        under = [(name, r, q) for name, r, q in zip(d.output_names, rms_clean, q_adc) if r < 4 * q]
     summary = {
         "out": str(out), "samples": d.n_samples, "fs": d.fs, "inputs": d.input_names,
         "outputs": d.output_names, "excitation": args.excitation, "seed": args.seed,
         "rms": args.rms, "band": args.band, "snr_db": args.snr_db,
         "sensor_noise_rms": exp.sensor_noise_rms.tolist(),
         "input_noise_rms": exp.input_noise_rms.tolist(), "bits": args.bits,
-        "full_scale": args.full_scale, "lsb": exp.lsb, "clipping": exp.clipping,
+        "full_scale": args.full_scale, "adc_full_scale": adc_fs, "lsb": exp.lsb,
+        "clipping": exp.clipping, "below_4_lsb": [name for name, _, _ in under],
         "output_rms": np.sqrt(np.mean(d.y**2, axis=0)).tolist(),
     }
     if args.json:
@@ -97,11 +118,17 @@ def run(args) -> int:
     if args.bits is None:
         print("converters: ideal (no quantisation, no clipping)")
     else:
+        ranges = {"D/A": f"+-{args.full_scale:g} V",
+                  "A/D": "auto (+-4 RMS per output)" if adc_fs == "auto" else f"+-{adc_fs:g} V"}
         for name, counts, names in (("D/A", exp.clipping["dac"], d.input_names),
                                     ("A/D", exp.clipping["adc"], d.output_names)):
             detail = ", ".join(f"{n} {c}" for n, c in zip(names, counts))
-            print(f"{name}: {args.bits} bits, +-{args.full_scale:g} V; clipped samples: "
+            print(f"{name}: {args.bits} bits, {ranges[name]}; clipped samples: "
                   f"{sum(counts)} of {d.n_samples * len(counts)} ({detail})")
         if exp.clipped_total:
             print("warning: the converters clipped; lower --rms or raise --full-scale")
+        for name, r, q in under:
+            print(f"warning: output {name} has RMS {r:.3g} V, under 4 A/D LSB ({q:.3g} V): "
+                  "the record is mostly quantisation; use --adc-full-scale auto or a "
+                  "smaller range")
     return 0
