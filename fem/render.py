@@ -497,9 +497,10 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
         parts.append(_Part("links", "tubes", x, u, radius=np.full(len(ln), 0.45 * typical)))
 
     pm = model.point_masses
-    if len(pm):
-        idx = model.index_of(pm.nodes, what="a point mass")
-        centres = xyz[idx] + pm.offset
+    has_mass = pm.mass > 0  # inertia-only entries (rotary inertia top-ups) are not objects
+    if has_mass.any():
+        idx = model.index_of(pm.nodes[has_mass], what="a point mass")
+        centres = xyz[idx] + pm.offset[has_mass]
         tpl = _replicate(pv.Sphere(radius=1.0, theta_resolution=16, phi_resolution=12),
                          centres, np.full(len(idx), 1.8 * typical))
         per = tpl.n_points // len(idx)

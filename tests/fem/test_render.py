@@ -355,6 +355,129 @@ def test_fe_strut_bending_mode_shows_that_strut_deflected_most():
             assert abs(z[peak] - mid) < lengths[s] / 16
 
 
+# ----------------------------------------------------------------------------- the testbed
+@pytest.fixture(scope="module")
+def testbed():
+    """The default testbed's model, its first 18 modes (6 suspension, 12 strut bending),
+    their labels and its solids as decorations."""
+    testbed_mod = pytest.importorskip("fem.testbed")
+    from fem.modal import solve_modes
+
+    tbm = testbed_mod.build_testbed()
+    modes = solve_modes(tbm.model, n_modes=18)
+    try:
+        from fem.labels import label_testbed_modes
+
+        labels = label_testbed_modes(tbm, modes).labels
+    except ImportError:
+        labels = None
+    return tbm, modes, labels, render.testbed_decorations(tbm)
+
+
+def test_testbed_png_has_the_requested_size_and_differs_from_the_undeformed(testbed, tmp_path):
+    tbm, modes, labels, decorations = testbed
+    out = tmp_path / "testbed.png"
+    img = render.render_mode(tbm.model, modes, 9, out, window_size=(360, 270), labels=labels,
+                             decorations=decorations)
+    still = render.render_mode(tbm.model, modes, 9, window_size=(360, 270), labels=labels,
+                               decorations=decorations, scale=0.0)
+    from PIL import Image
+
+    with Image.open(out) as im:
+        assert im.size == (360, 270)
+    assert img.shape == (270, 360, 3) and img.std() > 10
+    assert len(np.unique(img.reshape(-1, 3), axis=0)) > 50
+    assert np.any(img != still, axis=2).mean() > 0.005
+    bare = render.render_mode(tbm.model, modes, 9, window_size=(360, 270), labels=labels)
+    assert np.any(img != bare, axis=2).mean() > 0.02  # the solids are drawn
+
+
+def test_testbed_solids_are_attached_to_their_nodes_and_wafers_have_their_own_colour(testbed):
+    tbm, _, _, decorations = testbed
+    by_name = {d.name: d for d in decorations}
+    mp = tbm.map
+    assert not any("tube" in name for name in by_name)  # the beams are the tubes
+    assert by_name["udf"].node == mp.udf_master
+    assert by_name["base"].node == mp.base_master
+    for i in range(6):
+        adapter = by_name[f"strut {i} adapter"]
+        assert adapter.color is None  # coloured by displacement
+        assert adapter.node in mp.strut_nodes[i]
+        # the node is inside the adapter block (between its end nodes)
+        lo, hi = (int(np.flatnonzero(mp.strut_nodes[i] == n)[0]) for n in mp.adapter_nodes[i])
+        assert lo <= int(np.flatnonzero(mp.strut_nodes[i] == adapter.node)[0]) <= hi
+        wafers = [d for name, d in by_name.items() if name.startswith(f"strut {i} wafer")]
+        assert len(wafers) == tbm.testbed.pzt.wafers_per_strut
+        assert all(w.color == render.PART_COLOURS["wafer"] and w.node == adapter.node for w in wafers)
+
+
+def test_a_solid_without_a_node_is_named_in_the_error():
+    import trimesh
+
+    solids = [("strut 0 wafer 0", trimesh.creation.box((0.01, 0.02, 0.03))), ("udf", trimesh.creation.box((1, 1, 1)))]
+    with pytest.raises(render.RenderError, match="solid 'udf': no node given"):
+        render.decorations_from_solids(solids, {"strut 0 wafer 0": 5})
+
+
+def test_testbed_gif_has_the_requested_number_of_frames(testbed, tmp_path):
+    tbm, modes, labels, decorations = testbed
+    out = tmp_path / "testbed.gif"
+    frames = render.render_mode_gif(tbm.model, modes, 11, out, frames=5, window_size=(200, 150),
+                                    labels=labels, decorations=decorations)
+    from PIL import Image
+
+    with Image.open(out) as im:
+        assert im.n_frames == 5
+    assert all(mean_abs_diff(frames[j], frames[(j + 1) % 5]) > 0.05 for j in range(5))
+
+
+def test_testbed_strut_bending_modes_show_that_strut_deflected_most(testbed):
+    tbm, modes, labels, _ = testbed
+    mp = tbm.map
+    X = modes.shapes_full.reshape(-1, 6, modes.shapes_full.shape[1])
+    idx = tbm.model.index_of(mp.strut_nodes)
+    s = (mp.strut_s / mp.strut_s[-1])[:, None]
+    checked = 0
+    for k in range(modes.shapes_full.shape[1]):
+        if modes.frequencies_hz[k] < 5.0:
+            continue  # suspension modes
+        # From the mode itself: each strut's largest nodal deflection off its chord.
+        off_chord = []
+        for i in range(6):
+            u = X[idx[i], :3, k]
+            off_chord.append(u - (1 - s) * u[0] - s * u[-1])
+        size = np.array([np.linalg.norm(d, axis=1).max() for d in off_chord])
+        strut = int(np.argmax(size))
+        assert np.sort(size)[-2] < 0.1 * size[strut], "not a single-strut bending mode"
+        if labels is not None:
+            assert labels[k].startswith(f"strut {strut} bending 1"), labels[k]
+        # From the rendered meshes: colours and tube-axis deflection per strut.
+        scene = render.mode_scene(tbm.model, modes, k + 1)
+        ids, colour, moved = _scalars_and_deflection_per_beam(scene)
+        of = mp.strut_of_element(ids)
+        colour_by_strut = np.array([colour[of == i].max() for i in range(6)])
+        moved_by_strut = np.array([moved[of == i].max() for i in range(6)])
+        assert np.argmax(colour_by_strut) == strut and colour_by_strut[strut] == pytest.approx(1.0, abs=1e-6)
+        assert np.argmax(moved_by_strut) == strut
+        assert np.delete(colour_by_strut, strut).max() < 0.1
+        assert np.delete(moved_by_strut, strut).max() < 0.1 * moved_by_strut[strut]
+        # and the drawn strut bends the way the mode does: the largest deflection of the
+        # tube's axis off its chord points along the mode's at that station, within 2
+        # degrees (up to the sign, which the renderer normalises)
+        beam = scene.parts[0]
+        mine = np.isin(tbm.model.beams.ids, mp.strut_elements[strut])
+        drawn, x = beam.u[mine].reshape(-1, 3), beam.x0[mine].reshape(-1, 3)
+        ends = tbm.model.xyz[idx[strut, [0, -1]]]
+        t = ((x - ends[0]) @ (ends[1] - ends[0]) / np.sum((ends[1] - ends[0]) ** 2))[:, None]
+        drawn_off = drawn - (1 - t) * drawn[np.argmin(t)] - t * drawn[np.argmax(t)]
+        j = np.argmax(np.linalg.norm(drawn_off, axis=1))
+        node = np.argmin(np.abs(mp.strut_s / mp.strut_s[-1] - t[j, 0]))
+        a, b = drawn_off[j], off_chord[strut][node]
+        assert abs(a @ b) / (np.linalg.norm(a) * np.linalg.norm(b)) > np.cos(np.radians(2))
+        checked += 1
+    assert checked == 12
+
+
 # ----------------------------------------------------------------------------- errors
 @pytest.mark.parametrize("mode", [0, -1, 7, 13])
 def test_bad_mode_number_names_the_valid_range(tri, mode, tmp_path):
