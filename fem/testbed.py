@@ -83,6 +83,9 @@ from fem.sections import Section
 #: Chosen by a mesh study (tests/fem/test_testbed.py): doubling it moves no frequency below
 #: 400 Hz by more than 0.1 %.
 ELEMENTS_PER_SEGMENT = 4
+#: Wafers shorter than the adapter by less than this fraction of its length are taken to
+#: cover it all (a lip of a few micrometres would be a needlessly stiff element).
+MIN_LIP = 0.01
 #: Torsional stiffness of a flexure, as a multiple of the thickest tube's ``G J / L``.
 TORSION_RIGID_FACTOR = 1.0e3
 
@@ -279,7 +282,7 @@ def strut_stations(tb, elements_per_segment: int = ELEMENTS_PER_SEGMENT) -> tupl
     a0, a1 = 0.5 * (L - La), 0.5 * (L + La)
     seg1 = np.linspace(0.0, a0, n + 1)
     seg2 = np.linspace(a1, L, n + 1)
-    if Lw < La:
+    if La - Lw > MIN_LIP * La:
         w0, w1 = 0.5 * (L - Lw), 0.5 * (L + Lw)
         adapter = np.array([w0, w1])
         akinds = [1, 2, 1]

@@ -1,0 +1,153 @@
+"""Benchmark: build + 30 lowest modes of the default testbed, and a wall-thickness sweep.
+
+Issue 3, acceptance 7: at least 50 designs per second on one core for a sweep of 200 random
+wall-thickness designs (build + 30 lowest modes each).
+
+Three ways to get a design's 30 lowest modes are timed side by side in one run:
+
+- ``rebuild``: what a user without the sweep API would do: ``build_testbed(tb.with_walls(w))``,
+  ``assemble`` and the dense subset eigensolver (:func:`fem.testbed.solve_testbed_modes`);
+- ``rebuild (fem.modal)``: the same with the general :func:`fem.modal.solve_modes`;
+- ``sweep``: the model built once, :func:`fem.testbed.wall_basis`, then per design only
+  :func:`fem.testbed.wall_modes` (strut terms of K and M re-formed from precomputed data on
+  a fixed sparse pattern, dense ``scipy.linalg.eigh(..., subset_by_index=[0, 29])``).
+
+One core: the BLAS/LAPACK thread pools are limited to one thread by setting
+``OMP_NUM_THREADS``, ``OPENBLAS_NUM_THREADS`` and ``MKL_NUM_THREADS`` to 1 *before* numpy is
+imported (threadpoolctl is not installed); the script prints the BLAS configuration it ran
+with.
+
+Usage::
+
+    python benchmarks/bench_testbed.py [--designs 200] [--repeat 5] [--out benchmarks/results/testbed.md]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+import scipy  # noqa: E402
+
+
+def _timeit(fn, repeat: int) -> list[float]:
+    out = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        out.append(time.perf_counter() - t)
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description="testbed build/modes/sweep benchmark")
+    p.add_argument("--designs", type=int, default=200)
+    p.add_argument("--rebuild-designs", type=int, default=40, help="designs timed with the rebuild paths")
+    p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--out", default=None, help="also write the results as Markdown here")
+    args = p.parse_args(argv)
+
+    from fem.assembly import assemble
+    from fem.modal import solve_modes
+    from fem.testbed import build_testbed, solve_testbed_modes, wall_basis, wall_modes
+    from geometry.testbed import Testbed
+
+    tb = Testbed()
+    build_testbed(tb)  # warm-up: imports, the UDF solid (memoised), first BLAS calls
+
+    def build_and_solve():
+        tbm = build_testbed(tb)
+        return solve_testbed_modes(tbm, 30)
+
+    single = _timeit(build_and_solve, args.repeat)
+    tbm = build_testbed(tb)
+    system = assemble(tbm.model)
+    n_dof = system.n_dof
+    t_build = _timeit(lambda: build_testbed(tb), args.repeat)
+    t_asm = _timeit(lambda: assemble(tbm.model), args.repeat)
+    t_eig = _timeit(lambda: solve_testbed_modes(tbm, 30, system=system), args.repeat)
+
+    rng = np.random.default_rng(12345)
+    nominal = np.array(tb.struts.walls)
+    designs = nominal * rng.uniform(0.7, 1.3, size=(args.designs, 6))
+
+    t0 = time.perf_counter()
+    basis = wall_basis(tbm, system)
+    t_basis = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    f_sweep = np.array([wall_modes(basis, w, 30)[0] for w in designs])
+    t_sweep = time.perf_counter() - t0
+
+    nr = min(args.rebuild_designs, args.designs)
+    t0 = time.perf_counter()
+    f_rebuild = np.array([solve_testbed_modes(build_testbed(tb.with_walls(tuple(w))), 30).frequencies_hz
+                          for w in designs[:nr]])
+    t_rebuild = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for w in designs[:nr]:
+        solve_modes(build_testbed(tb.with_walls(tuple(w))).model, 30)
+    t_rebuild_fm = time.perf_counter() - t0
+    flex = f_sweep[:nr, 6:]
+    agree = float(np.max(np.abs(flex - f_rebuild[:, 6:]) / f_rebuild[:, 6:]))
+
+    blas = "unknown"
+    try:
+        cfg = np.show_config(mode="dicts")
+        blas = f"{cfg['Build Dependencies']['blas']['name']} {cfg['Build Dependencies']['blas']['version']}"
+    except Exception:  # older numpy: no dict mode
+        pass
+    try:
+        load = " ".join(f"{x:.1f}" for x in os.getloadavg())
+    except OSError:
+        load = "n/a"
+    med = statistics.median
+    lines = [
+        "# Testbed benchmark (issue 3, acceptance 7)",
+        "",
+        f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs (shared; other jobs were running: "
+        f"load average at the end {load}); Python {platform.python_version()}, numpy {np.__version__}, "
+        f"scipy {scipy.__version__}, BLAS {blas}, one thread (OMP/OPENBLAS/MKL_NUM_THREADS=1).",
+        f"Model: default testbed, {len(tbm.model.node_ids)} nodes, {len(tbm.model.beams)} beams, "
+        f"{n_dof} free DOF; 30 lowest modes.",
+        "",
+        "| step | time (median of %d) |" % args.repeat,
+        "| --- | --- |",
+        f"| build_testbed | {1e3 * med(t_build):.1f} ms |",
+        f"| assemble | {1e3 * med(t_asm):.1f} ms |",
+        f"| 30 modes (dense subset eigh) | {1e3 * med(t_eig):.1f} ms |",
+        f"| **build + assemble + 30 modes** | **{1e3 * med(single):.1f} ms** |",
+        "",
+        f"Sweep of random wall designs (each wall uniform in 0.7..1.3 x nominal, seed 12345):",
+        "",
+        "| method | designs | time | designs/s |",
+        "| --- | --- | --- | --- |",
+        f"| sweep: wall_basis once ({1e3 * t_basis:.0f} ms, included) + wall_modes | {args.designs} | "
+        f"{t_sweep + t_basis:.2f} s | **{args.designs / (t_sweep + t_basis):.1f}** |",
+        f"| rebuild: build_testbed + assemble + dense subset eigh | {nr} | {t_rebuild:.2f} s | "
+        f"{nr / t_rebuild:.1f} |",
+        f"| rebuild with fem.modal.solve_modes | {nr} | {t_rebuild_fm:.2f} s | {nr / t_rebuild_fm:.1f} |",
+        "",
+        f"Sweep vs rebuild frequencies (modes 7-30, first {nr} designs): max relative difference {agree:.1e}.",
+        "Target: at least 50 designs/s on one core.",
+    ]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if args.out:
+        from trussid.files import atomic_path
+
+        with atomic_path(args.out) as tmp:
+            tmp.write_text(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
