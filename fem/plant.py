@@ -1,0 +1,108 @@
+"""Structural plant by modal superposition: loads in, sensor readings out.
+
+With mass-normalised modes ``Phi`` (full DOFs), modal coordinates ``eta`` obey::
+
+    eta'' + 2 Z Omega eta' + Omega^2 eta = Phi^T F u
+
+for inputs ``u`` that produce nodal loads ``F u``. The state is ``x = [eta; eta']``.
+Displacement, velocity and acceleration sensors read ``S Phi eta``, ``S Phi eta'`` and
+``S Phi eta''`` (the last has a direct term ``S Phi Phi^T F``).
+"""
+
+from __future__ import annotations
+
+import control
+import numpy as np
+
+from fem.errors import ModelError
+from fem.sensors import Sensor, sensor_matrix
+
+
+def modal_damping(damping, n: int) -> np.ndarray:
+    """Per-mode damping ratios from a scalar or a sequence of length ``n``."""
+    z = np.asarray(damping, dtype=float)
+    if z.ndim == 0:
+        z = np.full(n, float(z))
+    if z.shape != (n,):
+        raise ModelError(f"damping: give one ratio or one per kept mode ({n}), got {z.shape[0]}")
+    if not (np.isfinite(z).all() and (z >= 0).all()):
+        raise ModelError(f"damping ratios must be finite and >= 0, got {z.tolist()}")
+    return z
+
+
+def modal_plant(modes, loads: np.ndarray, sensors: list[Sensor], damping=0.0025, *,
+                n_modes: int | None = None, residual_flexibility: np.ndarray | None = None,
+                input_names: list[str] | None = None) -> control.StateSpace:
+    """Continuous-time state-space plant from normal modes.
+
+    Parameters
+    ----------
+    modes : fem.modal.Modes
+        Mass-normalised modes (``shapes_full``, ``omega``).
+    loads : (6 n_nodes,) or (6 n_nodes, m) float
+        Nodal loads per unit of each input (e.g. per volt on a PZT) [N/unit, N m/unit].
+    sensors : list of Sensor
+    damping : float or (n_kept,) float
+        Modal damping ratios [-].
+    n_modes : int, optional
+        Keep the lowest ``n_modes`` modes (default all in ``modes``).
+    residual_flexibility : (6 n_nodes, m) float, optional
+        Static displacement of the truncated modes per unit input,
+        ``K^-1 F - Phi_kept Omega^-2 Phi_kept^T F`` (:func:`residual_flexibility`), added as a
+        direct term on displacement outputs (static correction). Velocity and acceleration
+        outputs have no constant residual and are left as they are.
+    input_names : list of str, optional
+
+    Returns
+    -------
+    control.StateSpace
+        States ``[eta; eta']`` (2 n_kept), inputs as ``loads`` columns, outputs one per sensor
+        named after it.
+    """
+    F = np.asarray(loads, dtype=float)
+    if F.ndim == 1:
+        F = F[:, None]
+    Phi = modes.shapes_full
+    if F.shape[0] != Phi.shape[0]:
+        raise ModelError(f"loads have {F.shape[0]} rows; the model has {Phi.shape[0]} DOFs")
+    n = len(modes.omega) if n_modes is None else int(n_modes)
+    if not 1 <= n <= len(modes.omega):
+        raise ModelError(f"n_modes must be in 1..{len(modes.omega)}, got {n_modes}")
+    Phi, w = Phi[:, :n], np.asarray(modes.omega[:n], dtype=float)
+    z = modal_damping(damping, n)
+    S = sensor_matrix(modes.node_ids, sensors)
+    q = np.array([s.quantity for s in sensors])
+    SPhi = S @ Phi
+    Bm = Phi.T @ F
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(w**2), -np.diag(2 * z * w)]])
+    B = np.vstack([np.zeros((n, F.shape[1])), Bm])
+    C = np.zeros((len(sensors), 2 * n))
+    D = np.zeros((len(sensors), F.shape[1]))
+    disp, vel, acc = q == "displacement", q == "velocity", q == "acceleration"
+    C[disp, :n] = SPhi[disp]
+    C[vel, n:] = SPhi[vel]
+    C[acc, :n] = -SPhi[acc] * w**2
+    C[acc, n:] = -SPhi[acc] * (2 * z * w)
+    D[acc] = SPhi[acc] @ Bm
+    if residual_flexibility is not None:
+        D[disp] += (S @ np.asarray(residual_flexibility).reshape(F.shape))[disp]
+    names_in = input_names or [f"u{i + 1}" for i in range(F.shape[1])]
+    names_out = [s.name or f"y{i + 1}" for i, s in enumerate(sensors)]
+    states = [f"eta{i + 1}" for i in range(n)] + [f"deta{i + 1}" for i in range(n)]
+    return control.ss(A, B, C, D, inputs=names_in, outputs=names_out, states=states)
+
+
+def residual_flexibility(system, modes, loads: np.ndarray, n_modes: int) -> np.ndarray:
+    """Static displacement of the modes above ``n_modes`` per unit input.
+
+    ``K^-1 F - sum_{kept} phi phi^T F / omega^2``. Needs a supported model (non-singular K)
+    whose kept modes are all elastic.
+    """
+    from fem.static import solve_static
+
+    F = np.asarray(loads, dtype=float).reshape(len(loads), -1)
+    w = np.asarray(modes.omega[:n_modes])
+    if not (w > 0).all():
+        raise ModelError("static correction needs a supported model: the kept modes include rigid-body modes")
+    Phi = modes.shapes_full[:, :n_modes]
+    return solve_static(system, F) - Phi @ ((Phi.T @ F) / w[:, None] ** 2)

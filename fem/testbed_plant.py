@@ -1,0 +1,188 @@
+"""The testbed's control-ready plant: actuator channels in (D/A volts), accelerometers out.
+
+Composes :mod:`fem.testbed` (model and map), :mod:`fem.actuators` (PZT induced strain),
+:mod:`fem.sensors`, :mod:`fem.plant` (modal superposition) and :mod:`fem.lab` (filters,
+amplifier, converters, ZOH discretisation), with every number taken from the
+:class:`geometry.testbed.Testbed` parameters.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import control
+import numpy as np
+
+from fem.actuators import Wafer, strain_actuator_loads
+from fem.assembly import assemble
+from fem.errors import ModelError
+from fem.lab import LabChain, lab_plant
+from fem.plant import modal_plant, residual_flexibility
+from fem.sensors import Sensor
+from fem.testbed import TestbedModel, build_testbed, solve_testbed_modes
+
+#: Modes computed before keeping those below the Nyquist frequency.
+MAX_MODES = 120
+
+
+@dataclass
+class TestbedPlant:
+    """A testbed plant and what it was made from.
+
+    Attributes
+    ----------
+    continuous, discrete : control.StateSpace
+        Command volts (per channel, at the D/A) to accelerometer volts, with the lab chain;
+        the discrete one at the sample rate (ZOH).
+    structure : control.StateSpace
+        PZT volts to accelerometer volts (the structure alone, continuous).
+    modes : fem.modal.Modes
+        The modes kept.
+    loads : (6 n_nodes, n_channels) float
+        Nodal loads per PZT volt of each channel [N/V, N m/V].
+    capacitance : float
+        Capacitance of one actuator from the wafer data [F] (wafers in parallel).
+    chain : LabChain
+    tbm : fem.testbed.TestbedModel
+    """
+
+    __test__ = False
+
+    continuous: control.StateSpace
+    discrete: control.StateSpace
+    structure: control.StateSpace
+    modes: object
+    loads: np.ndarray
+    capacitance: float
+    chain: LabChain
+    tbm: TestbedModel
+
+
+def wafer_of(tb) -> Wafer:
+    """The PZT wafer described by the testbed parameters."""
+    p = tb.pzt
+    return Wafer(width=p.width, length=p.length, thickness=p.thickness, youngs_modulus=p.youngs_modulus,
+                 d31=p.d31, relative_permittivity=p.relative_permittivity)
+
+
+def lab_chain_of(tb, sample_rate: float | None = None) -> LabChain:
+    """The electronics and converters described by the testbed parameters."""
+    f = tb.filters
+    return LabChain(smoothing_order=f.smoothing_order, smoothing_cutoff=f.smoothing_cutoff,
+                    amplifier_gain=tb.electrics.amplifier_gain, lowpass_order=f.lowpass_order,
+                    lowpass_cutoff=f.lowpass_cutoff,
+                    sample_rate=tb.daq.sample_rate if sample_rate is None else sample_rate)
+
+
+def channel_loads(tbm: TestbedModel, channels=None, arrangement: str = "extension") -> np.ndarray:
+    """Nodal loads per volt of each actuator channel.
+
+    Parameters
+    ----------
+    tbm : TestbedModel
+    channels : sequence of sequences of int, optional
+        Struts driven by each channel (default: the testbed's, the two struts that share
+        each top vertex), all driven in unison.
+    arrangement : {"extension", "bending"}
+        Wafers in phase (the testbed's) or in anti-phase.
+
+    Returns
+    -------
+    (6 n_nodes, n_channels) float
+    """
+    tb, mp = tbm.testbed, tbm.map
+    channels = mp.channel_struts if channels is None else channels
+    wafer = wafer_of(tb)
+    offset = 0.5 * tb.adapter.side + 0.5 * tb.pzt.thickness
+    n_struts = mp.wafer_elements.shape[0]
+    cols = []
+    for c, struts in enumerate(channels):
+        f = 0.0
+        for s in np.atleast_1d(struts):
+            if not 0 <= int(s) < n_struts:
+                raise ModelError(f"actuator channel {c + 1}: strut {s} does not exist (struts are 0..{n_struts - 1})")
+            elements = mp.wafer_elements[int(s)]
+            elements = elements[elements >= 0]
+            if elements.size == 0:
+                raise ModelError(f"actuator channel {c + 1}: strut {s} has no adapter with PZT wafers")
+            f = f + strain_actuator_loads(tbm.model, elements, wafer, offset, face_axis="y",
+                                          arrangement=arrangement, n_wafers=tb.pzt.wafers_per_strut)
+        cols.append(f)
+    return np.column_stack(cols)
+
+
+def accelerometers(tbm: TestbedModel, quantity: str = "acceleration") -> list[Sensor]:
+    """The testbed's sensors (accelerometers at the UDF corners, by default vertical)."""
+    tb, mp = tbm.testbed, tbm.map
+    sens = tb.accelerometers.sensitivity
+    if quantity != "acceleration":
+        sens = 1.0  # displacement/velocity outputs for analysis are in SI units
+    return [Sensor(int(n), tuple(d), quantity, sens, name=f"acc{k + 1}")
+            for k, (n, d) in enumerate(zip(mp.accelerometer_nodes, mp.accelerometer_directions))]
+
+
+def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_rate: float | None = None,
+                  quantity: str = "acceleration", chain: LabChain | None = None,
+                  static_correction: bool = False, tbm: TestbedModel | None = None) -> TestbedPlant:
+    """Build the testbed plant.
+
+    Parameters
+    ----------
+    tb : geometry.testbed.Testbed, optional
+        Default: the default testbed.
+    n_modes : int, optional
+        Modes kept; default all below the Nyquist frequency.
+    damping : float or sequence, optional
+        Modal damping ratio(s) [-]; default ``tb.damping.modal_ratio``.
+    sample_rate : float, optional
+        [Hz]; default ``tb.daq.sample_rate``.
+    quantity : {"acceleration", "velocity", "displacement"}
+        What the sensors measure (the lab's are accelerometers).
+    chain : LabChain, optional
+        Electronics; default from ``tb``.
+    static_correction : bool
+        Add the truncated modes' static displacement (displacement outputs; clamped base).
+    tbm : TestbedModel, optional
+        A model already built from ``tb``.
+
+    Returns
+    -------
+    TestbedPlant
+    """
+    if tbm is None:
+        tbm = build_testbed(tb)
+    tb = tbm.testbed
+    chain = chain or lab_chain_of(tb, sample_rate)
+    system = assemble(tbm.model)
+    n_compute = min(system.n_dof, MAX_MODES if n_modes is None else int(n_modes))
+    if n_compute < 1:
+        raise ModelError(f"n_modes must be >= 1, got {n_modes}")
+    modes = solve_testbed_modes(tbm, n_modes=n_compute, system=system)
+    if n_modes is None:
+        keep = int(np.count_nonzero(modes.frequencies_hz < 0.5 * chain.sample_rate))
+        if keep == n_compute and n_compute < system.n_dof:
+            raise ModelError(f"more than {MAX_MODES} modes lie below the Nyquist frequency: give n_modes")
+    else:
+        keep = n_compute
+    F = channel_loads(tbm)
+    sensors = accelerometers(tbm, quantity)
+    zeta = tb.damping.modal_ratio if damping is None else damping
+    resid = residual_flexibility(system, modes, F, keep) if static_correction else None
+    names = [f"ch{k + 1}" for k in range(F.shape[1])]
+    structure = modal_plant(modes, F, sensors, zeta, n_modes=keep, residual_flexibility=resid,
+                            input_names=names)
+    cont, disc = lab_plant(structure, chain, max_mode_hz=float(modes.frequencies_hz[keep - 1]))
+    wafer = wafer_of(tb)
+    return TestbedPlant(continuous=cont, discrete=disc, structure=structure,
+                        modes=_first(modes, keep), loads=F,
+                        capacitance=tb.pzt.wafers_per_strut * wafer.capacitance, chain=chain, tbm=tbm)
+
+
+testbed_plant.__test__ = False  # a builder, not a pytest test, despite its name
+
+
+def _first(modes, k: int):
+    from dataclasses import replace
+
+    return replace(modes, frequencies_hz=modes.frequencies_hz[:k], omega=modes.omega[:k],
+                   shapes=modes.shapes[:, :k], shapes_full=modes.shapes_full[:, :k])
