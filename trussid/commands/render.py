@@ -50,6 +50,32 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def _testbed_of(loaded):
+    """The :class:`fem.testbed.TestbedModel` behind a loaded model, if it is a testbed."""
+    for candidate in (loaded, getattr(loaded, "info", None), getattr(loaded, "testbed", None)):
+        if hasattr(candidate, "map") and hasattr(candidate, "testbed") and hasattr(candidate, "model"):
+            return candidate
+    return None
+
+
+def _decorations_and_labels(loaded, modes):
+    """Solids and mode labels to draw: the loader's own when it gives them; for a testbed,
+    its solids (:func:`fem.render.testbed_decorations`) and energy labels (:mod:`fem.labels`)."""
+    from fem import render
+
+    decorations = getattr(loaded, "decorations", None)
+    labels = getattr(loaded, "labels", None) or getattr(modes, "labels", None)
+    tbm = _testbed_of(loaded)
+    if tbm is not None:
+        if decorations is None:
+            decorations = render.testbed_decorations(tbm)
+        if labels is None:
+            from fem.labels import label_testbed_modes
+
+            labels = label_testbed_modes(tbm, modes).labels
+    return decorations or (), labels
+
+
 def run(args) -> int:
     from fem import render
 
@@ -87,8 +113,7 @@ def run(args) -> int:
         what = f"--grid {args.grid}: only" if args.grid is not None else f"--mode {args.mode} is out of range:"
         raise UserError(f"{what} the model has {n} modes ({system.n_dof} free DOF); "
                         f"valid mode numbers are 1 to {n}")
-    decorations = getattr(loaded, "decorations", ()) or ()
-    labels = getattr(loaded, "labels", None) or getattr(modes, "labels", None)
+    decorations, labels = _decorations_and_labels(loaded, modes)
     common = dict(decorations=decorations, view=args.view, labels=labels, **kwargs)
     if args.grid is not None:
         render.render_mode_grid(loaded.model, modes, args.grid, out,
