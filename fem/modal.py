@@ -185,13 +185,17 @@ SINGULAR_PIVOT = 1e-10
 
 def factor_stiffness(system: System):
     """Factorise ``K``; return ``(factor, None)`` if it is positive definite, else
-    ``(None, j)`` with ``j`` the reduced DOF of the smallest relative pivot (or None)."""
+    ``(None, j)`` with ``j`` the reduced DOF of the smallest relative pivot."""
     diag = system.K.diagonal()
+    scale = np.where(diag > 0, diag, 1.0)
     try:
         fac = SPDFactor(system.K.tocsc())
     except RuntimeError:
-        return None, None
-    ratio = fac.pivots() / np.where(diag > 0, diag, 1.0)
+        # An exactly zero pivot: SuperLU does not say where. A diagonal perturbation far
+        # below the test threshold makes the factorisation succeed and the pivot visible.
+        fac = SPDFactor((system.K + sp.diags(1e-3 * SINGULAR_PIVOT * scale)).tocsc())
+        return None, int(np.argmin(fac.pivots() / scale))
+    ratio = fac.pivots() / scale
     if (ratio < SINGULAR_PIVOT).any():
         return None, int(np.argmin(ratio))
     return fac, None

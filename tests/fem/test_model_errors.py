@@ -1,0 +1,216 @@
+"""Bad input gives a clear ModelError naming the offending item (issue 2, acceptance 8).
+
+(The CLI side and unsupported NASTRAN cards are tested with the CLI and the reader.)
+"""
+
+import numpy as np
+import pytest
+
+from fem import ALUMINIUM, Material, Model, ModelError, Section
+from fem.assembly import assemble
+from fem.modal import solve_modes
+from fem.static import solve_static
+from trussid.errors import UserError
+
+TUBE = Section.tube(0.01, 0.001, name="strut tube")
+GOOD_SECTION = {"A": 1e-4, "Iy": 1e-9, "Iz": 2e-9, "J": 3e-9, "Asy": 5e-5, "Asz": 5e-5}
+GOOD_MATERIAL = {"E": 70e9, "G": 26e9, "rho": 2700.0}
+
+
+def two_beams(**beam_kw):
+    """Nodes 1-2-3 along x, elements 11 and 12; element 12 gets ``beam_kw`` overrides."""
+    m = Model()
+    m.add_nodes([1, 2, 3], [[0, 0, 0], [0.5, 0, 0], [1.0, 0, 0]])
+    m.add_beams([11], [[1, 2]], TUBE, ALUMINIUM, orient=[0, 1, 0])
+    kw = dict(ids=[12], nodes=[[2, 3]], section=TUBE, material=ALUMINIUM, orient=[0, 1, 0])
+    kw.update(beam_kw)
+    m.add_beams(**kw)
+    m.fix(1)
+    return m
+
+
+def test_model_errors_are_user_errors():
+    assert issubclass(ModelError, UserError) and issubclass(ModelError, ValueError)
+
+
+def test_zero_length_element_is_named():
+    m = two_beams()
+    m.add_nodes([4], [[1.0, 0, 0]])  # coincides with node 3
+    m.add_beams([13], [[3, 4]], TUBE, ALUMINIUM, orient=[0, 1, 0])
+    with pytest.raises(ModelError, match=r"element 13: zero length"):
+        assemble(m)
+
+
+def test_element_with_the_same_node_at_both_ends_is_named():
+    with pytest.raises(ModelError, match=r"element 12: zero length .*node 2"):
+        assemble(two_beams(nodes=[[2, 2]]))
+
+
+@pytest.mark.parametrize("key", ["E", "G", "rho"])
+@pytest.mark.parametrize("value", [0.0, -1.0])
+def test_non_positive_material_constant_is_named(key, value):
+    kw = {"E": 70e9, "G": 26e9, "rho": 2700.0, "name": "bad alloy"}
+    kw[key] = value
+    with pytest.raises(ModelError, match=rf"material 'bad alloy': {key} must be positive"):
+        Material(**kw)
+
+
+@pytest.mark.parametrize("key", ["E", "G", "rho"])
+def test_non_positive_material_array_is_named_at_assembly_by_element(key):
+    mat = dict(GOOD_MATERIAL)
+    mat[key] = 0.0
+    with pytest.raises(ModelError, match=rf"element 12 \(.*\): {key} must be positive"):
+        assemble(two_beams(material=mat))
+
+
+@pytest.mark.parametrize("key", ["A", "Iy", "Iz", "J"])
+def test_non_positive_section_property_is_named(key):
+    kw = {"A": 1e-4, "Iy": 1e-9, "Iz": 1e-9, "J": 2e-9, "name": "flat bar"}
+    kw[key] = -1e-9
+    with pytest.raises(ModelError, match=rf"section 'flat bar': {key} must be positive"):
+        Section.general(**kw)
+    sec = dict(GOOD_SECTION)
+    sec[key] = 0.0
+    with pytest.raises(ModelError, match=rf"element 12 \(.*\): {key} must be positive"):
+        assemble(two_beams(section=sec))
+
+
+def test_non_positive_shear_area_is_named_for_timoshenko():
+    m = Model(beam_theory="timoshenko")
+    m.add_nodes([1, 2], [[0, 0, 0], [1, 0, 0]])
+    m.add_beams([7], [[1, 2]], dict(GOOD_SECTION, Asz=0.0), GOOD_MATERIAL, orient=[0, 1, 0], label="PBAR 3")
+    m.fix(1)
+    with pytest.raises(ModelError, match=r"element 7 \(PBAR 3\): Asz must be positive"):
+        assemble(m)
+
+
+@pytest.mark.parametrize("t", [0.01, 0.012])
+def test_wall_thickness_not_below_outer_radius_is_named(t):
+    with pytest.raises(ModelError, match=r"section 'thick tube': wall thickness .* must be less than the outer radius"):
+        Section.tube(0.01, t, name="thick tube")
+
+
+def test_orientation_vector_parallel_to_element_is_named():
+    with pytest.raises(ModelError, match=r"element 12: orientation vector \[2.0, 0.0, 0.0\] is parallel"):
+        assemble(two_beams(orient=[2.0, 0.0, 0.0]))
+
+
+def test_zero_orientation_vector_is_named():
+    with pytest.raises(ModelError, match=r"element 12: orientation vector .* is zero"):
+        assemble(two_beams(orient=[0.0, 0.0, 0.0]))
+
+
+def test_undefined_node_is_named_with_its_element():
+    with pytest.raises(ModelError, match=r"undefined node 99 \(referenced by element 12\)"):
+        assemble(two_beams(nodes=[[2, 99]]))
+
+
+def test_undefined_nodes_of_springs_masses_bodies_and_supports_are_named():
+    m = two_beams()
+    m.add_springs([5], [[3, 42]], np.ones(6))
+    with pytest.raises(ModelError, match=r"undefined node 42 \(referenced by spring 5\)"):
+        assemble(m)
+    m = two_beams()
+    m.add_point_masses([43], 1.0)
+    with pytest.raises(ModelError, match=r"undefined node 43 \(referenced by point mass"):
+        assemble(m)
+    m = two_beams()
+    m.add_rigid_body(8, 3, [44])
+    with pytest.raises(ModelError, match=r"undefined node 44 \(referenced by rigid body 8"):
+        assemble(m)
+    m = two_beams()
+    m.fix(45)
+    with pytest.raises(ModelError, match=r"undefined node 45 \(referenced by a support\)"):
+        assemble(m)
+
+
+def test_free_dof_without_stiffness_is_a_mechanism_naming_node_and_component():
+    """A point mass hung on a rod along x: its node has mass but no stiffness in y."""
+    m = two_beams()
+    m.add_nodes([7], [[1.0, 0.0, 0.4]])
+    m.add_beams([20], [[3, 7]], TUBE, ALUMINIUM, orient=[0, 1, 0], rod=True)
+    m.add_point_masses([7], 0.5)
+    m.add_springs([1], [7], [0, 0, 0, 1.0, 1.0, 1.0])  # rotations held, translations not
+    with pytest.raises(ModelError, match=r"mechanism: node 7 (ux|uy) has no stiffness"):
+        assemble(m)
+
+
+def test_zero_energy_direction_off_the_axes_is_a_mechanism():
+    """A rod along a skew direction: the two transverse directions at its free node have
+    non-zero diagonal stiffness in global axes but no stiffness at all: found by the
+    factorisation's pivots."""
+    m = two_beams()
+    m.add_nodes([7], [[1.3, 0.2, 0.4]])
+    m.add_beams([20], [[3, 7]], TUBE, ALUMINIUM, orient=[0, 1, 0], rod=True)
+    m.add_point_masses([7], 0.5)
+    m.add_springs([1], [7], [0, 0, 0, 1.0, 1.0, 1.0])
+    with pytest.raises(ModelError, match=r"mechanism: node 7 u[xyz] has no stiffness"):
+        solve_modes(m, 4)
+    with pytest.raises(ModelError, match=r"singular at node 7 u[xyz]"):
+        solve_static(m, np.zeros(m.n_dof))
+
+
+def test_dof_with_neither_mass_nor_stiffness_is_an_error_unless_autospc():
+    """Nodes joined only by rods have rotations with no stiffness and no mass."""
+    m = Model()
+    m.add_nodes([1, 2, 3], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    m.add_beams([1, 2, 3], [[1, 2], [2, 3], [3, 1]], TUBE, ALUMINIUM, orient=[0, 0, 1], rod=True)
+    m.fix([1, 3], "123")
+    m.fix(2, "3")
+    with pytest.raises(ModelError, match=r"mechanism: node 1 rz has no stiffness .*AUTOSPC"):
+        assemble(m)
+    s = assemble(m, autospc=True)
+    # The rods lie in the x-y plane: rz has neither stiffness nor mass at every node, while
+    # rx and ry carry the rods' torsion (J > 0) and stay (massless).
+    assert s.autospc == [(1, "rz"), (2, "rz"), (3, "rz")]
+    assert s.n_dof == 8  # node 2: ux, uy, rx, ry; nodes 1 and 3: rx, ry
+    modes = solve_modes(s, 2)
+    assert np.all(modes.frequencies_hz > 0)
+
+
+def test_slave_that_is_also_supported_is_named():
+    m = two_beams()
+    m.add_nodes([5], [[1.0, 0.3, 0.0]])
+    m.add_rigid_body(4, 3, [5])
+    m.fix(5, "2")
+    with pytest.raises(ModelError, match=r"node 5 is a slave of rigid body 4 and also supported in uy"):
+        assemble(m)
+
+
+def test_slave_of_two_rigid_bodies_is_named():
+    m = two_beams()
+    m.add_nodes([5], [[1.0, 0.3, 0.0]])
+    m.add_rigid_body(4, 3, [5])
+    m.add_rigid_body(6, 2, [5])
+    with pytest.raises(ModelError, match=r"node 5 is a slave of two rigid bodies \(4 and 6\)"):
+        assemble(m)
+
+
+def test_rigid_body_cycle_is_named():
+    m = two_beams()
+    m.add_nodes([5, 6], [[1.0, 0.3, 0.0], [1.0, 0.6, 0.0]])
+    m.add_rigid_body(4, 5, [6])
+    m.add_rigid_body(6, 6, [5])
+    with pytest.raises(ModelError, match=r"rigid bodies form a cycle through node [56]"):
+        assemble(m)
+
+
+def test_master_that_is_its_own_slave_is_named():
+    m = two_beams()
+    m.add_rigid_body(4, 3, [3, 2])
+    with pytest.raises(ModelError, match=r"rigid body 4: node 3 is both master and slave"):
+        assemble(m)
+
+
+def test_spring_joining_a_node_to_itself_is_named():
+    m = two_beams()
+    m.add_springs([9], [[3, 3]], np.ones(6))
+    with pytest.raises(ModelError, match=r"spring 9: both ends are node 3"):
+        assemble(m)
+
+
+def test_duplicate_node_id_is_named():
+    m = two_beams()
+    m.add_nodes([2], [[5.0, 0, 0]])
+    with pytest.raises(ModelError, match=r"node 2 is defined more than once"):
+        assemble(m)
