@@ -215,6 +215,21 @@ def test_gif_has_the_requested_number_of_frames_over_one_period(tri, tmp_path):
     assert mean_abs_diff(frames[1], frames[4]) > 1.0
 
 
+def test_gif_moves_the_decorations_too():
+    # A model that is one node carrying a block: only the block can move in the pictures.
+    model = Model()
+    model.add_node(1, [0.0, 0.0, 0.0])
+    modes = SimpleNamespace(shapes_full=np.array([[0.0], [0.0], [1.0], [0.0], [0.0], [0.0]]),
+                            frequencies_hz=np.array([10.0]), node_ids=np.array([1]))
+    block = pv.Cube(x_length=0.3, y_length=0.2, z_length=0.1)
+    frames = render.render_mode_gif(model, modes, 1, frames=4, window_size=(160, 120),
+                                    decorations=[(block, "steelblue", 1)], show_ghost=False)
+    # lifts sin(2 pi (j + 1/8) / 4) = 0.38, 0.92, -0.38, -0.92: the block's picture (its
+    # blue pixels) ranks from highest to lowest as frames 1, 0, 2, 3 (image rows grow down)
+    rows = [np.nonzero((f[:, :, 2].astype(int) - f[:, :, 0]) > 60)[0].mean() for f in frames]
+    assert rows[1] < rows[0] < rows[2] < rows[3]
+
+
 def test_grid_shows_the_first_modes_side_by_side(tri, tmp_path):
     model, _, modes = tri
     img = render.render_mode_grid(model, modes, 4, tmp_path / "grid.png", window_size=(400, 300))
