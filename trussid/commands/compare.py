@@ -42,7 +42,8 @@ def add_parser(subparsers):
                    "(.csv, .npz, .mat)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     p.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"),
-                   help="frequency band of the FRF error [Hz] (default 0 to Nyquist)")
+                   help="frequency band of the FRF error and plots [Hz] (default 0 to "
+                   "Nyquist; a band over two decades or more is plotted on a log axis)")
     p.add_argument("--fs", type=float, metavar="HZ", help="sampling frequency of a data file "
                    "that has neither fs nor a time column")
     p.add_argument("--inputs", nargs="+", metavar="NAME", help="data input channels to use")
@@ -91,7 +92,8 @@ def _safe_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name) or "input"
 
 
-def bode_figure(curves, j: int, input_name: str, output_names, title: str = ""):
+def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
+                logx: bool = False):
     """Bode overlay of one input column: one row per output, magnitude and phase.
 
     Parameters
@@ -105,6 +107,8 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = ""):
     input_name : str
     output_names : list of str
     title : str
+    logx : bool
+        Logarithmic frequency axis (for bands spanning decades).
 
     Returns
     -------
@@ -128,6 +132,8 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = ""):
         ax_p.set_ylim(-190, 190)
         for ax in (ax_m, ax_p):
             ax.grid(True, which="both", alpha=0.3)
+            if logx:
+                ax.set_xscale("log")
             ax.set_xlim(lo, hi)
     axes[0, 0].legend(loc="best", fontsize=8)
     axes[-1, 0].set_xlabel("frequency [Hz]")
@@ -189,6 +195,7 @@ def run(args) -> int:
     if not 0 <= band[0] < band[1] <= nyq * (1 + 1e-9):
         raise UserError(f"--band {band[0]:g} {band[1]:g}: need 0 <= LO < HI <= Nyquist "
                         f"({nyq:g} Hz)")
+    logx = band[0] > 0 and band[1] / band[0] >= 100
     metrics = {"model": str(args.model), "reference": str(ref_path), "reference_kind": kind,
                "states": model.nstates, "inputs": meta["input_names"],
                "outputs": meta["output_names"], "fs": fs, "band": list(band)}
@@ -209,7 +216,8 @@ def run(args) -> int:
         metrics["simulation_fit"] = simulation_fit(model, val.data.u, val.y_clean)
         metrics["simulation_fit"]["against"] = (f"noise-free plant output, {VALIDATION_SAMPLES}"
                                                 "-sample seeded white-noise record")
-        f_plot = np.linspace(max(band[0], nyq * 1e-3), band[1] * (1 - 1e-9), 800)
+        f_lo, f_hi = (band[0] if band[0] > 0 else nyq * 1e-3), band[1] * (1 - 1e-9)
+        f_plot = (np.geomspace(f_lo, f_hi, 1200) if logx else np.linspace(f_lo, f_hi, 800))
         fr, _, _ = modal_parameters(truth)
         f_plot = np.unique(np.concatenate([f_plot, fr[(fr > f_plot[0]) & (fr < f_plot[-1])]]))
         H_ref = frequency_response(truth, f_plot)
@@ -247,7 +255,8 @@ def run(args) -> int:
     for j, name in enumerate(meta["input_names"]):
         figs[f"bode_{_safe_name(name)}.png"] = bode_figure(
             curves, j, name, meta["output_names"],
-            title=f"Bode overlay, input {name}: model vs {ref_label}")
+            title=f"Bode overlay, input {name}: model vs {ref_label}",
+            logx=logx)
     poles = [("plant", truth), ("model", model)] if truth is not None else [("model", model)]
     figs["poles.png"] = pole_map_figure(poles)
 
