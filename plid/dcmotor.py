@@ -50,14 +50,17 @@ def first_order_from_physical(J: float, b: float, R: float, k: float) -> tuple[f
     return J * R / den, k / den
 
 
-def first_order_model(p: Mapping[str, float]) -> control.TransferFunction:
-    """``G / (T s + 1)`` from ``p = {"T": ..., "G": ...}``."""
-    return control.tf([p["G"]], [p["T"], 1.0])
+def first_order_model(p: Mapping[str, float]) -> control.StateSpace:
+    """``G / (T s + 1)`` from ``p = {"T": ..., "G": ...}``; the state is the speed."""
+    return control.ss([[-1.0 / p["T"]]], [[p["G"] / p["T"]]], [[1.0]], [[0.0]])
 
 
-def physical_model(p: Mapping[str, float]) -> control.TransferFunction:
-    """``k / (J R s + b R + k^2)`` from ``p = {"J", "b", "R", "k"}`` (SI)."""
-    return control.tf([p["k"]], [p["J"] * p["R"], p["b"] * p["R"] + p["k"] ** 2])
+def physical_model(p: Mapping[str, float]) -> control.StateSpace:
+    """``k / (J R s + b R + k^2)`` from ``p = {"J", "b", "R", "k"}`` (SI); the state is
+    the speed, so a fitted initial state is the initial speed whatever the parameters."""
+    jr = p["J"] * p["R"]
+    return control.ss([[-(p["b"] * p["R"] + p["k"] ** 2) / jr]], [[p["k"] / jr]], [[1.0]],
+                      [[0.0]])
 
 
 def step_guess(t, u, y) -> tuple[float, float] | None:
@@ -108,11 +111,14 @@ def _arx_guess(t, u, y) -> tuple[float, float]:
     return float(-dt / np.log(a)), float(c / (1 - a))
 
 
-def fit_first_order(t, u, y, *, hold: str = "zoh", confidence: float = 0.95) -> GreyboxReport:
+def fit_first_order(t, u, y, *, hold: str = "zoh", initial_state: str = "fit",
+                    confidence: float = 0.95) -> GreyboxReport:
     """Stage 1: fit ``G / (T s + 1)`` to the data (parameters ``T`` [s], ``G``).
 
     The starting guess is the 63.2 % rule on the first input step (or an ARX fit), the
-    refinement least squares over the whole record.
+    refinement least squares over the whole record. With ``initial_state="fit"``
+    (default) the speed at ``t[0]`` is estimated too (parameter ``x0[0]``), so a record
+    need not start at rest; ``"zero"`` assumes it does.
     """
     n = len(np.atleast_1d(t))
     _check_time(t)
@@ -129,8 +135,8 @@ def fit_first_order(t, u, y, *, hold: str = "zoh", confidence: float = 0.95) -> 
         guess = _arx_guess(t, u1[:, 0], y1[:, 0])
     T0, G0 = guess
     return fit_greybox(first_order_model, t, u1, y1, {"T": T0, "G": G0}, hold=hold,
-                       bounds={"T": (0.0, np.inf)}, log={"G": False},
-                       confidence=confidence)
+                       initial_state=initial_state, bounds={"T": (0.0, np.inf)},
+                       log={"G": False}, confidence=confidence)
 
 
 @dataclass(frozen=True)
@@ -149,6 +155,9 @@ class DCMotorResult:
     representative : dict
         One best-fitting physical parameter set (all four), e.g. for simulation; for
         undetermined parameters it is one of many equally good choices.
+    initial_speed : float or None
+        Fitted speed at ``t[0]`` [rad/s] (None when the record was assumed to start at
+        rest).
     intervals : dict
         95 % interval per parameter (``None`` for given ones and undetermined ones).
     given : tuple of str
@@ -165,6 +174,7 @@ class DCMotorResult:
     G_interval: tuple[float, float]
     parameters: dict[str, float | None]
     representative: dict[str, float]
+    initial_speed: float | None
     intervals: dict[str, tuple[float, float] | None]
     given: tuple[str, ...]
     undetermined: tuple[str, ...]
@@ -183,6 +193,7 @@ class DCMotorResult:
             "given": list(self.given),
             "undetermined": list(self.undetermined),
             "representative": dict(self.representative),
+            "initial_speed": self.initial_speed,
             "spread": {k: list(v) for k, v in self.physical.spread.items()},
             "n_starts": len(self.physical.starts),
             "rms": self.physical.rms,
@@ -228,6 +239,7 @@ def identify_dc_motor(
     J: float,
     R: float | None = None,
     hold: str = "zoh",
+    initial_state: str = "fit",
     n_starts: int = 8,
     seed: int = 0,
     bounds: Mapping[str, tuple[float, float]] | None = None,
@@ -245,6 +257,8 @@ def identify_dc_motor(
         Armature resistance [ohm], when measured separately. Without it, b, R and k are
         not all determined and the result says so.
     hold : {"zoh", "foh"}
+    initial_state : {"fit", "zero"}
+        Estimate the speed at ``t[0]`` (default) or assume the record starts at rest.
     n_starts : int
         Starts of the physical stage (seeded Latin hypercube, log-uniform in ``bounds``).
     seed : int
@@ -263,7 +277,8 @@ def identify_dc_motor(
         if unknown:
             raise DataError(f"unknown parameter {unknown[0]!r} in bounds; the DC motor "
                             "has b, R, k (J is given)")
-    fo = fit_first_order(t, u, y, hold=hold, confidence=confidence)
+    fo = fit_first_order(t, u, y, hold=hold, initial_state=initial_state,
+                         confidence=confidence)
     T, G = fo.estimates["T"], fo.estimates["G"]
     if G <= 0:
         raise DataError(f"the fitted gain G = {G:.3g} is not positive: is the speed "
@@ -283,8 +298,9 @@ def identify_dc_motor(
     for n, (lo, hi) in bnds.items():
         if n in initial and n not in given:
             initial[n] = float(np.clip(initial[n], lo, hi)) if lo <= hi else initial[n]
-    rep = fit_greybox(physical_model, t, u, y, initial, hold=hold, bounds=bnds,
-                      fixed=given, n_starts=n_starts, seed=seed, confidence=confidence)
+    rep = fit_greybox(physical_model, t, u, y, initial, hold=hold,
+                      initial_state=initial_state, bounds=bnds, fixed=given,
+                      n_starts=n_starts, seed=seed, confidence=confidence)
     params, intervals = {}, {}
     for n in ("J", "b", "R", "k"):
         if n in given:
@@ -298,7 +314,9 @@ def identify_dc_motor(
             intervals[n] = None
     return DCMotorResult(
         T=T, G=G, T_interval=fo.intervals["T"], G_interval=fo.intervals["G"],
-        parameters=params, representative=dict(rep.estimates), intervals=intervals,
+        parameters=params,
+        representative={n: float(rep.estimates[n]) for n in ("J", "b", "R", "k")},
+        initial_speed=rep.estimates.get("x0[0]"), intervals=intervals,
         given=given, undetermined=tuple(c.name for c in rep.undetermined),
         first_order=fo, physical=rep,
     )

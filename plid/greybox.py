@@ -319,7 +319,7 @@ def _check_name_set(what, given: Iterable[str], names) -> None:
         )
 
 
-def _build_space(initial, bounds, fixed, log) -> _Space:
+def _build_space(initial, bounds, fixed, log, scales=None) -> _Space:
     if not isinstance(initial, Mapping) or not initial:
         raise DataError("initial must be a non-empty mapping of parameter name to value")
     names = tuple(initial)
@@ -344,8 +344,13 @@ def _build_space(initial, bounds, fixed, log) -> _Space:
         fixed_set = set(fixed)
     log = dict(log or {})
     _check_name_set("log", log, names)
+    scales = dict(scales or {})
+    _check_name_set("scales", scales, names)
+    for n, s in scales.items():
+        if not (math.isfinite(float(s)) and float(s) > 0):
+            raise DataError(f"scale of parameter {n!r} must be positive, got {s!r}")
 
-    free, lo, hi, logs, scales = [], [], [], [], []
+    free, lo, hi, logs, scale_list = [], [], [], [], []
     for n in names:
         b = bounds.get(n, (-np.inf, np.inf))
         try:
@@ -373,18 +378,19 @@ def _build_space(initial, bounds, fixed, log) -> _Space:
         free.append(n)
         logs.append(bool(use_log))
         if use_log:
-            scales.append(1.0)
+            scale_list.append(1.0)
             with np.errstate(divide="ignore"):
                 lo.append(np.log(lower) if lower > 0 else -np.inf)
             hi.append(np.log(upper))
         else:
             width = upper - lower
             s = abs(v) if v != 0 else (width if np.isfinite(width) else 1.0)
-            scales.append(s)
+            s = float(scales.get(n, s))
+            scale_list.append(s)
             lo.append(lower / s)
             hi.append(upper / s)
     return _Space(names, tuple(free), values, np.array(logs, dtype=bool),
-                  np.array(scales, dtype=float), np.array(lo, dtype=float),
+                  np.array(scale_list, dtype=float), np.array(lo, dtype=float),
                   np.array(hi, dtype=float))
 
 
@@ -523,6 +529,7 @@ def fit_parameters(
     confidence: float = 0.95,
     ctol: float = 1e-6,
     min_obs: int | None = None,
+    scales: Mapping[str, float] | None = None,
 ) -> GreyboxReport:
     """Fit named parameters by (constrained) nonlinear least squares, with multi-start.
 
@@ -557,6 +564,10 @@ def fit_parameters(
         Absolute tolerance on constraint values.
     min_obs : int, optional
         Fewest residual entries accepted (default ``n_free + 2``).
+    scales : mapping, optional
+        ``name -> typical magnitude`` of linear (not log) parameters, the unit in which
+        they are estimated and judged "practically undetermined" (default: the initial
+        magnitude; give one for parameters that start at or near zero).
 
     Returns
     -------
@@ -569,7 +580,7 @@ def fit_parameters(
         inconsistent constraints, too few residuals, a residual that is not finite at the
         start.
     """
-    space = _build_space(initial, bounds, fixed, log)
+    space = _build_space(initial, bounds, fixed, log, scales)
     constraints = _check_constraints(constraints)
     n_free = len(space.free)
     if n_starts < 1:
@@ -904,8 +915,8 @@ def _as_2d(name, a, n) -> np.ndarray:
     return a
 
 
-def simulate(system, t, u, hold: str = "zoh") -> np.ndarray:
-    """Response of a continuous-time system to sampled input, from zero initial state.
+def simulate(system, t, u, hold: str = "zoh", x0=None) -> np.ndarray:
+    """Response of a continuous-time system to sampled input.
 
     Parameters
     ----------
@@ -918,6 +929,10 @@ def simulate(system, t, u, hold: str = "zoh") -> np.ndarray:
     hold : {"zoh", "foh"}
         How the input behaves between samples: held constant (a DAC, a square wave
         generator) or linearly interpolated (a sampled smooth signal).
+    x0 : (n,) array, optional
+        State at ``t[0]`` in the coordinates of ``control.ss(system)`` (default zero).
+        With ``hold="foh"`` it is the state of the sampled system, which differs from the
+        continuous state by a multiple of ``u[0]``.
 
     Returns
     -------
@@ -938,10 +953,15 @@ def simulate(system, t, u, hold: str = "zoh") -> np.ndarray:
         raise DataError(f"model has {sysc.ninputs} input(s) but u has {u.shape[1]} column(s)")
     sysd = control.sample_system(sysc, dt, method=hold)
     a, b, c, d = (np.asarray(m, dtype=float) for m in (sysd.A, sysd.B, sysd.C, sysd.D))
+    n = a.shape[0]
+    if x0 is not None:
+        x0 = np.asarray(x0, dtype=float).ravel()
+        if x0.size != n:
+            raise DataError(f"initial state has {x0.size} entries for {n} model state(s)")
     y = u @ d.T
-    if a.shape[0] == 0:
+    if n == 0:
         return y
-    if a.shape[0] <= 8:
+    if n <= 8:
         # lfilter runs the recursion in C; a transfer function per input is well
         # conditioned for the low orders grey-box models have.
         y = np.zeros((u.shape[0], c.shape[0]))
@@ -949,8 +969,15 @@ def simulate(system, t, u, hold: str = "zoh") -> np.ndarray:
             num, den = scipy.signal.ss2tf(a, b, c, d, input=j)
             for i in range(c.shape[0]):
                 y[:, i] += scipy.signal.lfilter(num[i], den, u[:, j])
+        if x0 is not None and np.any(x0):
+            # free response C A^k x0: the impulse response of (A, x0, C, 0), one step on
+            num, den = scipy.signal.ss2tf(a, x0[:, None], c, np.zeros((c.shape[0], 1)))
+            imp = np.zeros(u.shape[0] + 1)
+            imp[0] = 1.0
+            for i in range(c.shape[0]):
+                y[:, i] += scipy.signal.lfilter(num[i], den, imp)[1:]
         return y
-    _, yd, _ = scipy.signal.dlsim((a, b, c, d, dt), u)
+    _, yd, _ = scipy.signal.dlsim((a, b, c, d, dt), u, x0=x0)
     return np.asarray(yd).reshape(u.shape[0], -1)
 
 
@@ -962,6 +989,7 @@ def fit_greybox(
     initial: Mapping[str, float],
     *,
     hold: str = "zoh",
+    initial_state: str = "zero",
     weights=None,
     bounds: Mapping[str, tuple[float, float]] | None = None,
     fixed: Iterable[str] | Mapping[str, float] = (),
@@ -989,6 +1017,12 @@ def fit_greybox(
         As in :func:`fit_parameters`.
     hold : {"zoh", "foh"}
         Inter-sample behaviour of the input (see :func:`simulate`).
+    initial_state : {"zero", "fit"}
+        Start the simulation from rest, or estimate the state at ``t[0]`` as extra
+        (nuisance) parameters named ``x0[0]``, ``x0[1]``, ... in the state coordinates of
+        ``control.ss(model(p))`` (give a state-space model with physical states, so that
+        they mean something and do not move with the other parameters). Their starting
+        values come from linear least squares at the initial parameters.
     weights : (p,) array, optional
         Residual weight per output; default 1 for one output, ``1 / std(y_i)`` for several
         (so that channels in different units count alike).
@@ -1014,8 +1048,18 @@ def fit_greybox(
         if w.size != y2.shape[1]:
             raise DataError(f"weights has {w.size} entries for {y2.shape[1]} output(s)")
 
+    if initial_state not in ("zero", "fit"):
+        raise DataError(f"initial_state must be 'zero' or 'fit', got {initial_state!r}")
+    x0_names: list[str] = []
+    scales = None
+    if initial_state == "fit":
+        initial, log, scales = _initial_state_guess(model, space, t, u2, y2, w, hold,
+                                                    initial, log)
+        x0_names = [n for n in initial if n.startswith("x0[")]
+
     def residual(p):
-        ys = simulate(model(p), t, u2, hold)
+        x0 = [p[n] for n in x0_names] if x0_names else None
+        ys = simulate(model(p), t, u2, hold, x0)
         if ys.shape[1] != y2.shape[1]:
             raise DataError(f"model has {ys.shape[1]} output(s) but y has {y2.shape[1]} "
                             "column(s)")
@@ -1023,4 +1067,27 @@ def fit_greybox(
 
     return fit_parameters(residual, initial, bounds=bounds, fixed=fixed,
                           constraints=constraints, log=log, n_starts=n_starts, seed=seed,
-                          confidence=confidence, ctol=ctol)
+                          confidence=confidence, ctol=ctol, scales=scales)
+
+
+def _initial_state_guess(model, space, t, u2, y2, w, hold, initial, log):
+    """Add ``x0[i]`` parameters, started at the least-squares initial state: the output is
+    linear in it, ``y = y_u + O x0`` with O the free responses to unit initial states."""
+    sys0 = control.ss(model(space.params(space.theta(space.values), "model")))
+    n = sys0.nstates
+    names = [f"x0[{i}]" for i in range(n)]
+    clash = [nm for nm in names if nm in initial]
+    if clash:
+        raise DataError(f"parameter name {clash[0]!r} is reserved for the fitted initial state")
+    y_u = simulate(sys0, t, u2, hold)
+    zero = np.zeros_like(u2)
+    obs = np.column_stack([(simulate(sys0, t, zero, hold, np.eye(n)[i]) * w).ravel()
+                           for i in range(n)])
+    x0, *_ = np.linalg.lstsq(obs, ((y2 - y_u) * w).ravel(), rcond=None)
+    initial = {**initial, **{nm: float(v) for nm, v in zip(names, x0)}}
+    log = {**(log or {}), **{nm: False for nm in names}}
+    # a state's natural unit: the state that alone explains the largest output seen
+    gain = np.max(np.abs(obs), axis=0)
+    ymax = float(np.max(np.abs(y2 * w)))
+    scales = {nm: (ymax / g if g > 0 and ymax > 0 else 1.0) for nm, g in zip(names, gain)}
+    return initial, log, scales

@@ -73,6 +73,19 @@ def test_any_input_works_not_only_steps():
     assert rep.estimates["G"] == pytest.approx(G, rel=0.01)
 
 
+def test_record_that_does_not_start_at_rest_is_handled_by_fitting_the_initial_speed():
+    t, u, y = motor_data(seed=7)
+    cut = int(30.0 * 20)  # start mid-way through a half period, at speed
+    t, u, y = t[cut:] - t[cut], u[cut:], y[cut:]
+    T, G = first_order_from_physical(J, B, R, K)
+    rep = fit_first_order(t, u, y)  # initial_state="fit" by default
+    assert rep.estimates["T"] == pytest.approx(T, rel=0.01)
+    assert rep.estimates["G"] == pytest.approx(G, rel=0.01)
+    assert rep.estimates["x0[0]"] == pytest.approx(y[0], abs=0.1)
+    at_rest = fit_first_order(t, u, y, initial_state="zero")  # the wrong assumption
+    assert abs(at_rest.estimates["T"] / T - 1) > 0.01
+
+
 def test_acceptance_2_inertia_alone_leaves_a_named_combination_undetermined():
     t, u, y = motor_data(seed=11)
     res = identify_dc_motor(t, u, y, J=J, n_starts=6, seed=4)
@@ -84,7 +97,8 @@ def test_acceptance_2_inertia_alone_leaves_a_named_combination_undetermined():
     (comb,) = res.physical.undetermined
     p = res.representative
     ratio = p["k"] ** 2 / (p["b"] * p["R"])
-    assert comb.exponents == pytest.approx({"b": -ratio, "R": 1.0, "k": 1.0}, abs=1e-4)
+    assert comb.exponents == pytest.approx(
+        {"b": -ratio, "R": 1.0, "k": 1.0, "x0[0]": 0.0}, abs=1e-4)  # x0: initial speed
     assert comb.reason == "structural"
     assert res.parameters["J"] == J
     assert res.parameters["R"] is None and res.parameters["k"] is None
@@ -98,7 +112,8 @@ def test_acceptance_2_inertia_alone_leaves_a_named_combination_undetermined():
     assert len(good) >= 3
     # ... every one of which reproduces the same T and G: a curve of exact answers
     for s in good:
-        T, G = first_order_from_physical(**s.estimate)
+        e = s.estimate
+        T, G = first_order_from_physical(e["J"], e["b"], e["R"], e["k"])
         assert T == pytest.approx(res.T, rel=1e-3)
         assert G == pytest.approx(res.G, rel=1e-3)
     d = res.to_dict()

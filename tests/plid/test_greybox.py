@@ -207,6 +207,23 @@ def test_zoh_step_and_foh_ramp_responses_are_exact_at_the_samples():
     assert abs(y_zoh[-1] - exact[-1]) == pytest.approx(G * dt / 2, rel=0.05)
 
 
+def test_initial_state_response_matches_lsim():
+    a = np.array([[0.0, 1.0], [-4.0, -0.3]])
+    b, c = np.array([[0.0], [1.0]]), np.array([[1.0, 0.0]])
+    t = np.arange(400) * 0.02
+    u = np.sin(t)
+    x0 = np.array([0.5, -1.0])
+    y = simulate(control.ss(a, b, c, 0), t, u, x0=x0)[:, 0]
+    _, y_ref, _ = scipy.signal.lsim((a, b, c, [[0.0]]), u, t, X0=x0, interp=False)
+    np.testing.assert_allclose(y, y_ref, atol=1e-10)
+
+
+def test_reserved_initial_state_name_is_refused():
+    with pytest.raises(DataError, match=r"'x0\[0\]' is reserved"):
+        fit_greybox(first_order, T_AXIS, U_STEP, Y_STEP, {"T": 1.0, "G": 1.0, "x0[0]": 0.0},
+                    initial_state="fit")
+
+
 def test_mass_spring_damper_recovered_from_random_input(rng):
     m, k, c = 2.0, 80.0, 1.5
     dt = 0.01

@@ -12,6 +12,7 @@ JSON output (``--json``)::
                                                             # undetermined parameters
      "given": ["J", ...], "undetermined": ["R*k", ...],     # [] when all are determined
      "representative": {...},   # one best-fitting full set (e.g. to simulate with)
+     "initial_speed": rad/s,    # fitted speed at t[0]; null with --initial-state zero
      "spread": {"b": [min, max], ...},  # over multi-start fits as good as the best
      "n_starts": 8, "rms": ..}
 
@@ -71,6 +72,9 @@ def add_parser(subparsers) -> None:
     m.add_argument("--hold", choices=("zoh", "foh"), default="zoh",
                    help="input between samples: held (zoh, default: square waves, DACs) "
                    "or linear (foh)")
+    m.add_argument("--initial-state", choices=("fit", "zero"), default="fit",
+                   help="estimate the speed at the first sample (fit, default) or assume "
+                   "the record starts at rest (zero)")
     m.add_argument("--starts", type=int, default=8, metavar="N",
                    help="multi-start count for the physical stage (default 8)")
     m.add_argument("--seed", type=int, default=0, help="seed of the multi-start (default 0)")
@@ -128,7 +132,8 @@ def run_dc_motor(args) -> int:
         raise DataError(f"--starts must be at least 1, got {args.starts}")
     t, u, y = read_tuy_csv(args.data)
     res = identify_dc_motor(t, u, y, J=J, R=args.resistance, hold=args.hold,
-                            n_starts=args.starts, seed=args.seed)
+                            initial_state=args.initial_state, n_starts=args.starts,
+                            seed=args.seed)
     if args.json:
         print(json.dumps(res.to_dict(), indent=2))
     else:
