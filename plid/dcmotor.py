@@ -207,6 +207,8 @@ class DCMotorResult:
             f"[{self.G_interval[0]:.5g}, {self.G_interval[1]:.5g}]  (95 %)",
             "physical parameters:",
         ]
+        if self.initial_speed is not None:
+            lines.insert(1, f"initial speed (fitted): {self.initial_speed:.4g} rad/s")
         for n in ("J", "b", "R", "k"):
             v = self.parameters[n]
             iv = self.intervals[n]
