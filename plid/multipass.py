@@ -1,0 +1,185 @@
+"""Multi-pass batch PLID and the complete identification recipe ``identify``.
+
+A *pass* is one :class:`plid.estimator.PLID` run over the whole record. Later passes start
+from the previous pass's model (converted exactly into the same basis) with a re-inflated
+parameter covariance, and with their own state noise ``Q`` and parameter drift
+``Q_theta``, so a schedule can shrink them pass by pass (``docs/plid.md``).
+
+:func:`identify` is what ``trussid identify`` runs. Its two starts (measured in
+``benchmarks/results/plid_thesis.md``):
+
+- ``start="subspace"`` (default): a quick N4SID estimate with D = 0
+  (:func:`plid.subspace.subspace_prior`) is the prior; the observer basis is a rotation
+  basis at the prior's pole frequencies (:mod:`plid.bases`); one PLID pass with ``Q = 0``
+  and a tight parameter prior refines it. This won every benchmark case.
+- ``start="scratch"``: no prior; a rotation basis at the peaks of the output spectrum and
+  a schedule of passes with shrinking ``Q``. Works, but from scratch at 24-42 states it
+  settles far from N4SID's accuracy (see the account).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import control
+import numpy as np
+
+from plid.bases import basis_for, data_frequencies, model_frequencies
+from plid.canonical import ObserverBasis
+from plid.errors import IdentificationError
+from plid.estimator import PLID, PLIDResult, PLIDWarning
+
+__all__ = ["Pass", "multipass", "identify", "Identification", "SCRATCH_SCHEDULE"]
+
+
+@dataclass(frozen=True)
+class Pass:
+    """Settings of one pass (scaled units, see :class:`plid.estimator.PLID`)."""
+
+    Q: float = 0.0
+    Q_theta: float = 0.0
+    prior_theta_var: float = 1e4
+
+
+SCRATCH_SCHEDULE = (Pass(1e-6, 0.0, 1e4), Pass(1e-7, 0.0, 1e-2), Pass(1e-8, 0.0, 1e-3),
+                    Pass(0.0, 0.0, 1e-4))
+
+
+def multipass(u, y, order: int, dt: float, schedule, *, basis: ObserverBasis | None = None,
+              prior: control.StateSpace | None = None, R=1e-4, N=0.0, form: str = "direct",
+              progress: bool | None = False, history_every: int = 0):
+    """Run the passes of ``schedule`` in turn.
+
+    Parameters
+    ----------
+    u, y : arrays (N, m), (N, p)
+        Data.
+    order : int
+    dt : float
+        Sample time [s].
+    schedule : sequence of Pass
+    basis : ObserverBasis, optional
+        Default the block shift.
+    prior : control.StateSpace, optional
+        Start of the first pass (else theta = 0).
+    R, N : covariances (scaled units) for every pass.
+    form : {"direct", "sqrt"}
+
+    Returns
+    -------
+    result : PLIDResult
+        Of the last pass.
+    history : list of dict
+        Per pass: its settings, seconds, whether it stayed finite.
+    """
+    history = []
+    res = None
+    current = prior
+    for k, ps in enumerate(schedule):
+        t0 = time.perf_counter()
+        est = PLID(order, form=form, dt=dt, Q=ps.Q, R=R, N=N, Q_theta=ps.Q_theta,
+                   prior=current, prior_theta_var=ps.prior_theta_var, basis=basis,
+                   history_every=history_every, progress=progress)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PLIDWarning)
+            r = est.fit(u, y)
+        history.append({"pass": k, "Q": ps.Q, "Q_theta": ps.Q_theta,
+                        "prior_theta_var": ps.prior_theta_var, "finite": r.finite,
+                        "seconds": time.perf_counter() - t0})
+        if not r.finite:
+            break
+        res = r
+        current = r.model
+    if res is None:
+        raise IdentificationError("PLID diverged in its first pass (estimate not finite)")
+    return res, history
+
+
+@dataclass
+class Identification:
+    """What :func:`identify` produced."""
+
+    result: PLIDResult
+    model: control.StateSpace
+    start: str
+    basis: ObserverBasis
+    R: np.ndarray
+    prior: control.StateSpace | None
+    info: dict = field(default_factory=dict)
+
+
+def _noise_estimate(model, u, y, floor=1e-10):
+    """Output-noise variance per channel in scaled units: the simulation error of a prior
+    model on the data (an over-estimate by the prior's own model error)."""
+    from plid.experiment import simulate
+
+    e = y - simulate(model, u)
+    return np.maximum(np.mean(e ** 2, axis=0) / np.mean(y ** 2, axis=0), floor)
+
+
+def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
+             form: str = "direct", radius: float = 0.97, block_rows=None,
+             schedule=None, prior_theta_var: float = 1e-4, Q: float = 0.0,
+             progress: bool | None = False) -> Identification:
+    """Identify an order-``order`` model: the recipe that won the benchmarks.
+
+    Parameters
+    ----------
+    u, y : arrays (N, m), (N, p)
+    order : int
+        A multiple of the number of outputs.
+    dt : float
+        Sample time [s].
+    start : {"subspace", "scratch"}
+        See the module docstring.
+    R : float or (p,), optional
+        Output-noise variance in scaled units; default estimated (subspace start: the
+        prior's simulation error; scratch: 1e-4).
+    form : {"direct", "sqrt"}
+        PLID recursion.
+    radius : float
+        Radius of the rotation basis.
+    block_rows : int or list, optional
+        N4SID block rows (subspace start); default chosen by :func:`subspace_prior`.
+    schedule : sequence of Pass, optional
+        Scratch start passes (default :data:`SCRATCH_SCHEDULE`); for the subspace start
+        the default is one pass ``Pass(Q, 0, prior_theta_var)``.
+    prior_theta_var, Q : float
+        Subspace start: the parameter prior variance and state noise of its pass.
+    """
+    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    p = y.shape[1]
+    fs = 1.0 / dt
+    if order % p:
+        from plid.canonical import check_order
+        check_order(order, p)
+    info = {}
+    t0 = time.perf_counter()
+    if start == "subspace":
+        from plid.subspace import subspace_prior
+
+        prior, pinfo = subspace_prior(u, y, order, dt, block_rows=block_rows)
+        info["subspace"] = pinfo
+        info["subspace_seconds"] = time.perf_counter() - t0
+        freqs = model_frequencies(prior, order // 2, fs)
+        basis = basis_for(order, p, fs, freqs, radius)
+        if R is None:
+            R = _noise_estimate(prior, u, y)
+        sched = schedule or (Pass(Q, 0.0, prior_theta_var),)
+    elif start == "scratch":
+        prior = None
+        freqs = data_frequencies(u, y, fs, order // 2)
+        basis = basis_for(order, p, fs, freqs, radius)
+        R = 1e-4 if R is None else R
+        sched = schedule or SCRATCH_SCHEDULE
+    else:
+        raise IdentificationError(f"start must be 'subspace' or 'scratch', got {start!r}")
+    res, hist = multipass(u, y, order, dt, sched, basis=basis, prior=prior, R=R, form=form,
+                          progress=progress)
+    info["passes"] = hist
+    info["seconds"] = time.perf_counter() - t0
+    return Identification(res, res.model, start, basis, np.atleast_1d(np.asarray(R, float)),
+                          prior, info)
