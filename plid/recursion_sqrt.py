@@ -10,9 +10,11 @@ arithmetic differs.
   "Fast triangular formulation of the square root filter", AIAA J. 11(9)). For
   ``M = I - f f^T / (1 + f^T f)`` its lower-triangular factor is
   ``T = diag(d) + tril(f beta^T, -1)`` with ``a_j = 1 + sum_{i>=j} f_i^2``,
-  ``d_j = sqrt(a_{j+1} / a_j)`` and ``beta_j = -f_j / sqrt(a_j a_{j+1})``; ``L T`` is a
-  column-wise reverse cumulative sum, O((n + q)^2) per output and fully vectorised. A QR
-  array update of the (n + q + p)-square pre-array would cost O((n + q)^3) per sample.
+  ``d_j = sqrt(a_{j+1} / a_j)`` and ``beta_j = -f_j / sqrt(a_j a_{j+1})`` (ratios of
+  positive sums: no cancellation, which is why it keeps definiteness). The p factors are
+  multiplied together on their semiseparable generators and applied as one triangular
+  product ``L <- L T`` (BLAS trmm). A QR array update of the (n + q + p)-square pre-array
+  would cost O((n + q)^3) per sample with no structure to exploit.
   The posterior output noise is ``v = y - C x`` exactly, so "appending v to the state"
   needs no extra columns: its factor rows are ``-C L_x``.
 - Time update: ``F = [[I, 0], [Phi, A_hat]]`` leaves the theta rows of ``L`` unchanged
@@ -30,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+from scipy.linalg.blas import dtrmm
 
 from plid.recursion_common import Problem, psd_factor
 
@@ -45,8 +48,7 @@ class SqrtState:
     # whitening of the outputs and the per-output data the measurement update needs
     Rw: np.ndarray          # inverse Cholesky factor of R, (p, p)
     Hw: np.ndarray          # Rw @ C, (p, n)
-    jmax: list              # columns of L touched by each whitened output
-    single: list            # (state index, weight) when a whitened row has one entry
+    J: int                  # columns of L the measurement update touches
 
 
 def sqrt_init(pb: Problem, z0: np.ndarray, P0: np.ndarray) -> SqrtState:
@@ -57,12 +59,8 @@ def sqrt_init(pb: Problem, z0: np.ndarray, P0: np.ndarray) -> SqrtState:
         L = np.asfortranarray(np.linalg.qr(L.T, mode="r").T)
     Rw = np.linalg.inv(np.linalg.cholesky(pb.R))
     Hw = Rw @ pb.C
-    jmax, single = [], []
-    for i in range(pb.p):
-        nz = np.flatnonzero(Hw[i])
-        jmax.append(pb.q + int(nz.max()) + 1)
-        single.append((int(nz[0]), float(Hw[i, nz[0]])) if nz.size == 1 else None)
-    return SqrtState(np.array(z0, dtype=float), L, Rw, Hw, jmax, single)
+    J = pb.q + int(np.flatnonzero(np.any(Hw != 0, axis=0)).max()) + 1
+    return SqrtState(np.array(z0, dtype=float), L, Rw, Hw, J)
 
 
 def sqrt_covariance(st: SqrtState) -> np.ndarray:
@@ -70,35 +68,70 @@ def sqrt_covariance(st: SqrtState) -> np.ndarray:
     return st.L @ st.L.T
 
 
+def _rcumsum_excl(a: np.ndarray) -> np.ndarray:
+    """``out[j] = sum_{i > j} a[i]`` along axis 0."""
+    out = np.zeros_like(a)
+    out[:-1] = np.cumsum(a[:0:-1], axis=0)[::-1]
+    return out
+
+
+def _fcumsum_excl(a: np.ndarray) -> np.ndarray:
+    """``out[i] = sum_{j < i} a[j]`` along axis 0."""
+    out = np.zeros_like(a)
+    np.cumsum(a[:-1], axis=0, out=out[1:])
+    return out
+
+
 def _measurement(pb: Problem, st: SqrtState, yw: np.ndarray) -> None:
-    q = pb.q
+    """All p (whitened) scalar Carlson updates, applied to L in one triangular product.
+
+    Scalar update k multiplies L by ``T_k = diag(d_k) + tril(f_k beta_k^T, -1)``. The
+    ``f_k`` of the later updates, the gains and the product ``T = T_1 ... T_p`` are all
+    worked out on its generators (``T = diag(D) + tril(U V^T, -1)``, rank p), which costs
+    O((n + q) p^2) vector work; then ``L <- L T`` is one BLAS ``trmm``. Doing the p updates
+    on L itself costs p column-wise cumulative sums over the whole factor, which numpy does
+    several times slower than BLAS does the product.
+    """
+    q, p = pb.q, pb.p
     z, L = st.z, st.L
-    for i in range(pb.p):
-        J = st.jmax[i]
-        LJ = L[:, :J]
-        if st.single[i] is not None:
-            s, w = st.single[i]
-            f = w * L[q + s, :J]
-            innov = yw[i] - w * z[q + s]
+    J = st.J
+    LJ = L[:, :J]
+    Gm = st.Hw @ L[q:, :J]                      # rows g_k = L^T h_k, (p, J)
+    D = np.ones(J)
+    U = np.empty((J, p))
+    V = np.empty((J, p))
+    for k in range(p):
+        g = Gm[k]
+        Uk, Vk = U[:, :k], V[:, :k]
+        if k:
+            # f = (T_1 ... T_{k-1})^T g
+            f = D * g + np.einsum("jr,jr->j", Vk, _rcumsum_excl(g[:, None] * Uk))
         else:
-            f = st.Hw[i] @ L[q:, :J]
-            innov = yw[i] - st.Hw[i] @ z[q:]
-        f2 = f * f
-        tail = np.cumsum(f2[::-1])[::-1]          # sum_{i >= j} f_i^2
+            f = g
+        tail = np.cumsum((f * f)[::-1])[::-1]     # sum_{i >= j} f_i^2
         a = 1.0 + tail
         a1 = np.empty_like(a)
         a1[:-1] = a[1:]
         a1[-1] = 1.0
         d = np.sqrt(a1 / a)
         beta = -f / np.sqrt(a * a1)
-        g = LJ @ f                                 # P h (unnormalised gain)
-        z += g * (innov / a[0])
-        G = LJ * f
-        # exclusive reverse cumulative sum over columns: Cc[:, j] = sum_{i>j} G[:, i]
-        rc = np.cumsum(G[:, :0:-1], axis=1)
-        LJ *= d
-        rc *= beta[-2::-1]
-        LJ[:, :-1] += rc[:, ::-1]
+        if k:
+            Vf = Vk * f[:, None]
+            w = D * f + np.einsum("jr,jr->j", Uk, _fcumsum_excl(Vf))   # (T_1..T_{k-1}) f
+            Vk *= d[:, None]
+            Vk -= np.cumsum(Vf, axis=0) * beta[:, None]
+        else:
+            w = f
+        innov = yw[k] - st.Hw[k] @ z[q:]
+        z += (LJ @ w) * (innov / a[0])
+        U[:, k] = w
+        V[:, k] = beta
+        D *= d
+    # T = diag(D) + tril(U V^T, -1), built Fortran-ordered for trmm (which reads only
+    # the lower triangle).
+    W = V @ U.T                                  # W[j, i] = V_j . U_i = T[i, j]
+    W.flat[::J + 1] = D
+    dtrmm(1.0, W.T, LJ, side=1, lower=1, overwrite_b=1)
 
 
 def _lq_lower(M: np.ndarray) -> np.ndarray:
