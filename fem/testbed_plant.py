@@ -112,9 +112,13 @@ def channel_loads(tbm: TestbedModel, channels=None, arrangement: str = "extensio
 
 
 def accelerometers(tbm: TestbedModel, quantity: str = "acceleration") -> list[Sensor]:
-    """The testbed's sensors (accelerometers at the UDF corners, by default vertical)."""
+    """The testbed's sensors (accelerometers at the UDF corners, by default vertical).
+
+    Acceleration outputs are in volts at the A/D input: accelerometer sensitivity times the
+    signal conditioner's gain (``tb.accelerometers.conditioning_gain``).
+    """
     tb, mp = tbm.testbed, tbm.map
-    sens = tb.accelerometers.sensitivity
+    sens = tb.accelerometers.sensitivity * tb.accelerometers.conditioning_gain
     if quantity != "acceleration":
         sens = 1.0  # displacement/velocity outputs for analysis are in SI units
     return [Sensor(int(n), tuple(d), quantity, sens, name=f"acc{k + 1}")
