@@ -119,37 +119,73 @@ def _massless(M: sp.csr_matrix, dofs: np.ndarray) -> np.ndarray:
     return out
 
 
-def _dense(system: System, k: int) -> tuple[np.ndarray, np.ndarray]:
+def _dense(system: System, k: int, sigma: float | None):
+    """Lowest ``k`` eigenpairs with LAPACK; returns ``(lambda, X, proven)``.
+
+    LAPACK's accuracy is absolute, ``eps`` times the largest eigenvalue of the problem it
+    is given. Solved directly, ``K x = lambda M x`` thus gives the lowest modes only
+    ``eps * lambda_max / lambda`` relative accuracy, poor when the spectrum spans many
+    decades (fine meshes, stiff axial members). So the lowest modes are taken from the
+    *inverted* problem ``M x = mu (K - sigma M) x``, ``mu = 1 / (lambda - sigma)``, whose
+    error ``eps * mu_max`` falls on the highest modes instead; the second matrix is
+    positive definite (``sigma = 0`` when K is proven so, else a small negative shift),
+    and a singular ``M`` (massless DOFs: ``mu = 0``) needs no special treatment. When more
+    than half of the modes are wanted, the upper part of the spectrum comes from the direct
+    problem, stitched at ``sqrt(lambda_low lambda_high)`` where the two errors cross.
+    """
+    n = system.n_dof
+    proven = False
+    if sigma is None:
+        if system.has_supports and factor_stiffness(system)[0] is not None:
+            sigma, proven = 0.0, True
+        else:
+            sigma = -default_shift(system)
     K = system.K.toarray()
     M = system.M.toarray()
-    zero = _massless(system.M, system.dofs)
-    if zero.any():
-        # Static condensation of the massless DOFs: exact, they have no inertia.
-        z, m = np.flatnonzero(zero), np.flatnonzero(~zero)
-        try:
-            cf = la.cho_factor(K[np.ix_(z, z)])
-        except la.LinAlgError:
-            j = z[int(np.argmin(np.abs(np.diag(K)[z])))]
-            raise ModelError(f"mechanism: {system.dof_label(j)} has neither mass nor a stiffness "
-                             f"that restrains it") from None
-        G = -la.cho_solve(cf, K[np.ix_(z, m)])
-        Kc = K[np.ix_(m, m)] + K[np.ix_(m, z)] @ G
-        Kc = 0.5 * (Kc + Kc.T)
-        k = min(k, len(m))
-        lam, x = _eigh(Kc, M[np.ix_(m, m)], k, system)
-        X = np.zeros((system.n_dof, k))
-        X[m] = x
-        X[z] = G @ x
-        return lam, X
-    return _eigh(K, M, k, system)
-
-
-def _eigh(K, M, k, system):
+    massless = _massless(system.M, system.dofs)
+    n_mass = int((~massless).sum())
+    k = min(k, n_mass)
+    B = K - sigma * M
+    k_low = k
+    if k > n // 2:
+        # Direct problem on the massive DOFs (static condensation of the massless ones).
+        lam_hi, X_hi = _direct(K, M, massless, system)
+        lo, hi = lam_hi[0] - sigma, lam_hi[-1] - sigma
+        k_low = int(np.searchsorted(lam_hi - sigma, np.sqrt(max(lo, 0.0) * hi)))
+        k_low = min(max(k_low, 1), k)
     try:
-        return la.eigh(K, M, subset_by_index=[0, k - 1])
+        mu, X = la.eigh(M, B, subset_by_index=[n - k_low, n - 1])
     except la.LinAlgError:
-        raise ModelError("the mass matrix is not positive definite on the DOFs that carry mass "
-                         "(a massless direction mixed with massive ones)") from None
+        # K - sigma M is singular: a direction with neither stiffness nor mass.
+        diag = np.abs(np.diag(B))
+        fac = SPDFactor(sp.csc_matrix(B) + sp.diags(1e-13 * np.where(diag > 0, diag, 1.0)))
+        j = int(np.argmin(fac.pivots() / np.where(diag > 0, diag, 1.0)))
+        raise ModelError(f"mechanism: {system.dof_label(j)} has neither mass nor a stiffness "
+                         f"that restrains it") from None
+    lam, X = sigma + 1.0 / mu[::-1], X[:, ::-1]
+    if k_low < k:
+        lam = np.r_[lam, lam_hi[k_low:k]]
+        X = np.c_[X, X_hi[:, k_low:k]]
+    return lam, X, proven
+
+
+def _direct(K, M, massless, system):
+    """All eigenpairs of ``K x = lambda M x``, massless DOFs condensed statically."""
+    z, m = np.flatnonzero(massless), np.flatnonzero(~massless)
+    if not z.size:
+        return la.eigh(K, M)
+    try:
+        cf = la.cho_factor(K[np.ix_(z, z)])
+    except la.LinAlgError:
+        j = z[int(np.argmin(np.abs(np.diag(K)[z])))]
+        raise ModelError(f"mechanism: {system.dof_label(j)} has neither mass nor a stiffness "
+                         f"that restrains it") from None
+    G = -la.cho_solve(cf, K[np.ix_(z, m)])
+    Kc = K[np.ix_(m, m)] + K[np.ix_(m, z)] @ G
+    lam, x = la.eigh(0.5 * (Kc + Kc.T), M[np.ix_(m, m)])
+    X = np.zeros((len(K), len(m)))
+    X[m], X[z] = x, G @ x
+    return lam, X
 
 
 def _shift_invert(system: System, k: int, sigma: float | None, tol: float):
@@ -243,8 +279,9 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
     autospc : bool
         Passed to :func:`fem.assembly.assemble` when a model is given.
     sigma : float, optional
-        Shift for shift-invert [rad^2/s^2]; default a small negative value
-        (:func:`default_shift`), which finds the lowest modes including rigid-body ones.
+        Shift [rad^2/s^2] (both methods work on ``K - sigma M``); default 0 when the model
+        has supports and K factorises without a tiny pivot, else a small negative value
+        (:func:`default_shift`) so that free-free models (singular K) work.
     tol : float
         ARPACK relative tolerance (0 = machine precision).
 
@@ -268,7 +305,7 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
     use_dense = method == "dense" or (method == "auto" and n <= DENSE_MAX_DOF) or k >= n - 1
     proven = False
     if use_dense:
-        lam, X = _dense(system, k)
+        lam, X, proven = _dense(system, k, sigma)
         used = "dense"
     else:
         lam, X, proven = _shift_invert(system, k, sigma, tol)
