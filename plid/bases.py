@@ -142,9 +142,9 @@ def band_frequencies(count: int, band, spacing: str = "geometric") -> np.ndarray
 
 
 def data_frequencies(u, y, fs: float, count: int, band=None, nperseg: int = 1024) -> np.ndarray:
-    """``count`` frequencies [Hz] from the data: the largest peaks of the summed output
-    power spectral density (Welch) inside ``band`` (default 2 % to 48 % of fs), topped up
-    with band-spread frequencies when there are too few peaks."""
+    """``count`` frequencies [Hz] from the data: the most prominent peaks of the summed
+    output power spectral density (Welch) inside ``band`` (default 2 % to 48 % of fs),
+    topped up with band-spread frequencies when there are too few peaks."""
     y = np.asarray(y, dtype=float)
     y = y[:, None] if y.ndim == 1 else y
     nper = int(min(nperseg, y.shape[0]))
@@ -153,8 +153,11 @@ def data_frequencies(u, y, fs: float, count: int, band=None, nperseg: int = 1024
     lo, hi = band if band is not None else (0.02 * fs, 0.48 * fs)
     keep = (f > lo) & (f < hi)
     f, P = f[keep], P[keep]
-    peaks, _ = scipy.signal.find_peaks(np.log(P + 1e-300))
-    chosen = f[peaks[np.argsort(P[peaks])[::-1][:count]]] if peaks.size else np.array([])
+    # Rank peaks by prominence in log power: the ripple of the Welch estimate on the skirt
+    # of a strong resonance makes tall but not prominent peaks.
+    peaks, props = scipy.signal.find_peaks(np.log(P + 1e-300), prominence=0.0, distance=2)
+    top = peaks[np.argsort(props["prominences"])[::-1][:count]] if peaks.size else peaks
+    chosen = f[top]
     chosen = list(np.sort(chosen))
     df = fs / nper
     for g in band_frequencies(count, (lo, hi)):
