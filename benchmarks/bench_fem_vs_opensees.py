@@ -48,9 +48,24 @@ sys.path.insert(0, str(HERE))
 from fem_models import SIZES, SMALL, opensees_env, spec_from_name  # noqa: E402
 
 N_MODES = 20
-#: OpenSeesPy settings used by the benchmark: its fastest measured combination that gives the
-#: right answer (see ``--sweep-opensees`` and benchmarks/results/fem_vs_opensees.md).
-OPENSEES_DEFAULT = {"solver": "-genBandArpack", "system": "BandSPD", "numberer": "RCM"}
+#: OpenSeesPy settings per structure kind: the fastest combination that gives the right answer,
+#: from ``--sweep-opensees`` (20 modes, ARPACK shift-invert ``-genBandArpack`` in every case;
+#: ``-fullGenLapack`` took 415 s on the 2 688-DOF lattice and ``-symmBandLapack`` solves only
+#: the standard problem K x = lambda x; ``system SparseSYM`` returned wrong frequencies).
+#: Measured under load (see benchmarks/results/fem_vs_opensees.md): boom 1.5e4: SuperLU+AMD
+#: 5.4 s, ProfileSPD+RCM (OpenSees' default) 7.4 s, Mumps 7.9 s, BandGeneral 11.7 s,
+#: BandSPD 12.5 s, UmfPack 29.9 s; lattice 2.8e4: Mumps 227 s, SuperLU+AMD 251 s,
+#: ProfileSPD and BandSPD > 300 s.
+OPENSEES_SETTINGS = {
+    "boom": {"solver": "-genBandArpack", "system": "SuperLU", "numberer": "AMD"},
+    "lattice": {"solver": "-genBandArpack", "system": "Mumps", "numberer": "RCM"},
+}
+
+
+def opensees_settings(case: str) -> dict:
+    """The OpenSeesPy settings used for ``case`` (by structure kind)."""
+    kind = SIZES.get(case, case).partition(":")[0]
+    return dict(OPENSEES_SETTINGS[kind])
 
 
 # ------------------------------------------------------------------------------ workers
@@ -72,15 +87,16 @@ def worker_trussid(case: str, n_modes: int, method: str) -> dict:
 
     base = _rss_mb()
     spec = spec_from_name(case)
-    t0 = time.perf_counter()
+    c0, t0 = time.process_time(), time.perf_counter()
     model = to_trussid(spec)
     t1 = time.perf_counter()
     system = assemble(model)
     t2 = time.perf_counter()
     modes = solve_modes(system, n_modes=n_modes, method=method)
     t3 = time.perf_counter()
-    return {"setup": t1 - t0, "assembly": t2 - t1, "modes": t3 - t2, "n_dof": int(system.n_dof),
-            "base_mb": base, "frequencies_hz": np.asarray(modes.frequencies_hz).tolist()}
+    return {"setup": t1 - t0, "assembly": t2 - t1, "modes": t3 - t2, "cpu": time.process_time() - c0,
+            "n_dof": int(system.n_dof), "base_mb": base, "method": modes.method,
+            "frequencies_hz": np.asarray(modes.frequencies_hz).tolist()}
 
 
 def worker_opensees(case: str, n_modes: int, solver: str, system: str | None, numberer: str | None) -> dict:
@@ -90,20 +106,21 @@ def worker_opensees(case: str, n_modes: int, solver: str, system: str | None, nu
 
     base = _rss_mb()
     spec = spec_from_name(case)
-    t0 = time.perf_counter()
+    c0, t0 = time.process_time(), time.perf_counter()
     build_opensees(spec, ops)
     t1 = time.perf_counter()
     f = opensees_eigen(ops, n_modes, solver, system, numberer)
     t2 = time.perf_counter()
-    return {"setup": t1 - t0, "assembly": 0.0, "modes": t2 - t1, "n_dof": spec.n_free_dof,
-            "base_mb": base, "frequencies_hz": np.sort(f).tolist()}
+    return {"setup": t1 - t0, "assembly": 0.0, "modes": t2 - t1, "cpu": time.process_time() - c0,
+            "n_dof": spec.n_free_dof, "base_mb": base, "frequencies_hz": np.sort(f).tolist()}
 
 
 def _worker_main(args) -> int:
     if args.worker == "trussid":
         out = worker_trussid(args.case, args.modes, args.method)
     else:
-        out = worker_opensees(args.case, args.modes, args.os_solver, args.os_system, args.os_numberer)
+        out = worker_opensees(args.case, args.modes, args.os_solver or "-genBandArpack",
+                              args.os_system, args.os_numberer)
     out["peak_mb_self"] = _rss_mb("VmHWM")
     print("RESULT " + json.dumps(out), flush=True)
     return 0
@@ -111,7 +128,7 @@ def _worker_main(args) -> int:
 
 # ------------------------------------------------------------------------------ driver
 def run_worker(tool: str, case: str, n_modes: int = N_MODES, timeout: float = 600.0,
-               method: str = "auto", opensees: dict | None = None) -> dict:
+               method: str = "auto", opensees: dict | None = None, blas_threads: int | None = None) -> dict:
     """Run one measurement in a fresh child process; returns its figures.
 
     The child's peak RSS comes from ``os.wait4`` on that child (its own ``ru_maxrss``), not
@@ -120,14 +137,19 @@ def run_worker(tool: str, case: str, n_modes: int = N_MODES, timeout: float = 60
     cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", tool, "--case", case,
            "--modes", str(n_modes), "--method", method]
     env = dict(os.environ)
+    o = None
     if tool == "opensees":
-        o = {**OPENSEES_DEFAULT, **(opensees or {})}
-        cmd += ["--os-solver", o["solver"]]
+        o = {**opensees_settings(case), **{k: v for k, v in (opensees or {}).items() if v}}
+        # "--opt=value": the OpenSees flags start with "-", which argparse would take for options.
+        cmd += [f"--os-solver={o['solver']}"]
         if o.get("system"):
-            cmd += ["--os-system", o["system"]]
+            cmd += [f"--os-system={o['system']}"]
         if o.get("numberer"):
-            cmd += ["--os-numberer", o["numberer"]]
+            cmd += [f"--os-numberer={o['numberer']}"]
         env = opensees_env()
+    if blas_threads:
+        # OpenBLAS (numpy/scipy) and OpenMP (OpenSees' MUMPS) thread pools.
+        env.update(OPENBLAS_NUM_THREADS=str(blas_threads), OMP_NUM_THREADS=str(blas_threads))
     load_before = os.getloadavg()[0]
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         t0 = time.perf_counter()
@@ -148,7 +170,7 @@ def run_worker(tool: str, case: str, n_modes: int = N_MODES, timeout: float = 60
         out.seek(0)
         err.seek(0)
         stdout, stderr = out.read(), err.read()
-    result = {"tool": tool, "case": case, "wall": wall, "peak_mb": usage.ru_maxrss / 1024.0,
+    result = {"tool": tool, "case": case, "wall": wall, "blas_threads": blas_threads, "settings": o, "peak_mb": usage.ru_maxrss / 1024.0,
               "load_before": load_before, "load_after": os.getloadavg()[0]}
     lines = [ln for ln in stdout.splitlines() if ln.startswith("RESULT ")]
     if timed_out:
@@ -203,18 +225,20 @@ def markdown(results: dict, info: dict) -> str:
         f"{info['loadavg'][0]:.2f}/{info['loadavg'][1]:.2f}/{info['loadavg'][2]:.2f}; Python {info['python']}, "
         f"numpy {info['numpy']}, scipy {info['scipy']}; {info['date_utc']}.",
         "",
-        "| structure | DOF | tool | setup s | assembly s | modes s | assembly+modes s | total s | peak MB (base) | runs: totals s | load 1-min |",
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---|---:|",
+        "| structure | DOF | tool | setup s | assembly s | modes s | assembly+modes s | total s | CPU s | peak MB (base) | runs: totals s | load 1-min |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|---:|",
     ]
     for case, per_tool in results.items():
         for tool, r in per_tool.items():
+            if r.get("settings"):
+                tool = f"{tool} ({r['settings']['system']}, {r['settings']['numberer']})"
             if r["status"] != "ok":
-                lines.append(f"| {case} | {r.get('n_dof', '')} | {tool} | | | | | {r['status']} | {r['peak_mb']:.0f} | | {r['load_before']:.2f} |")
+                lines.append(f"| {case} | {r.get('n_dof', '')} | {tool} | | | | | {r['status']} | | {r['peak_mb']:.0f} | | {r['load_before']:.2f} |")
                 continue
-            asm = "(in eigen)" if tool == "opensees" else _fmt(r["assembly"])
+            asm = "(in eigen)" if tool.startswith("opensees") else _fmt(r["assembly"])
             lines.append(
                 f"| {case} | {r['n_dof']} | {tool} | {_fmt(r['setup'])} | {asm} | {_fmt(r['modes'])} | "
-                f"{_fmt(r['assembly'] + r['modes'])} | {_fmt(r['total'])} | {r['peak_mb']:.0f} ({r['base_mb']:.0f}) | "
+                f"{_fmt(r['assembly'] + r['modes'])} | {_fmt(r['total'])} | {_fmt(r['cpu'])} | {r['peak_mb']:.0f} ({r['base_mb']:.0f}) | "
                 f"{', '.join(map(str, r['totals']))} | {r['load_before']:.2f} |")
         t, o = per_tool.get("trussid"), per_tool.get("opensees")
         if t and o and t["status"] == "ok" and o["status"] == "ok":
@@ -223,7 +247,7 @@ def markdown(results: dict, info: dict) -> str:
             dev = np.max(np.abs(ft[:k] - fo[:k]) / fo[:k])
             lines.append(
                 f"| {case} | | **OpenSees / trussid** | {o['setup'] / t['setup']:.1f}x | | | "
-                f"**{o['modes'] / (t['assembly'] + t['modes']):.1f}x** | **{o['total'] / t['total']:.1f}x** | "
+                f"**{o['modes'] / (t['assembly'] + t['modes']):.1f}x** | **{o['total'] / t['total']:.1f}x** | {o['cpu'] / t['cpu']:.1f}x | "
                 f"{o['peak_mb'] / t['peak_mb']:.2f}x | max rel. freq. diff {dev:.1e} | |")
     return "\n".join(lines)
 
@@ -254,6 +278,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--tools", default="trussid,opensees")
     p.add_argument("--timeout", type=float, default=600.0, help="per run [s]")
     p.add_argument("--json", default=None, help="also write all runs to this JSON file")
+    p.add_argument("--blas-threads", type=int, default=None,
+                   help="set OPENBLAS_NUM_THREADS and OMP_NUM_THREADS in both tools' processes")
     p.add_argument("--sweep-opensees", default=None, metavar="CASE",
                    help="time OpenSeesPy's linear-system/numberer options on CASE and exit")
     # worker mode (internal)
@@ -261,9 +287,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--case", help=argparse.SUPPRESS)
     p.add_argument("--modes", type=int, default=N_MODES, help=argparse.SUPPRESS)
     p.add_argument("--method", default="auto", help="trussid solve_modes method")
-    p.add_argument("--os-solver", default=OPENSEES_DEFAULT["solver"])
-    p.add_argument("--os-system", default=OPENSEES_DEFAULT["system"])
-    p.add_argument("--os-numberer", default=OPENSEES_DEFAULT["numberer"])
+    p.add_argument("--os-solver", default=None, help="OpenSees eigen solver flag (default: by structure)")
+    p.add_argument("--os-system", default=None, help="OpenSees system (default: by structure)")
+    p.add_argument("--os-numberer", default=None, help="OpenSees numberer (default: by structure)")
     args = p.parse_args(argv)
 
     if args.worker:
@@ -285,7 +311,8 @@ def main(argv: list[str] | None = None) -> int:
         for tool in tools:
             runs = []
             for i in range(args.repeat):
-                r = run_worker(tool, case, timeout=args.timeout, method=args.method, opensees=opensees)
+                r = run_worker(tool, case, timeout=args.timeout, method=args.method, opensees=opensees,
+                               blas_threads=args.blas_threads)
                 runs.append(r)
                 print(f"# {case} {tool} run {i + 1}: {r['status']} "
                       f"total {r.get('total', float('nan')):.2f} s, wall {r['wall']:.2f} s, "
