@@ -127,5 +127,6 @@ def run(args) -> int:
         render.render_mode(loaded.model, modes, args.mode, out,
                            **({"window_size": size} if size else {}), **common)
     f = float(modes.frequencies_hz[args.mode - 1])
-    print(f"wrote {out}: mode {args.mode} ({f:.6g} Hz) of {loaded.source}")
+    label = f", {labels[args.mode - 1]}" if labels is not None and len(labels) >= args.mode else ""
+    print(f"wrote {out}: mode {args.mode} ({f:.6g} Hz{label}) of {loaded.source}")
     return 0
