@@ -17,6 +17,15 @@ with ``VTK_DEFAULT_OPENGL_WINDOW``, the render functions create VTK's OSMesa win
 ``bad X server connection`` without a display) before falling back to EGL.
 
 Mode numbers are 1-based throughout (mode 1 is the lowest), as on the command line.
+
+Pieces, each usable alone:
+
+- :func:`mode_scene` builds the deformable geometry of a mode (no rendering): tests read
+  the colours (``"displacement / max"``) and the deflections off its meshes.
+- :func:`render_mode`, :func:`render_mode_gif`, :func:`render_mode_grid` draw it.
+- :class:`Decoration`, :func:`decorations_from_solids` and :func:`testbed_decorations`
+  attach solids to nodes; a model builder can hand any list of
+  ``Decoration(mesh, colour, node)`` to the render functions.
 """
 
 from __future__ import annotations
