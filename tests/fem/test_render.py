@@ -553,12 +553,28 @@ def test_cli_renders_png_and_gif(deck, tmp_path, capsys):
     assert "mode 2" in capsys.readouterr().out
 
 
+def test_cli_grid_writes_one_png_of_the_first_modes(deck, tmp_path, capsys):
+    out = tmp_path / "grid.png"
+    assert cli_main(["render", str(deck), "--grid", "3", "--out", str(out), "--size", "300x100"]) == 0
+    from PIL import Image
+
+    with Image.open(out) as im:
+        assert im.size == (300, 100)
+    assert "modes 1 to 3" in capsys.readouterr().out
+    assert cli_main(["render", str(deck), "--grid", "3", "--out", str(tmp_path / "grid.gif")]) == 2
+    assert "--grid draws a still image" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("args, message", [
     (["--mode", "0"], "--mode 0: mode numbers start at 1"),
     (["--mode", "-3"], "--mode -3: mode numbers start at 1"),
     (["--mode", "19"], "--mode 19 is out of range: the model has 18 modes (18 free DOF); valid mode numbers are 1 to 18"),
     (["--grid", "0"], "--grid 0: must be at least 1"),
     (["--size", "big"], "--size 'big': expected WIDTHxHEIGHT"),
+    (["--size", "8x8"], "window size 8x8 is out of range"),
+    (["--grid", "19"], "--grid 19: only the model has 18 modes"),
+    (["--amplitude", "-0.1"], "amplitude must be a finite number >= 0"),
+    (["--scale", "nan"], "scale must be a finite number >= 0"),
 ])
 def test_cli_bad_mode_number_is_a_one_line_error(deck, tmp_path, capsys, args, message):
     out = tmp_path / "x.png"
