@@ -189,29 +189,52 @@ def _direct(K, M, massless, system):
 
 
 def _shift_invert(system: System, k: int, sigma: float | None, tol: float):
-    """Lowest ``k`` eigenpairs by ARPACK shift-invert; also returns whether ``K`` was
-    proven positive definite (factorised at ``sigma = 0`` without a tiny pivot)."""
-    K, M = system.K, system.M
-    fac, proven = None, False
+    """Lowest ``k`` eigenpairs by ARPACK shift-invert; returns ``(lambda, X, proven)``,
+    ``proven`` when K was shown positive definite (no tiny pivot)."""
+    K = system.K
     if sigma is None and system.has_supports:
-        # A supported model should have a positive definite K: factorising it at sigma = 0
-        # gives the best-separated spectrum and doubles as NASTRAN's MAXRATIO mechanism test.
-        ok, _ = factor_stiffness(system)
-        if ok is not None:
-            fac, proven = ok, True
-            sigma = 0.0
-    if fac is None:
-        if sigma is None:
-            sigma = -default_shift(system)
+        # A supported model should have a positive definite K: shifting at 0 gives the
+        # best-separated inverted spectrum. Whether K really is definite is only checked
+        # (from the factor's pivots, which cost a copy of U) if near-zero modes show up.
         try:
-            fac = SPDFactor((K - sigma * M).tocsc())
-        except RuntimeError as exc:  # exactly singular: only possible for sigma >= 0
-            raise ModelError(f"K - sigma M is singular at sigma={sigma:g}: {exc}") from None
-    op = sla.LinearOperator(K.shape, matvec=fac.solve, dtype=float)
-    v0 = np.random.default_rng(0).standard_normal(K.shape[0])  # reproducible start
-    lam, x = sla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0, tol=tol)
+            fac = SPDFactor(K.tocsc())
+        except RuntimeError:  # exactly singular: a mechanism or free rigid-body motion
+            fac = None
+        if fac is not None:
+            try:
+                lam, X = _arpack(system, k, 0.0, fac, tol)
+            except sla.ArpackError:  # a nearly singular K can break the Lanczos process
+                lam = X = None
+        if fac is not None and lam is not None:
+            if not (lam < ZERO_EIGENVALUE * eigenvalue_scale(system)).any():
+                return lam, X, True
+            diag = K.diagonal()
+            if not (fac.pivots() / np.where(diag > 0, diag, 1.0) < SINGULAR_PIVOT).any():
+                return lam, X, True
+            # Nearly singular: redo with a negative shift for accurate flexible modes; the
+            # zero-frequency modes are then checked for rigid-body motion or a mechanism.
+    if sigma is None:
+        sigma = -default_shift(system)
+    try:
+        fac = SPDFactor((K - sigma * system.M).tocsc())
+    except RuntimeError as exc:  # exactly singular: only possible for sigma >= 0
+        raise ModelError(f"K - sigma M is singular at sigma={sigma:g}: {exc}") from None
+    lam, X = _arpack(system, k, sigma, fac, tol)
+    return lam, X, False
+
+
+def _arpack(system: System, k: int, sigma: float, fac: "SPDFactor", tol: float):
+    op = sla.LinearOperator(system.K.shape, matvec=fac.solve, dtype=float)
+    v0 = np.random.default_rng(0).standard_normal(system.n_dof)  # reproducible start
+    # The Krylov space of (K - sigma M)^-1 M cannot exceed the rank of M: massless DOFs
+    # (lumped rotations, rod nodes) would otherwise break ARPACK's default subspace size.
+    n_mass = int((~_massless(system.M, system.dofs)).sum())
+    k = min(k, n_mass - 1)
+    ncv = min(n_mass, max(2 * k + 1, 20))
+    lam, x = sla.eigsh(system.K, k=k, M=system.M, sigma=sigma, which="LM", OPinv=op, v0=v0, tol=tol,
+                       ncv=ncv)
     order = np.argsort(lam)
-    return lam[order], x[:, order], proven
+    return lam[order], x[:, order]
 
 
 #: A factorisation pivot below this fraction of its diagonal entry means K is singular

@@ -135,7 +135,8 @@ def test_free_dof_without_stiffness_is_a_mechanism_naming_node_and_component():
         assemble(m)
 
 
-def test_zero_energy_direction_off_the_axes_is_a_mechanism():
+@pytest.mark.parametrize("method", ["dense", "sparse"])
+def test_zero_energy_direction_off_the_axes_is_a_mechanism(method):
     """A rod along a skew direction: the two transverse directions at its free node have
     non-zero diagonal stiffness in global axes but no stiffness at all: found by the
     factorisation's pivots."""
@@ -145,27 +146,47 @@ def test_zero_energy_direction_off_the_axes_is_a_mechanism():
     m.add_point_masses([7], 0.5)
     m.add_springs([1], [7], [0, 0, 0, 1.0, 1.0, 1.0])
     with pytest.raises(ModelError, match=r"mechanism: node 7 u[xyz] has no stiffness"):
-        solve_modes(m, 4)
+        solve_modes(m, 4, method=method)
     with pytest.raises(ModelError, match=r"singular at node 7 u[xyz]"):
         solve_static(m, np.zeros(m.n_dof))
 
 
-def test_dof_with_neither_mass_nor_stiffness_is_an_error_unless_autospc():
-    """Nodes joined only by rods have rotations with no stiffness and no mass."""
+def rod_triangle(J):
     m = Model()
     m.add_nodes([1, 2, 3], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
-    m.add_beams([1, 2, 3], [[1, 2], [2, 3], [3, 1]], TUBE, ALUMINIUM, orient=[0, 0, 1], rod=True)
+    sec = dict(A=TUBE.A, Iy=TUBE.Iy, Iz=TUBE.Iz, J=J, Asy=np.inf, Asz=np.inf)
+    m.add_beams([1, 2, 3], [[1, 2], [2, 3], [3, 1]], sec, ALUMINIUM, orient=[0, 0, 1], rod=True)
     m.fix([1, 3], "123")
     m.fix(2, "3")
-    with pytest.raises(ModelError, match=r"mechanism: node 1 rz has no stiffness .*AUTOSPC"):
+    return m
+
+
+def test_dof_with_neither_mass_nor_stiffness_is_an_error_unless_autospc():
+    """Nodes joined only by rods without torsion (J = 0): rotations have no stiffness and
+    no mass. AUTOSPC removes them; node 2 then vibrates in x and y on two rods."""
+    m = rod_triangle(J=0.0)
+    with pytest.raises(ModelError, match=r"mechanism: node 1 rx has no stiffness .*AUTOSPC"):
         assemble(m)
     s = assemble(m, autospc=True)
-    # The rods lie in the x-y plane: rz has neither stiffness nor mass at every node, while
-    # rx and ry carry the rods' torsion (J > 0) and stay (massless).
+    assert s.autospc == [(n, c) for n in (1, 2, 3) for c in ("rx", "ry", "rz")]
+    assert s.n_dof == 2
+    # Hand-derived: rod 1-2 along x (k = EA/L), rod 2-3 at 135 deg (k = EA/(L sqrt 2));
+    # consistent rod mass of the two rods at node 2 (each rho A L / 3 on the free node).
+    EA, L2 = ALUMINIUM.E * TUBE.A, np.sqrt(2.0)
+    e = np.array([-1.0, 1.0]) / L2
+    K = EA / 1.0 * np.diag([1.0, 0.0]) + EA / L2 * np.outer(e, e)
+    mass = ALUMINIUM.rho * TUBE.A * (1.0 + L2) / 3.0
+    expected = np.sqrt(np.linalg.eigvalsh(K) / mass) / (2 * np.pi)
+    assert np.allclose(solve_modes(s, 2).frequencies_hz, expected, rtol=1e-12)
+
+
+def test_floating_massless_rotations_of_a_rod_truss_are_named():
+    """With J > 0 in-plane rods' torsion ties node rotations to each other but not to
+    the ground: rz is removed by AUTOSPC, the rx-ry set still floats without mass."""
+    s = assemble(rod_triangle(J=TUBE.J), autospc=True)
     assert s.autospc == [(1, "rz"), (2, "rz"), (3, "rz")]
-    assert s.n_dof == 8  # node 2: ux, uy, rx, ry; nodes 1 and 3: rx, ry
-    modes = solve_modes(s, 2)
-    assert np.all(modes.frequencies_hz > 0)
+    with pytest.raises(ModelError, match=r"mechanism: node \d r[xy] has neither mass nor a stiffness"):
+        solve_modes(s, 2)
 
 
 def test_slave_that_is_also_supported_is_named():
