@@ -173,6 +173,21 @@ def test_a_decoration_follows_its_node_rigid_motion(tri):
     np.testing.assert_allclose(mesh.points, expected, rtol=0, atol=1e-12)
 
 
+def test_mode_shapes_are_matched_to_nodes_by_id_not_position(tri, rng):
+    model, _, modes = tri
+    perm = rng.permutation(model.n_nodes)
+    shuffled = SimpleNamespace(
+        shapes_full=modes.shapes_full.reshape(model.n_nodes, 6, -1)[perm].reshape(6 * model.n_nodes, -1),
+        frequencies_hz=modes.frequencies_hz, node_ids=model.node_ids[perm])
+    a = render.mode_scene(model, modes, 2).meshes()["beams"]
+    b = render.mode_scene(model, shuffled, 2).meshes()["beams"]
+    np.testing.assert_array_equal(a.points, b.points)
+    missing = SimpleNamespace(shapes_full=modes.shapes_full[6:], frequencies_hz=modes.frequencies_hz,
+                              node_ids=model.node_ids[1:])
+    with pytest.raises(render.RenderError, match=f"node {model.node_ids[0]} of the model has no entry"):
+        render.mode_scene(model, missing, 2)
+
+
 # ----------------------------------------------------------------------------- acceptance 1
 def test_png_has_the_requested_size_and_is_not_uniform(tri, tmp_path):
     model, _, modes = tri
