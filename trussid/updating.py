@@ -1,0 +1,824 @@
+"""FE model updating: the six strut wall thicknesses (and modal damping) from identified modes.
+
+Composition layer over :mod:`fem` (the testbed model, its wall basis and analytic wall
+sensitivities), :mod:`geometry` (the testbed parameters) and :mod:`plid` (the grey-box
+least-squares machinery and the identified models)::
+
+    measured modes (f, zeta, shapes at sensors)  ---pairing--->  model modes at walls t
+    residual r_i = (f_model,pair(i)(t) - f_i) / sigma_i ,  Jacobian d f / d t  (fem.sensitivity)
+    plid.greybox.fit_parameters(r, walls, bounds, jac)  ->  walls, intervals, identifiability
+
+Which modes carry wall information
+----------------------------------
+A strut's first bending pair (two planes, nearly equal frequencies) depends almost only on
+that strut's wall (``d ln f / d ln t`` about 0.14 to 0.31), so the 12 bending modes fix the
+six walls *as a set*: geometrically the six struts are equivalent, and swapping two walls
+leaves the bending frequencies nearly unchanged. Which wall belongs to which strut is told by
+(a) mode shapes (a sensor on each strut: MAC pairing), or (b) the UDF rigid-body modes,
+which depend on the struts' axial stiffness with a different weight per strut. With
+frequencies alone, include the UDF modes; the global search below then finds the assignment.
+
+Pairing measured to model modes
+-------------------------------
+The bending modes lie close together and reorder when walls change, so pairing is redone at
+every evaluation of the residual (a linear assignment, :func:`pair_modes`), by frequency
+distance and, when identified shapes at known sensors are given, by MAC. Before fitting,
+measured modes that no model mode can reach are dropped: model mode ``j`` may move by about
+``|df_j/dt| * prior_range * t`` (sensitivity-aware gate) within the prior wall range.
+
+Two stages (why: an eigen-solution of the full 372-DOF model costs ~0.1-0.4 s, too much for
+a global search):
+
+1. *Global*, on a Ritz-reduced model (the nominal model's lowest modes as a basis, carried
+   as a :class:`fem.testbed.WallBasis` so that :func:`fem.testbed.wall_modes` and
+   :func:`fem.sensitivity.eigenvalue_sensitivities` apply unchanged; frequency error about
+   3e-5 relative for walls within +-15 %): :func:`plid.greybox.fit_parameters` with its
+   seeded multi-start over the prior box ``nominal * (1 +- prior_range)``.
+2. *Local*, on the full model, from the stage-1 estimate, within the physical bounds: the
+   estimate, the identifiability analysis and the intervals.
+
+Intervals
+---------
+With measured-frequency standard deviations ``frequency_std_hz`` (e.g. from the scatter of
+identifications on separate records, :func:`modes_from_data`), the residuals are in units
+of sigma, and the walls' covariance is ``(J^T J)^-1`` in ``ln t`` (known-sigma, normal
+quantile), inflated by the Birge ratio ``sqrt(chi2 / dof)`` when the fit is worse than the
+stated sigmas explain. Without them, residuals are relative frequency errors and the
+intervals are :mod:`plid.greybox`'s (from the residual scatter).
+
+Damping: the model's damping is one modal ratio (``Testbed.damping.modal_ratio``); it does
+not depend on the walls, so its estimate is the (inverse-variance weighted) mean of the
+paired modes' identified damping ratios, with a t-interval from their scatter or, when
+larger, from the stated standard deviations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.linalg as la
+import scipy.optimize
+import scipy.stats
+
+from trussid.errors import UserError
+
+__all__ = [
+    "UpdateError",
+    "IdentifiedModes",
+    "UpdateReport",
+    "reduced_wall_basis",
+    "model_modes",
+    "pair_modes",
+    "modes_of_model",
+    "modes_from_data",
+    "update_walls",
+    "WALL_NAMES",
+]
+
+#: Parameter names of the six walls (strut numbering of :mod:`fem.testbed`, 0..5).
+WALL_NAMES = tuple(f"wall{i}" for i in range(6))
+#: Default physical bounds on each wall, as multiples of its nominal value.
+DEFAULT_BOUNDS = (0.5, 1.5)
+#: A wall never gets closer than this fraction of the outer radius to 0 or to the radius.
+RADIUS_MARGIN = 0.02
+
+
+class UpdateError(UserError):
+    """Bad input to model updating (the message names the offending item)."""
+
+
+# --------------------------------------------------------------------------- data
+
+
+@dataclass(frozen=True)
+class IdentifiedModes:
+    """Modes extracted from an identified model (or given by the user).
+
+    Attributes
+    ----------
+    frequencies_hz : (k,) float
+        Natural frequencies [Hz], ascending.
+    damping : (k,) float
+        Damping ratios [-].
+    shapes : (p, k) complex or None
+        Mode shapes at the model's outputs (``C v``), unit norm.
+    strength : (k,) float
+        Peak modal contribution ``|C v| |w^H B| / |Re s|`` (largest singular value of the
+        mode's residue over its half-power bandwidth), to tell real modes from noise modes.
+    frequency_std_hz, damping_std : (k,) float or None
+        Standard deviations of the estimates.
+    output_names : tuple of str
+    """
+
+    frequencies_hz: np.ndarray
+    damping: np.ndarray
+    shapes: np.ndarray | None = None
+    strength: np.ndarray | None = None
+    frequency_std_hz: np.ndarray | None = None
+    damping_std: np.ndarray | None = None
+    output_names: tuple = ()
+
+    def select(self, idx) -> "IdentifiedModes":
+        """The modes at indices ``idx``."""
+        idx = np.asarray(idx, dtype=int)
+
+        def pick(a, axis=0):
+            return None if a is None else np.take(a, idx, axis=axis)
+
+        return IdentifiedModes(self.frequencies_hz[idx], self.damping[idx], pick(self.shapes, 1),
+                               pick(self.strength), pick(self.frequency_std_hz), pick(self.damping_std),
+                               self.output_names)
+
+
+@dataclass
+class UpdateReport:
+    """Result of :func:`update_walls`.
+
+    Attributes
+    ----------
+    walls, nominal : (6,) float
+        Updated and nominal wall thicknesses [m].
+    intervals : (6, 2) float
+        ``confidence`` intervals [m]; NaN where none (wall on a bound, undetermined).
+    std_log : (6,) float
+        Standard error of ``ln t`` (NaN where none).
+    interval_source : str
+        ``"known sigma"`` (from ``frequency_std_hz``) or ``"residual scatter"``.
+    measured_hz : (k,) float
+        All measured frequencies given.
+    used : (k,) bool
+        Measured modes paired with a model mode (the others could not be reached).
+    pairing : (k,) int
+        Index (ascending order, at the updated walls) of the paired model mode; -1 unused.
+    model_hz : (k,) float
+        Paired model frequencies at the updated walls (NaN unused).
+    nominal_hz : (k,) float
+        Paired model frequencies at the nominal walls (NaN unused).
+    labels : list of str
+        Labels of the paired model modes (:func:`fem.labels.label_testbed_modes`), "" unused.
+    mac : (k,) float or None
+        MAC of each pair when shapes were given.
+    chi2, dof, birge : float, int, float
+        ``sum r^2`` at the estimate (residuals in sigma units, or relative without sigma),
+        degrees of freedom, ``sqrt(chi2 / dof)``.
+    damping, damping_interval : float or None, (2,) or None
+        Modal damping estimate and its interval.
+    greybox : plid.greybox.GreyboxReport
+        Stage-2 fit (full model).
+    coarse : plid.greybox.GreyboxReport
+        Stage-1 fit (reduced model, multi-start).
+    confidence : float
+    """
+
+    walls: np.ndarray
+    nominal: np.ndarray
+    intervals: np.ndarray
+    std_log: np.ndarray
+    interval_source: str
+    measured_hz: np.ndarray
+    used: np.ndarray
+    pairing: np.ndarray
+    model_hz: np.ndarray
+    nominal_hz: np.ndarray
+    labels: list
+    mac: np.ndarray | None
+    chi2: float
+    dof: int
+    birge: float
+    damping: float | None
+    damping_interval: tuple | None
+    greybox: object
+    coarse: object
+    confidence: float = 0.95
+    info: dict = field(default_factory=dict)
+
+    def covers(self, truth) -> np.ndarray:
+        """Whether each interval contains ``truth`` (False where there is none)."""
+        t = np.asarray(truth, float)
+        lo, hi = self.intervals[:, 0], self.intervals[:, 1]
+        return np.isfinite(lo) & (lo <= t) & (t <= hi)
+
+    def table(self, truth=None) -> str:
+        """Walls (in inches and relative to nominal) and the mode pairs, as text."""
+        inch = 0.0254
+        pct = f"{100 * self.confidence:g} %"
+        head = f"{'strut':>5} {'nominal [in]':>13} {'updated [in]':>13} {pct + ' interval [in]':>26}"
+        if truth is not None:
+            head += f" {'true [in]':>11} {'error':>9} {'covered':>8}"
+        lines = [f"walls ({self.interval_source} intervals)", head]
+        for i in range(6):
+            lo, hi = self.intervals[i]
+            iv = f"[{lo / inch:.5f}, {hi / inch:.5f}]" if np.isfinite(lo) else "-"
+            row = f"{i:>5} {self.nominal[i] / inch:>13.5f} {self.walls[i] / inch:>13.5f} {iv:>26}"
+            if truth is not None:
+                t = float(np.asarray(truth)[i])
+                row += (f" {t / inch:>11.5f} {100 * (self.walls[i] / t - 1):>8.3f}%"
+                        f" {'yes' if self.covers(truth)[i] else 'NO':>8}")
+            lines.append(row)
+        lines.append("")
+        lines.append(f"{'mode':>4} {'measured [Hz]':>14} {'nominal [Hz]':>13} {'updated [Hz]':>13}"
+                     f"{'  MAC' if self.mac is not None else ''}  model mode")
+        for k in range(len(self.measured_hz)):
+            if not self.used[k]:
+                lines.append(f"{k:>4} {self.measured_hz[k]:>14.4f} {'-':>13} {'-':>13}  not paired")
+                continue
+            mac = f" {self.mac[k]:.3f}" if self.mac is not None else ""
+            lines.append(f"{k:>4} {self.measured_hz[k]:>14.4f} {self.nominal_hz[k]:>13.4f} "
+                         f"{self.model_hz[k]:>13.4f}{mac}  {self.labels[k]}")
+        lines.append(f"chi2 {self.chi2:.4g} on {self.dof} dof (Birge ratio {self.birge:.3g})")
+        if self.damping is not None:
+            iv = self.damping_interval
+            lines.append(f"modal damping {100 * self.damping:.4f} % "
+                         f"[{100 * iv[0]:.4f}, {100 * iv[1]:.4f}] %")
+        und = getattr(self.greybox, "undetermined", ())
+        if und:
+            lines.append("NOT determined by these modes: " + "; ".join(c.name for c in und))
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary."""
+        def fl(a):
+            return [None if not np.isfinite(v) else float(v) for v in np.ravel(a)]
+
+        return {
+            "walls": fl(self.walls), "nominal": fl(self.nominal),
+            "intervals": [fl(r) for r in self.intervals], "interval_source": self.interval_source,
+            "measured_hz": fl(self.measured_hz), "used": [bool(u) for u in self.used],
+            "pairing": [int(p) for p in self.pairing], "model_hz": fl(self.model_hz),
+            "labels": list(self.labels), "chi2": self.chi2, "dof": self.dof, "birge": self.birge,
+            "damping": self.damping,
+            "damping_interval": None if self.damping_interval is None else list(self.damping_interval),
+            "undetermined": [c.name for c in getattr(self.greybox, "undetermined", ())],
+        }
+
+
+# --------------------------------------------------------------------------- model side
+
+
+def reduced_wall_basis(basis, n_vectors: int = 60):
+    """A Ritz-reduced copy of a :class:`fem.testbed.WallBasis`.
+
+    The reduced DOFs are the amplitudes of the nominal model's lowest ``n_vectors`` modes
+    ``V``; every matrix of the basis is projected, ``V^T B V``, and stored densely (the
+    pattern is all ``(r, c)``), so the public :func:`fem.testbed.wall_modes` and
+    :func:`fem.sensitivity.eigenvalue_sensitivities` work on it unchanged. The basis stays
+    affine in the tube properties, hence exact in how the walls enter; its only error is
+    the Ritz error of the fixed subspace (about 3e-5 relative on the lowest 36 modes for
+    walls within +-15 % of nominal).
+
+    Returns
+    -------
+    reduced : fem.testbed.WallBasis
+    V : (n, n_vectors) float
+        The projection (reduced shapes ``q`` expand to ``V q``).
+    """
+    from fem.testbed import wall_matrices
+
+    k = min(int(n_vectors), basis.n)
+    K, M = wall_matrices(basis, basis.walls_ref)
+    _, V = la.eigh(K, M, subset_by_index=[0, k - 1], driver="gvx", check_finite=False)
+
+    def proj(data):
+        return (V.T @ (basis.sparse(data) @ V)).ravel()
+
+    rr, cc = np.divmod(np.arange(k * k), k)
+    reduced = replace(
+        basis, n=k, rows=rr, cols=cc, K_ref=proj(basis.K_ref), M_ref=proj(basis.M_ref),
+        KA=np.array([proj(d) for d in basis.KA]), KI=np.array([proj(d) for d in basis.KI]),
+        MA=np.array([proj(d) for d in basis.MA]), MI=np.array([proj(d) for d in basis.MI]),
+    )
+    return reduced, V
+
+
+class _ModelModes:
+    """Frequencies, wall sensitivities and sensor shapes of a (full or reduced) wall basis,
+    with a one-entry cache (the residual and its Jacobian ask at the same walls)."""
+
+    def __init__(self, basis, n_modes: int, sensor_rows: np.ndarray | None):
+        self.basis, self.n_modes, self.rows = basis, n_modes, sensor_rows
+        self._key, self._val = None, None
+        self.evaluations = 0
+
+    def __call__(self, walls):
+        from fem.sensitivity import eigenvalue_sensitivities
+        from fem.testbed import wall_modes
+
+        w = np.asarray(walls, float)
+        key = w.tobytes()
+        if key != self._key:
+            f, X = wall_modes(self.basis, w, self.n_modes)
+            lam = (2 * np.pi * f) ** 2
+            dfdt = eigenvalue_sensitivities(self.basis, w, lam, X) / (8 * np.pi**2 * np.maximum(f, 1e-300))[:, None]
+            shapes = None if self.rows is None else self.rows @ X
+            self._key, self._val = key, (f, dfdt, shapes)
+            self.evaluations += 1
+        return self._val
+
+
+def model_modes(tbm, walls, n_modes: int = 40):
+    """Frequencies [Hz] and ``d f / d t`` [Hz/m] of a testbed model at ``walls`` (full model).
+
+    A thin convenience over :func:`fem.testbed.wall_modes` and
+    :func:`fem.sensitivity.eigenvalue_sensitivities`.
+    """
+    from fem.testbed import wall_basis
+
+    f, dfdt, _ = _ModelModes(wall_basis(tbm), n_modes, None)(walls)
+    return f, dfdt
+
+
+def _mac(measured: np.ndarray, model: np.ndarray) -> np.ndarray:
+    """MAC between complex measured shapes (p, k) and real model shapes (p, n)."""
+    num = np.abs(measured.conj().T @ model) ** 2
+    den = np.outer(np.sum(np.abs(measured) ** 2, axis=0), np.sum(model**2, axis=0))
+    return np.divide(num, den, out=np.zeros_like(num), where=den > 0)
+
+
+def pair_modes(measured_hz, model_hz, *, scale_hz=None, mac=None, mac_weight: float = 1.0,
+               allowed=None) -> np.ndarray:
+    """Pair each measured mode with a distinct model mode (linear assignment).
+
+    Cost of a pair: ``|f_i - F_j| / scale_i`` (default ``scale_i = f_i``: relative distance)
+    plus ``mac_weight * (1 - MAC_ij)`` when ``mac`` is given. Pairs outside ``allowed`` are
+    never chosen.
+
+    Parameters
+    ----------
+    measured_hz : (k,) float
+    model_hz : (n,) float
+    scale_hz : (k,) or (k, n) float, optional
+    mac : (k, n) float, optional
+    mac_weight : float
+    allowed : (k, n) bool, optional
+
+    Returns
+    -------
+    (k,) int
+        Model index paired with each measured mode, -1 when no allowed model mode is left.
+    """
+    f = np.asarray(measured_hz, float)
+    F = np.asarray(model_hz, float)
+    scale = f[:, None] if scale_hz is None else np.asarray(scale_hz, float)
+    if scale.ndim == 1:
+        scale = scale[:, None]
+    cost = np.abs(f[:, None] - F[None, :]) / scale
+    if mac is not None:
+        cost = cost + mac_weight * (1.0 - np.asarray(mac, float))
+    big = 1e6 + 10 * float(np.max(cost[np.isfinite(cost)], initial=0.0))
+    if allowed is not None:
+        cost = np.where(allowed, cost, big)
+    rows, cols = scipy.optimize.linear_sum_assignment(cost)
+    out = np.full(f.size, -1)
+    ok = cost[rows, cols] < big
+    out[rows[ok]] = cols[ok]
+    return out
+
+
+# --------------------------------------------------------------------------- identified side
+
+
+def modes_of_model(sys, band=None, *, max_damping: float = 0.2) -> IdentifiedModes:
+    """Modes of an identified (discrete or continuous) ``control.StateSpace``.
+
+    One mode per complex-conjugate pole pair with a positive imaginary part; frequency
+    ``|s| / 2 pi`` and damping ``-Re s / |s|`` with ``s = ln z / dt`` for a discrete model;
+    shape ``C v`` (unit norm) at the outputs; strength ``|C v| |w^H B| / |Re s|``.
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+    band : (low, high) Hz, optional
+        Keep modes with frequencies in this band.
+    max_damping : float
+        Drop modes more damped than this (noise and filter poles).
+    """
+    import control
+
+    A = np.asarray(sys.A, float)
+    B = np.asarray(sys.B, float)
+    C = np.asarray(sys.C, float)
+    if A.shape[0] == 0:
+        raise UpdateError("the identified model has no states")
+    lam, W, V = la.eig(A, left=True, right=True)
+    keep = lam.imag > 1e-12 * np.maximum(np.abs(lam), 1e-300)
+    lam, W, V = lam[keep], W[:, keep], V[:, keep]
+    if control.isdtime(sys, strict=True):
+        s = np.log(lam.astype(complex)) / sys.dt
+    else:
+        s = lam.astype(complex)
+    wn = np.abs(s)
+    f = wn / (2 * np.pi)
+    z = -s.real / np.maximum(wn, 1e-300)
+    sel = (z < max_damping) & (z > -1.0)
+    if band is not None:
+        sel &= (f >= band[0]) & (f <= band[1])
+    cv = C @ V
+    wb = W.conj().T @ B / np.sum(W.conj() * V, axis=0)[:, None]  # left vectors scaled: w^H v = 1
+    # the mode's residue C v w^H B, here with discrete poles; at its peak the continuous
+    # contribution is about residue / (dt |Re s|) -- only the ranking matters
+    strength = np.linalg.norm(cv, axis=0) * np.linalg.norm(wb, axis=1) / np.maximum(np.abs(s.real), 1e-300)
+    order = np.argsort(f[sel])
+    idx = np.flatnonzero(sel)[order]
+    shapes = cv[:, idx] / np.maximum(np.linalg.norm(cv[:, idx], axis=0), 1e-300)
+    names = tuple(getattr(sys, "output_labels", ()) or ())
+    return IdentifiedModes(f[idx], z[idx], shapes, strength[idx], None, None, names)
+
+
+def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = None,
+                    n_segments: int = 4, max_damping: float = 0.05, identify_kwargs=None):
+    """Identify a model with PLID and extract its strongest modes, with uncertainties.
+
+    The full record is identified once (:func:`plid.multipass.identify`); its
+    ``n_modes`` strongest modes in ``band`` are the estimates. The record is then cut into
+    ``n_segments`` equal pieces, each identified alone; each estimate's standard deviation
+    is the scatter of the matching segment modes divided by ``sqrt(n_segments)`` (the
+    variance of a frequency estimate falls as 1/record length). A segment mode matches when
+    it is the nearest in frequency and within 5 half-power bandwidths; modes without at
+    least 2 segment matches get NaN (the caller decides).
+
+    Parameters
+    ----------
+    u, y : (N, m), (N, p) arrays
+    dt : float
+        Sample time [s].
+    order : int
+        Model order (a multiple of the number of outputs).
+    band : (low, high) Hz
+    n_modes : int, optional
+        Keep this many strongest modes (default all in band).
+    n_segments : int
+        Records for the scatter (0 or 1: no standard deviations).
+    max_damping : float
+    identify_kwargs : dict, optional
+        Passed to :func:`plid.multipass.identify`.
+
+    Returns
+    -------
+    modes : IdentifiedModes
+    info : dict
+        ``models`` (full, then segments) and ``segment_modes``.
+    """
+    import warnings
+
+    from plid.estimator import PLIDWarning
+    from plid.multipass import identify
+
+    u = np.asarray(u, float).reshape(len(u), -1)
+    y = np.asarray(y, float).reshape(len(y), -1)
+    kw = dict(identify_kwargs or {})
+
+    def ident(uu, yy):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PLIDWarning)
+            return identify(uu, yy, order, dt, **kw).model
+
+    full = ident(u, y)
+    modes = modes_of_model(full, band, max_damping=max_damping)
+    if n_modes is not None and len(modes.frequencies_hz) > n_modes:
+        strongest = np.sort(np.argsort(modes.strength)[::-1][:n_modes])
+        modes = modes.select(strongest)
+    models, seg_modes = [full], []
+    if n_segments and n_segments > 1:
+        n = len(u) // n_segments
+        fs_seg, zs_seg = [], []
+        for k in range(n_segments):
+            sl = slice(k * n, (k + 1) * n)
+            mk = ident(u[sl], y[sl])
+            models.append(mk)
+            sm = modes_of_model(mk, band, max_damping=max_damping)
+            seg_modes.append(sm)
+            fk, zk = np.full(len(modes.frequencies_hz), np.nan), np.full(len(modes.frequencies_hz), np.nan)
+            if len(sm.frequencies_hz):
+                j = pair_modes(modes.frequencies_hz, sm.frequencies_hz)
+                for i, jj in enumerate(j):
+                    if jj >= 0:
+                        bw = 2 * max(modes.damping[i], 1e-4) * modes.frequencies_hz[i]
+                        if abs(sm.frequencies_hz[jj] - modes.frequencies_hz[i]) <= 5 * bw:
+                            fk[i], zk[i] = sm.frequencies_hz[jj], sm.damping[jj]
+            fs_seg.append(fk)
+            zs_seg.append(zk)
+        fs_seg, zs_seg = np.array(fs_seg), np.array(zs_seg)
+        cnt = np.sum(np.isfinite(fs_seg), axis=0)
+        with np.errstate(invalid="ignore"):
+            fstd = np.where(cnt >= 2, np.nanstd(fs_seg, axis=0, ddof=1), np.nan) / math.sqrt(n_segments)
+            zstd = np.where(cnt >= 2, np.nanstd(zs_seg, axis=0, ddof=1), np.nan) / math.sqrt(n_segments)
+        modes = replace(modes, frequency_std_hz=fstd, damping_std=zstd)
+    return modes, {"models": models, "segment_modes": seg_modes}
+
+
+# --------------------------------------------------------------------------- updating
+
+
+def _vector(name, value, k, positive=True):
+    a = np.asarray(value, float)
+    if a.ndim == 0:
+        a = np.full(k, float(a))
+    a = a.ravel()
+    if a.size != k:
+        raise UpdateError(f"{name} has {a.size} entries for {k} measured modes")
+    bad = np.flatnonzero(~np.isfinite(a) | ((a <= 0) if positive else (a < 0)))
+    if bad.size:
+        raise UpdateError(f"{name}[{bad[0]}] = {a[bad[0]]!r} must be finite and "
+                          f"{'positive' if positive else 'non-negative'}")
+    return a
+
+
+def _wall_bounds(bounds, nominal, r_out):
+    if bounds is None:
+        bounds = DEFAULT_BOUNDS
+    b = np.asarray(bounds, float)
+    if b.shape == (2,):
+        b = np.outer(nominal, b)  # relative to nominal
+    elif b.shape != (6, 2):
+        raise UpdateError(f"bounds must be (low, high) relative to nominal or a (6, 2) array in m, "
+                          f"got shape {b.shape}")
+    lo = np.maximum(b[:, 0], RADIUS_MARGIN * r_out)
+    hi = np.minimum(b[:, 1], (1 - RADIUS_MARGIN) * r_out)
+    for i in range(6):
+        if not lo[i] < hi[i]:
+            raise UpdateError(f"bounds of wall{i}: lower {lo[i]:.4g} m is not below upper {hi[i]:.4g} m "
+                              f"(walls must lie in (0, {r_out:.4g} m))")
+        if not lo[i] <= nominal[i] <= hi[i]:
+            raise UpdateError(f"bounds of wall{i} [{lo[i]:.4g}, {hi[i]:.4g}] m exclude its nominal "
+                              f"value {nominal[i]:.4g} m")
+    return lo, hi
+
+
+def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence):
+    """Seeded multi-start fit, then swap moves.
+
+    The struts are geometrically equivalent, so exchanging two walls leaves the strut
+    bending frequencies (nearly) unchanged and only the modes that see all struts (UDF
+    rigid-body) tell the arrangements apart: each arrangement is a separate local minimum,
+    and random starts find the right one only by luck. After the multi-start, every
+    pairwise exchange of the current estimate is therefore tried as a start, and the best
+    fit kept, until no exchange improves the fit.
+
+    Returns the best :class:`plid.greybox.GreyboxReport` and the accepted swaps.
+    """
+    from plid.greybox import fit_parameters
+
+    bnds = {n: (a, b) for n, a, b in zip(WALL_NAMES, lo, hi)}
+    best = fit_parameters(residual, initial, bounds=bnds, jac=jac, n_starts=n_starts, seed=seed,
+                          confidence=confidence, min_obs=6)
+    accepted = []
+    for _ in range(6):  # each accepted swap lowers the cost; a few rounds at most
+        improved = False
+        cur = np.array([best.estimates[n] for n in WALL_NAMES])
+        for i in range(6):
+            for j in range(i + 1, 6):
+                w = cur.copy()
+                w[i], w[j] = cur[j], cur[i]
+                w = np.clip(w, lo * (1 + 1e-9), hi * (1 - 1e-9))
+                rep = fit_parameters(residual, dict(zip(WALL_NAMES, w)), bounds=bnds, jac=jac,
+                                     n_starts=1, confidence=confidence, min_obs=6)
+                if rep.cost < best.cost * (1 - 1e-6) - 1e-300:
+                    best, improved = rep, True
+                    accepted.append((i, j))
+        if not improved:
+            break
+    return best, accepted
+
+
+def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_std_hz=None,
+                 damping_std=None, shapes=None, sensors=None, tbm=None, n_model_modes: int | None = None,
+                 bounds=None, prior_range: float = 0.2, gate: float = 3.0, n_starts: int = 12,
+                 seed: int = 0, confidence: float = 0.95, reduced_vectors: int = 60,
+                 mac_weight: float = 1.0, labels: bool = True) -> UpdateReport:
+    """Estimate the six strut wall thicknesses from measured natural frequencies.
+
+    Parameters
+    ----------
+    measured_freqs_hz : (k,) float
+        Identified natural frequencies [Hz] (any order; modes of any kind: strut bending,
+        UDF rigid-body, ...). At least 7 are needed when ``frequency_std_hz`` is not given
+        (6 walls plus a degree of freedom for the scatter).
+    tb_nominal : geometry.testbed.Testbed, optional
+        The model to update (default: the default testbed); its walls are the start.
+    damping : (k,) float, optional
+        Identified damping ratios [-] of the same modes: gives the damping estimate.
+    frequency_std_hz : float or (k,) float, optional
+        Standard deviations of the measured frequencies [Hz]: residual weights and
+        known-sigma intervals. Default: relative residuals, intervals from their scatter.
+    damping_std : float or (k,) float, optional
+        Standard deviations of ``damping``.
+    shapes : (p, k) complex, optional
+        Identified mode shapes at ``sensors`` (for MAC pairing).
+    sensors : list of fem.sensors.Sensor, optional
+        Where ``shapes`` were measured (any quantity: MAC ignores scale).
+    tbm : fem.testbed.TestbedModel, optional
+        ``build_testbed(tb_nominal)`` if already built (Euler-Bernoulli).
+    n_model_modes : int, optional
+        Model modes considered for pairing (default: those up to 1.5 times the highest
+        measured frequency, plus 4).
+    bounds : (low, high) or (6, 2) array, optional
+        Physical bounds: relative to nominal (default ``(0.5, 1.5)``) or per wall in m;
+        always inside ``(0.02, 0.98)`` times the outer radius.
+    prior_range : float
+        Relative wall range expected before the test (``+-prior_range``): the box of the
+        stage-1 multi-start and the reach of the pairing gate.
+    gate : float
+        A measured mode is paired only with model modes within ``gate`` times their reach
+        ``|df/dt| prior_range t`` (plus ``gate`` measurement sigmas, plus 0.5 %).
+    n_starts : int
+        Stage-1 starts (the nominal walls, then a seeded Latin hypercube over the prior box).
+    seed : int
+    confidence : float
+    reduced_vectors : int
+        Ritz vectors of the stage-1 model.
+    mac_weight : float
+        Weight of ``1 - MAC`` against the relative frequency distance in pairing.
+    labels : bool
+        Label the paired modes (builds the model at the updated walls: ~1 s).
+
+    Returns
+    -------
+    UpdateReport
+
+    Raises
+    ------
+    UpdateError
+        Non-finite or non-positive frequencies, mismatched lengths, bad bounds, shapes
+        without sensors, fewer modes than can determine the walls, no measured mode
+        reachable by the model.
+    """
+    from fem.sensors import sensor_matrix
+    from fem.testbed import build_testbed, wall_basis
+    from geometry.testbed import Testbed
+    from plid.greybox import fit_parameters
+
+    f_all = _vector("measured_freqs_hz", measured_freqs_hz, np.size(measured_freqs_hz))
+    k_all = f_all.size
+    known_sigma = frequency_std_hz is not None
+    sig_all = _vector("frequency_std_hz", frequency_std_hz, k_all) if known_sigma else None
+    z_all = _vector("damping", damping, k_all, positive=False) if damping is not None else None
+    zsig_all = (_vector("damping_std", damping_std, k_all) if damping_std is not None else None)
+    if not 0 < prior_range < 1:
+        raise UpdateError(f"prior_range must be in (0, 1), got {prior_range!r}")
+    if not 0 < confidence < 1:
+        raise UpdateError(f"confidence must be in (0, 1), got {confidence!r}")
+    if (shapes is None) != (sensors is None):
+        raise UpdateError("give shapes and sensors together (MAC pairing needs both)")
+    sh_all = None
+    if shapes is not None:
+        sh_all = np.asarray(shapes, complex)
+        if sh_all.ndim != 2 or sh_all.shape != (len(sensors), k_all):
+            raise UpdateError(f"shapes must be (n_sensors={len(sensors)}, n_modes={k_all}), "
+                              f"got {sh_all.shape}")
+
+    tb = Testbed() if tb_nominal is None else tb_nominal
+    tbm = build_testbed(tb) if tbm is None else tbm
+    basis = wall_basis(tbm)
+    nominal = np.array(basis.walls_ref, float)
+    r_out = basis.r_out
+    lo, hi = _wall_bounds(bounds, nominal, r_out)
+    n_model = (int(n_model_modes) if n_model_modes is not None else None)
+
+    reduced, V = reduced_wall_basis(basis, reduced_vectors)
+    rows_full = None
+    if sensors is not None:
+        S = sensor_matrix(basis.system.node_ids, sensors)
+        rows_full = np.asarray(S @ basis.system.T)  # sensors from reduced DOFs
+    rows_red = None if rows_full is None else rows_full @ V
+
+    if n_model is None:
+        f_red0 = np.sqrt(np.maximum(la.eigvalsh(reduced.dense(reduced.K_ref), reduced.dense(reduced.M_ref)), 0)) / (2 * np.pi)
+        n_model = int(np.count_nonzero(f_red0 <= 1.5 * f_all.max())) + 4
+    n_model = max(min(n_model, reduced.n), 1)
+    if n_model < k_all:
+        raise UpdateError(f"{k_all} measured modes but only {n_model} model modes considered: "
+                          "raise n_model_modes")
+    coarse_modes = _ModelModes(reduced, n_model, rows_red)
+    full_modes = _ModelModes(basis, n_model, rows_full)
+
+    # Sensitivity-aware gate at the nominal walls: which measured modes can be paired at all.
+    f0, d0, sh0 = full_modes(nominal)
+    reach = np.abs(d0) @ (prior_range * nominal)
+    tol = gate * (reach[None, :] + (sig_all[:, None] if known_sigma else 0.0)) + 5e-3 * f_all[:, None]
+    allowed = np.abs(f_all[:, None] - f0[None, :]) <= tol
+    mac0 = None if sh_all is None else _mac(sh_all, sh0)
+    pair0 = pair_modes(f_all, f0, scale_hz=np.maximum(tol, 1e-300), mac=mac0, mac_weight=mac_weight,
+                       allowed=allowed)
+    used = pair0 >= 0
+    if not used.any():
+        raise UpdateError("no measured frequency lies within reach of a model mode "
+                          f"(measured {np.round(f_all, 3).tolist()} Hz; model {np.round(f0, 3).tolist()} Hz)")
+    f = f_all[used]
+    k = f.size
+    sig = sig_all[used] if known_sigma else f  # relative residuals without sigmas
+    allowed_u = allowed[used]
+    sh = None if sh_all is None else sh_all[:, used]
+    if not known_sigma and k < 7:
+        raise UpdateError(f"{k} paired modes cannot determine 6 walls with intervals: give at least 7, "
+                          "or frequency_std_hz")
+    if k < 6:
+        raise UpdateError(f"only {k} measured modes could be paired: 6 walls need at least 6")
+
+    def make(mm):
+        def pairs(p):
+            w = np.array([p[n] for n in WALL_NAMES])
+            F, dF, shp = mm(w)
+            mac = None if sh is None else _mac(sh, shp)
+            j = pair_modes(f, F, mac=mac, mac_weight=mac_weight, allowed=allowed_u)
+            # every gated mode stays pairable (the residual length must not change)
+            j = np.where(j >= 0, j, pair_modes(f, F, mac=mac, mac_weight=mac_weight))
+            return w, F, dF, j, mac
+
+        def residual(p):
+            _, F, _, j, _ = pairs(p)
+            return (F[j] - f) / sig
+
+        def jac(p):
+            _, _, dF, j, _ = pairs(p)
+            return dF[j] / sig[:, None]
+
+        return pairs, residual, jac
+
+    initial = dict(zip(WALL_NAMES, nominal))
+    lo1 = np.maximum(lo, nominal * (1 - prior_range))
+    hi1 = np.minimum(hi, nominal * (1 + prior_range))
+    _, r1, j1 = make(coarse_modes)
+    coarse, swaps = _global_fit(r1, j1, initial, lo1, hi1, n_starts, seed, confidence)
+    start = {n: float(np.clip(coarse.estimates[n], lo[i] * (1 + 1e-9), hi[i] * (1 - 1e-9)))
+             for i, n in enumerate(WALL_NAMES)}
+    pairs2, r2, j2 = make(full_modes)
+    rep = fit_parameters(r2, start, bounds={n: (a, b) for n, a, b in zip(WALL_NAMES, lo, hi)},
+                         jac=j2, n_starts=1, confidence=confidence, min_obs=6)
+    est = {n: rep.estimates[n] for n in WALL_NAMES}
+    walls, F, dF, j, mac = pairs2(est)
+    r = (F[j] - f) / sig
+    chi2 = float(r @ r)
+    dof = k - 6
+
+    # Intervals in ln t.
+    intervals = np.full((6, 2), np.nan)
+    std_log = np.full(6, np.nan)
+    if known_sigma:
+        jl = (dF[j] / sig[:, None]) * walls[None, :]
+        birge = math.sqrt(chi2 / dof) if dof > 0 else 1.0
+        infl = max(1.0, birge)
+        try:
+            cov = la.inv(jl.T @ jl) * infl**2
+            ok = np.isfinite(cov).all()
+        except la.LinAlgError:
+            ok = False
+        zq = scipy.stats.norm.ppf(0.5 + confidence / 2)
+        for i, n in enumerate(WALL_NAMES):
+            if ok and rep.determined.get(n, True) and n not in rep.at_bound:
+                std_log[i] = math.sqrt(max(cov[i, i], 0.0))
+                intervals[i] = walls[i] * np.exp([-zq * std_log[i], zq * std_log[i]])
+        source = "known sigma"
+    else:
+        birge = math.sqrt(chi2 / dof) if dof > 0 else float("nan")
+        for i, n in enumerate(WALL_NAMES):
+            iv = rep.intervals.get(n)
+            if iv is not None:
+                intervals[i] = iv
+                se = rep.std_errors.get(n)
+                std_log[i] = se if se is not None else np.nan
+        source = "residual scatter"
+
+    # Damping: one modal ratio, the weighted mean of the paired modes' ratios.
+    zeta = ziv = None
+    if z_all is not None:
+        zz = z_all[used]
+        w = 1.0 / zsig_all[used] ** 2 if zsig_all is not None else np.ones(k)
+        zeta = float(np.sum(w * zz) / np.sum(w))
+        scatter = math.sqrt(float(np.sum(w * (zz - zeta) ** 2) / np.sum(w) / max(k - 1, 1)))
+        stated = math.sqrt(1.0 / float(np.sum(w))) if zsig_all is not None else 0.0
+        se = max(scatter, stated)
+        tq = scipy.stats.t.ppf(0.5 + confidence / 2, max(k - 1, 1))
+        ziv = (zeta - tq * se, zeta + tq * se)
+
+    # Report: pairs over all measured modes, with nominal frequencies of the same pairs.
+    idx_used = np.flatnonzero(used)
+    pairing = np.full(k_all, -1)
+    pairing[idx_used] = j
+    model_hz = np.full(k_all, np.nan)
+    model_hz[idx_used] = F[j]
+    nominal_hz = np.full(k_all, np.nan)
+    nominal_hz[idx_used] = f0[pair0[used]]
+    mac_all = None
+    if mac is not None:
+        mac_all = np.full(k_all, np.nan)
+        mac_all[idx_used] = mac[np.arange(k), j]
+    lab = [""] * k_all
+    if labels:
+        from fem.labels import label_testbed_modes
+        from fem.testbed import solve_testbed_modes
+
+        tbm_u = build_testbed(tb.with_walls(tuple(float(x) for x in walls)),
+                              elements_per_segment=tbm.elements_per_segment)
+        ml = label_testbed_modes(tbm_u, solve_testbed_modes(tbm_u, n_model)).labels
+        for i, jj in zip(idx_used, j):
+            lab[i] = ml[jj]
+    return UpdateReport(
+        walls=walls, nominal=nominal, intervals=intervals, std_log=std_log, interval_source=source,
+        measured_hz=f_all, used=used, pairing=pairing, model_hz=model_hz, nominal_hz=nominal_hz,
+        labels=lab, mac=mac_all, chi2=chi2, dof=dof, birge=birge, damping=zeta, damping_interval=ziv,
+        greybox=rep, coarse=coarse, confidence=confidence,
+        info={"coarse_evaluations": coarse_modes.evaluations, "full_evaluations": full_modes.evaluations,
+              "n_model_modes": n_model, "swaps": swaps},
+    )
