@@ -103,6 +103,7 @@ class Identification:
 
     result: PLIDResult
     model: control.StateSpace
+    K: np.ndarray | None          # one-step predictor gain of ``model`` (original units)
     start: str
     basis: ObserverBasis
     R: np.ndarray
@@ -180,6 +181,23 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     res, hist = multipass(u, y, order, dt, sched, basis=basis, prior=prior, R=R, form=form,
                           progress=progress)
     info["passes"] = hist
+    R = np.atleast_1d(np.asarray(R, float))
+    K = _predictor(res, u, y, R)
     info["seconds"] = time.perf_counter() - t0
-    return Identification(res, res.model, start, basis, np.atleast_1d(np.asarray(R, float)),
-                          prior, info)
+    return Identification(res, res.model, K, start, basis, R, prior, info)
+
+
+def _predictor(res: PLIDResult, u, y, R):
+    """One-step predictor gain of the identified model: the recursion's own gain is the
+    steady state of ``Q = 0`` passes (no correction at all), so the predictor assumes a
+    small state noise instead: 1 % input noise through ``B`` and the estimated ``R``."""
+    from plid.metrics import default_noise_covariances, predictor_gain
+
+    model = res.model
+    Qd, _ = default_noise_covariances(model, u, y)
+    sy2 = np.mean(y ** 2, axis=0)
+    Rd = np.diag(np.broadcast_to(R, sy2.shape) * sy2)
+    try:
+        return predictor_gain(model, Qd, Rd)
+    except Exception:  # no stabilising solution (e.g. an unstable mode): keep the recursion's
+        return res.K

@@ -1,0 +1,167 @@
+"""Order-selection help: prediction error and frequency-response change against order.
+
+For each candidate order the data are identified (by default with
+:func:`plid.multipass.identify`; ``method="subspace"`` uses the quick N4SID prior alone)
+and two numbers are tabulated:
+
+- the one-step signal-to-prediction-error ratio [dB] on validation data (the last
+  ``holdout`` fraction of the record when no separate validation data are given: the
+  model is identified on the rest and its predictor runs through the whole record, scored
+  on the tail only), see :func:`plid.metrics.prediction_ratio_db`;
+- the frequency-response change from the previous order: RMS over the band and over
+  every channel of ``20 log10 |H_n / H_prev|`` [dB].
+
+The order the data support is where the prediction ratio stops rising and the change
+drops to the noise level. :func:`plot_orders` draws both against order (PNG).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from plid.canonical import check_order
+from plid.errors import DataError
+from plid.frf import frequency_response
+from plid.metrics import (default_noise_covariances, one_step_predict, prediction_ratio_db,
+                          predictor_gain)
+
+__all__ = ["OrderRow", "order_table", "format_table", "plot_orders"]
+
+
+@dataclass
+class OrderRow:
+    """One candidate order."""
+
+    order: int
+    prediction_db: float          # one-step signal-to-prediction-error, validation data
+    frf_change_db: float | None   # RMS dB change from the previous order (None for the first)
+    unstable_poles: int
+    seconds: float
+    model: object
+
+
+def _split(u, y, holdout):
+    k = int(round(u.shape[0] * (1 - holdout)))
+    if k < 10 or u.shape[0] - k < 10:
+        raise DataError(f"holdout {holdout} leaves too few samples on one side")
+    return u[:k], y[:k], u[k:], y[k:]
+
+
+def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float = 0.3,
+                band=None, method: str = "plid", n_freq: int = 400,
+                block_rows=None) -> list[OrderRow]:
+    """Identify at each order and tabulate prediction error and FRF change.
+
+    Parameters
+    ----------
+    u, y : arrays (N, m), (N, p)
+        Identification data (all of it when ``u_val, y_val`` are given).
+    orders : sequence of int
+        Candidate orders (multiples of p), ascending.
+    dt : float
+        Sample time [s].
+    u_val, y_val : arrays, optional
+        Validation data; default the last ``holdout`` of the record.
+    band : (lo, hi) Hz, optional
+        Band of the FRF change; default (1 %, 49 %) of fs.
+    method : {"plid", "subspace"}
+        ``"plid"``: :func:`plid.multipass.identify` (subspace start); ``"subspace"``: the
+        N4SID prior only (quicker).
+    block_rows : int or list, optional
+        N4SID block rows (default: :func:`plid.subspace.subspace_prior` tries several).
+    """
+    from plid.multipass import identify
+    from plid.subspace import subspace_prior
+
+    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    p = y.shape[1]
+    if u_val is None:
+        u_all, y_all = u, y
+        u, y, u_val, y_val = _split(u, y, holdout)
+        start = u.shape[0]
+    else:
+        u_all = y_all = None
+        start = 0
+        u_val = np.atleast_2d(np.asarray(u_val, dtype=float).T).T
+        y_val = np.atleast_2d(np.asarray(y_val, dtype=float).T).T
+    orders = sorted(int(n) for n in orders)
+    for n in orders:
+        check_order(n, p)
+    fs = 1.0 / dt
+    lo, hi = band if band is not None else (0.01 * fs, 0.49 * fs)
+    f = np.linspace(lo, hi, n_freq)
+    rows, H_prev = [], None
+    skip = min(10 * max(orders), u_val.shape[0] // 10)
+    for n in orders:
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            if method == "plid":
+                ident = identify(u, y, n, dt, block_rows=block_rows)
+                model, K = ident.model, ident.K
+            elif method == "subspace":
+                model, _ = subspace_prior(u, y, n, dt, block_rows=block_rows)
+                K = None
+            else:
+                raise DataError(f"method must be 'plid' or 'subspace', got {method!r}")
+        sec = time.perf_counter() - t0
+        if K is None:
+            Qd, Rd = default_noise_covariances(model, u, y)
+            K = predictor_gain(model, Qd, Rd)
+        if u_all is not None:
+            # Held-out tail: run the predictor through the whole record (it uses past data
+            # only) so that the tail is not spoiled by a start from x0 = 0.
+            yhat = one_step_predict(model, u_all, y_all, K=K)[start:]
+            e = y_val - yhat
+            pr = -10 * np.log10(np.mean(np.mean(e ** 2, 0) / np.mean(y_val ** 2, 0)))
+        else:
+            pr = prediction_ratio_db(model, u_val, y_val, K=K, skip=skip)["overall"]
+        H = frequency_response(model, f)
+        change = None
+        if H_prev is not None:
+            change = float(np.sqrt(np.mean((20 * np.log10(np.abs(H) / np.abs(H_prev))) ** 2)))
+        H_prev = H
+        unstable = int(np.sum(np.abs(np.linalg.eigvals(np.asarray(model.A))) >= 1))
+        rows.append(OrderRow(n, float(pr), change, unstable, sec, model))
+    return rows
+
+
+def format_table(rows) -> str:
+    """A plain-text table of :func:`order_table` rows."""
+    out = ["order  prediction [dB]  FRF change [dB]  unstable  seconds"]
+    for r in rows:
+        ch = "-" if r.frf_change_db is None else f"{r.frf_change_db:.3f}"
+        out.append(f"{r.order:5d}  {r.prediction_db:15.2f}  {ch:>15s}  {r.unstable_poles:8d}"
+                   f"  {r.seconds:7.1f}")
+    return "\n".join(out)
+
+
+def plot_orders(rows, path) -> None:
+    """PNG of prediction ratio and FRF change against order (written atomically)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from trussid.files import atomic_path
+
+    n = [r.order for r in rows]
+    fig, ax = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
+    ax[0].plot(n, [r.prediction_db for r in rows], "o-")
+    ax[0].set_ylabel("one-step prediction [dB]")
+    ax[0].grid(True, alpha=0.3)
+    ch = [(r.order, r.frf_change_db) for r in rows if r.frf_change_db is not None]
+    if ch:
+        ax[1].semilogy([c[0] for c in ch], [c[1] for c in ch], "s-")
+    ax[1].set_ylabel("FRF change from previous order [dB RMS]")
+    ax[1].set_xlabel("order")
+    ax[1].grid(True, alpha=0.3)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    plt.close(fig)

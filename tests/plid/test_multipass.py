@@ -1,0 +1,100 @@
+"""Multi-pass PLID and the identify recipe (plid.multipass), with the subspace prior
+(plid.subspace) it uses."""
+
+import control
+import numpy as np
+import pandas as pd
+import pytest
+
+from plid.errors import IdentificationError
+from plid.frf import frequency_response
+from plid.metrics import frf_error
+from plid.multipass import Pass, identify, multipass
+from plid.subspace import n4sid, refit_input_matrix
+
+FS = 1600.0
+
+
+def modal_plant(freqs, zeta, m, p, seed):
+    """Well-scaled lightly damped modal plant (states w q, q'), ZOH at FS, D = 0."""
+    rng = np.random.default_rng(seed)
+    n = 2 * len(freqs)
+    A = np.zeros((n, n))
+    for i, f in enumerate(freqs):
+        w = 2 * np.pi * f
+        A[2 * i:2 * i + 2, 2 * i:2 * i + 2] = [[0, w], [-w, -2 * zeta * w]]
+    sign = lambda shape: rng.choice([-1.0, 1.0], shape) * rng.uniform(0.5, 1.5, shape)
+    B = np.zeros((n, m))
+    B[1::2] = sign((len(freqs), m)) * 300
+    C = sign((p, n))
+    return control.c2d(control.ss(A, B, C, np.zeros((p, m))), 1 / FS)
+
+
+def data(plant, n_samples, snr_db=None, seed=0):
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((n_samples, plant.ninputs))
+    y0 = np.atleast_2d(control.forced_response(plant, U=u.T).outputs).T
+    if snr_db is None:
+        return u, y0
+    noise = rng.standard_normal(y0.shape) * np.sqrt(np.mean(y0 ** 2, 0)) / 10 ** (snr_db / 20)
+    return u, y0 + noise
+
+
+@pytest.fixture(scope="module")
+def simo():
+    return modal_plant([90.0, 210.0, 340.0], 0.01, 1, 2, seed=1)
+
+
+def test_n4sid_with_d_is_nfoursids_own_model(simo):
+    from nfoursid.nfoursid import NFourSID
+
+    u, y = data(simo, 1500, snr_db=40, seed=2)
+    df = pd.DataFrame(np.hstack([u, y]), columns=["u0", "y0", "y1"])
+    ref = NFourSID(df, output_columns=["y0", "y1"], input_columns=["u0"], num_block_rows=8)
+    ref.subspace_identification()
+    ss, _ = ref.system_identification(rank=6)
+    ref_model = control.ss(ss.a, ss.b, ss.c, ss.d, 1 / FS)
+    ours = n4sid(u, y, 6, 8, 1 / FS).with_d
+    f = np.linspace(10, 790, 200)
+    np.testing.assert_allclose(frequency_response(ours, f) + ours.D[None],
+                               frequency_response(ref_model, f) + ref_model.D[None], rtol=1e-8)
+
+
+def test_refit_recovers_the_input_matrix_exactly_on_noiseless_data(simo):
+    u, y = data(simo, 800, seed=3)
+    wrong_b = control.ss(simo.A, np.ones((6, 1)), simo.C, 0, simo.dt)
+    fixed = refit_input_matrix(wrong_b, u, y)
+    np.testing.assert_allclose(fixed.B, simo.B, rtol=1e-7, atol=1e-9 * np.abs(simo.B).max())
+
+
+def test_scratch_multipass_converges_on_noiseless_data(simo):
+    u, y = data(simo, 3000, seed=4)
+    ident = identify(u, y, 6, 1 / FS, start="scratch", R=1e-10)
+    err = frf_error(ident.model, simo, band=(30, 790))
+    assert err["rms_db"] < 1e-4
+    assert len(ident.info["passes"]) == 4
+
+
+def test_a_pass_started_at_the_truth_with_a_tight_prior_stays_there(simo):
+    u, y = data(simo, 1500, seed=5)
+    from plid.bases import basis_for, model_frequencies
+
+    basis = basis_for(6, 2, FS, model_frequencies(simo, 3, FS))
+    res, hist = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-8)] * 2, basis=basis,
+                          prior=simo, R=1e-10)
+    assert [h["pass"] for h in hist] == [0, 1]
+    assert frf_error(res.model, simo, band=(30, 790))["max_db"] < 1e-6
+
+
+def test_subspace_start_is_at_least_as_accurate_as_n4sid_on_the_same_noisy_data(simo):
+    u, y = data(simo, 4000, snr_db=40, seed=6)
+    best_n4sid = min(frf_error(n4sid(u, y, 6, i, 1 / FS).with_d, simo, band=(30, 790))["rms_db"]
+                     for i in (8, 12, 20))
+    ident = identify(u, y, 6, 1 / FS)
+    assert frf_error(ident.model, simo, band=(30, 790))["rms_db"] <= best_n4sid
+
+
+def test_identify_refuses_an_unknown_start(simo):
+    u, y = data(simo, 500, seed=7)
+    with pytest.raises(IdentificationError, match="start"):
+        identify(u, y, 6, 1 / FS, start="magic")
