@@ -212,3 +212,15 @@ def test_bad_options_are_refused(kwargs, match):
     rng = np.random.default_rng(0)
     with pytest.raises(IdentificationError, match=match):
         PLID(2, **kwargs).fit(rng.standard_normal((50, 1)), rng.standard_normal((50, 1)))
+
+
+def test_blas_threads_are_limited_during_the_recursion_and_restored():
+    from plid._blas import _controls, blas_threads
+
+    ctrls = _controls()
+    if not ctrls:
+        pytest.skip("no OpenBLAS library found to control")
+    before = [get() for get, _ in ctrls]
+    with blas_threads(1):
+        assert all(get() == 1 for get, _ in ctrls)
+    assert [get() for get, _ in ctrls] == before
