@@ -182,6 +182,11 @@ def frame_matrices(L, A, Iy, Iz, J, E, G, rho, *, nsm=0.0, Asy=np.inf, Asz=np.in
         A=A, Iy=Iy, Iz=Iz, J=J, E=E, G=G, rho=rho, nsm=nsm, Asy=Asy, Asz=Asz).items()}
     rod = np.broadcast_to(np.asarray(rod, bool), (n,))
     beam = (~rod).astype(float)[:, None, None]
+    if rod.any():
+        # A rod's bending properties are meaningless (often 0 or NaN from a deck): neutralise
+        # them so that no 0/0 or NaN * 0 reaches the rod's matrices.
+        for key, neutral in (("Iy", 0.0), ("Iz", 0.0), ("Asy", np.inf), ("Asz", np.inf)):
+            f[key] = np.where(rod, neutral, f[key])
     timo = theory == "timoshenko"
     if theory not in ("euler-bernoulli", "timoshenko"):
         raise ModelError(f"unknown beam theory {theory!r}")

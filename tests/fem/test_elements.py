@@ -153,3 +153,12 @@ def test_local_axes_errors_name_the_element():
         local_axes(np.ones((1, 3)), np.ones((1, 3)), np.array([[0, 0, 1.0]]), ids=np.array([42]))
     with pytest.raises(ModelError, match="element 43: orientation vector .* parallel"):
         local_axes(np.zeros((1, 3)), np.array([[0, 0, 2.0]]), np.array([[0, 0, -1.0]]), ids=np.array([43]))
+
+
+@pytest.mark.parametrize("theory", ["euler-bernoulli", "timoshenko"])
+def test_rod_ignores_undefined_bending_properties(theory):
+    """Rods from decks may carry I = 0 or NaN and no shear area: no NaN may leak out."""
+    args = [np.full(1, v) for v in (0.5, A, np.nan, 0.0, J, E, G, RHO)]
+    K, M = frame_matrices(*args, Asy=0.0, Asz=np.nan, rod=True, theory=theory)
+    Kr, Mr = frame_matrices(*[np.full(1, v) for v in (0.5, A, IY, IZ, J, E, G, RHO)], rod=True, theory=theory)
+    assert np.array_equal(K, Kr) and np.array_equal(M, Mr)
