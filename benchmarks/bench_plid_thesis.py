@@ -13,7 +13,7 @@ at 1600 Hz, white unit-RMS input; separate 4000-sample validation record (other 
 Methods, same data in the same run:
 
 - ``N4SID``: nfoursid's algorithm (thin SVD, see :mod:`plid.subspace`) with its D term, at
-  block rows 20, 30, 40 and 60 (those giving enough rows); the best by the true FRF error is
+  block rows 20, 30, 40, 60 and 80 (those giving enough rows); the best by the true FRF error is
   reported (an oracle choice: it favours the comparator).
 - ``N4SID D=0``: the same state sequence, least squares without D.
 - ``PLID subspace``: :func:`plid.multipass.identify` with ``start="subspace"`` (prior from
@@ -84,7 +84,7 @@ def run_case(case, noise, orders, seed=11, methods=("n4sid", "subspace", "scratc
         res = {}
         if "n4sid" in methods:
             best = None
-            for i in (20, 30, 40, 60):
+            for i in (20, 30, 40, 60, 80):
                 if i * p < n + p:
                     continue
                 t0 = time.perf_counter()

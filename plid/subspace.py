@@ -152,8 +152,8 @@ def refit_input_matrix(sys, u, y) -> control.StateSpace:
 def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True):
     """A strictly proper order-``n`` prior from the data alone.
 
-    Runs :func:`n4sid` for each candidate block-row count (default 20, 30, 40 and 60, at
-    least ``n / p + 1``), takes the D = 0 model, unstable poles reflected
+    Runs :func:`n4sid` for each candidate block-row count (default 20, 30, 40, 60 and 80,
+    at least ``n / p + 1``), takes the D = 0 model, unstable poles reflected
     (:func:`plid.stabilise.stabilise`), optionally :func:`refit_input_matrix`, and keeps
     the candidate with the smallest output error on the data themselves (no truth used).
 
@@ -173,7 +173,7 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True)
         # N4SID accuracy on lightly damped plants depends strongly on the block rows (case
         # (b) of the benchmark: 2.7 dB at 30, 0.12 dB at 40), so several are tried.
         lo = -(-n // p) + 1
-        block_rows = sorted({max(lo, i) for i in (20, 30, 40, 60)})
+        block_rows = sorted({max(lo, i) for i in (20, 30, 40, 60, 80)})
     best, info = None, {"candidates": {}}
     for i in np.atleast_1d(block_rows):
         fit = n4sid(u, y, n, int(i), dt)
