@@ -47,7 +47,7 @@ import scipy.signal
 from plid.canonical import ObserverBasis, from_statespace, join_theta
 from plid.errors import IdentificationError
 
-__all__ = ["rotation_basis", "band_frequencies", "data_frequencies", "model_frequencies",
+__all__ = ["rotation_basis", "as_selector", "band_frequencies", "data_frequencies", "model_frequencies",
            "to_basis", "conversion_condition", "basis_for"]
 
 
@@ -116,6 +116,37 @@ def _assemble(w, groups, radius, p):
     for b, i in enumerate(owner):
         C[i, 2 * b] = 1.0
     return ObserverBasis(F, C, f"rotation r={radius:g}")
+
+
+def as_selector(basis: ObserverBasis) -> ObserverBasis:
+    """The same basis in coordinates where ``C`` selects one state per output.
+
+    For each output i the first state it reads is replaced by ``C_i x`` (the sum it reads):
+    ``T = I`` with row ``s_i`` set to ``C_i``, ``F' = T F T^-1``, ``C' = C T^-1 = e_{s_i}``.
+    PLID in ``(F', C')`` is the same estimator (``A' = T A T^-1``, ``Abar' = T Abar``), but
+    the engine's per-sample loop turns ``C x`` and ``P C^T`` into index gathers for a
+    selector ``C`` (``plid.recursion_common.Problem.sel``), which is what this is for.
+    ``T`` is unit triangular up to a permutation; its condition number is about the
+    number of blocks per output.
+    """
+    C = np.asarray(basis.C)
+    n, p = basis.n, basis.p
+    T = np.eye(n)
+    sel = []
+    for i in range(p):
+        nz = np.flatnonzero(C[i])
+        s = next(j for j in nz if j not in sel and all(C[k, j] == 0 for k in range(p) if k != i))
+        if C[i, s] == 0:
+            raise IdentificationError("basis C has an empty row")
+        T[s] = C[i]
+        sel.append(s)
+    Ti = np.linalg.inv(T)
+    F = T @ basis.F @ Ti
+    Cs = np.zeros((p, n))
+    Cs[np.arange(p), sel] = 1.0
+    if not np.allclose(C @ Ti, Cs, atol=1e-12):
+        raise IdentificationError("basis cannot be put in selector form (rows of C overlap)")
+    return ObserverBasis(F, Cs, basis.name + " selector")
 
 
 def _with_real_poles(basis: ObserverBasis, count_per_output: int, radius: float):

@@ -146,3 +146,19 @@ def test_conversion_refuses_a_feedthrough_term():
     bad = control.ss(plant.A, plant.B, plant.C, [[1.0]], plant.dt)
     with pytest.raises(IdentificationError, match="feed-through"):
         to_basis(bad, basis_for(4, 1, FS, [90.0, 210.0]))
+
+
+def test_selector_coordinates_give_the_same_model_and_a_selector_C():
+    from plid.bases import as_selector
+
+    plant = modal_plant([60, 140, 230, 330, 420, 510], 0.01, 1, 3, seed=12)
+    basis = basis_for(12, 3, FS, band_frequencies(6, (40, 600)))
+    sb = as_selector(basis)
+    assert np.all(sb.C.sum(axis=1) == 1) and set(np.unique(sb.C)) == {0.0, 1.0}
+    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(sb.F)),
+                               np.sort_complex(np.linalg.eigvals(basis.F)), atol=1e-12)
+    theta, _ = to_basis(plant, sb, "sylvester")
+    A2, B2, C2 = to_matrices(theta, sb, 1)
+    f = np.linspace(10, 790, 200)
+    np.testing.assert_allclose(frequency_response(control.ss(A2, B2, C2, 0, plant.dt), f),
+                               frequency_response(plant, f), rtol=1e-7)
