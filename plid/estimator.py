@@ -420,6 +420,10 @@ class PLID:
         """The identified model and diagnostics so far (original units)."""
         if self._st is None:
             raise IdentificationError("no data processed yet")
+        with _limit_blas(self.blas_threads):
+            return self._result()
+
+    def _result(self) -> PLIDResult:
         pb, st = self._pb, self._st
         n, p, m, q = pb.n, pb.p, pb.m, pb.q
         su, sy = self._su, self._sy
@@ -465,7 +469,7 @@ class PLID:
                 + ("estimate or covariance is not finite" if not finite else
                    f"covariance is not positive definite (smallest eigenvalue {min_eig:.3g})")
                 + ("; the square-root form avoids this" if self.form == "direct" else ""),
-                PLIDWarning, stacklevel=2)
+                PLIDWarning, stacklevel=4)
         return PLIDResult(
             model=model, K=K, K_source=K_source, theta=theta, theta_cov=theta_cov,
             Q=pb.Q * np.outer(t, t), R=pb.R * np.outer(sy, sy), N=Nm * np.outer(su, su),

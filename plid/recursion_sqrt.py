@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+from numpy.lib.stride_tricks import as_strided
 from scipy.linalg.blas import dtrmm
 
 from plid.recursion_common import Problem, psd_factor
@@ -179,10 +180,12 @@ def sqrt_step(pb: Problem, st: SqrtState, u: np.ndarray, y: np.ndarray,
     for j in range(p):
         x_new += c3[j, :, j]
 
-    # Second-order term sum_jl Sv[j,l] L_aj L_al^T + c_jl c_lj^T, input noise, Q.
-    LA3 = LA.reshape(p, n, np_)
-    Y3 = np.tensordot(Sv, LA3, axes=(1, 0))
-    W = np.tensordot(LA3, Y3, axes=([0, 2], [0, 2]))
+    # Second-order term sum_jl Sv[j,l] L_aj L_al^T = sum_k G_k G_k^T with Sv = Ws Ws^T and
+    # G_k = sum_j Ws[j,k] L_aj; plus sum_jl c_jl c_lj^T, input noise and Q.
+    N_ = L.shape[0]
+    LA3 = as_strided(L, shape=(p, n, np_), strides=(n * 8, 8, N_ * 8), writeable=False)
+    G = np.einsum("jk,jic->ikc", psd_factor(Sv), LA3).reshape(n, p * np_)
+    W = G @ G.T
     W += c3.transpose(1, 0, 2).reshape(n, p * p) @ c3.transpose(1, 2, 0).reshape(n, p * p).T
     if pb.N is not None:
         LB3 = L[np_:q, :q].reshape(m, n, q)
@@ -191,12 +194,13 @@ def sqrt_step(pb: Problem, st: SqrtState, u: np.ndarray, y: np.ndarray,
     W += pb.Q
     Wf = psd_factor(0.5 * (W + W.T))
 
-    Lt = L[:q, :q]
+    # New x rows: Phi L_t + A_hat L_xt, with Phi L_t = sum_k coef_k L[block k, :q] read
+    # through a strided view of the (Fortran-ordered) factor, no copy.
+    K = p + m
+    Lt3 = as_strided(L, shape=(K, n, q), strides=(n * 8, 8, N_ * 8), writeable=False)
     Lxt_new = Ahat @ L[q:, :q]
-    for k in range(p + m):
-        ck = coef[k]
-        if ck != 0.0:
-            Lxt_new += ck * Lt[k * n:(k + 1) * n, :]
+    Lxt_new += np.einsum("k,kic->ic", coef, Lt3)
+    Lt = L[:q, :q]
     AL = Ahat @ L[q:, q:]
 
     if pb.Q_theta is None:
