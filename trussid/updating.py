@@ -49,7 +49,15 @@ intervals are :mod:`plid.greybox`'s (from the residual scatter).
 Damping: the model's damping is one modal ratio (``Testbed.damping.modal_ratio``); it does
 not depend on the walls, so its estimate is the (inverse-variance weighted) mean of the
 paired modes' identified damping ratios, with a t-interval from their scatter or, when
-larger, from the stated standard deviations.
+larger, from the stated standard deviations (for a mode blended with an unresolved
+neighbour, these include ``gap / (2 f sqrt 3)``: a blend looks more damped).
+
+Which experiment
+----------------
+The lab plant (extension drive, UDF accelerometers) hardly sees the strut bending modes.
+:func:`bending_experiment_plant` is the test suited to updating: all wafers driven in
+anti-phase (bending) from one channel, a lateral sensor on each strut; a SIMO PLID model of
+its data gives one strong mode per strut, with a shape that names the strut.
 """
 
 from __future__ import annotations
@@ -872,7 +880,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     # identified pole is a blend of the two and may lie anywhere between them (uniform
     # over +-gap: sigma gap / sqrt 3), a model-form error the measured sigma does not hold.
     unres = np.zeros(k)
-    if known_sigma and unresolved_sigma:
+    if unresolved_sigma:
         w1 = np.array([start[n] for n in WALL_NAMES])
         F1, _, sh1 = full_modes(w1)
         j1 = pair_modes(f, F1, mac=None if sh is None else _mac(sh, sh1), mac_weight=mac_weight,
@@ -883,7 +891,8 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         gap = gap.min(axis=1)
         zi = z_all[used] if z_all is not None else np.full(k, tb.damping.modal_ratio)
         unres = np.where(gap < 2 * zi * f, gap / math.sqrt(3), 0.0)
-        sig = np.sqrt(sig**2 + unres**2)
+        if known_sigma:
+            sig = np.sqrt(sig**2 + unres**2)
     pairs2, r2, j2 = make(full_modes, sig)
     rep = fit_parameters(r2, start, bounds={n: (a, b) for n, a, b in zip(WALL_NAMES, lo, hi)},
                          jac=j2, n_starts=1, confidence=confidence, min_obs=1)
@@ -925,10 +934,12 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     zeta = ziv = None
     if z_all is not None:
         zz = z_all[used]
-        w = 1.0 / zsig_all[used] ** 2 if zsig_all is not None else np.ones(k)
+        # a blend of two modes within the bandwidth looks more damped: up to gap / 2f
+        zs = np.sqrt((zsig_all[used] if zsig_all is not None else 0.0) ** 2 + (unres / (2 * f)) ** 2)
+        w = 1.0 / zs**2 if np.all(zs > 0) else np.ones(k)
         zeta = float(np.sum(w * zz) / np.sum(w))
         scatter = math.sqrt(float(np.sum(w * (zz - zeta) ** 2) / np.sum(w) / max(k - 1, 1)))
-        stated = math.sqrt(1.0 / float(np.sum(w))) if zsig_all is not None else 0.0
+        stated = math.sqrt(1.0 / float(np.sum(w))) if np.all(zs > 0) else 0.0
         se = max(scatter, stated)
         tq = scipy.stats.t.ppf(0.5 + confidence / 2, max(k - 1, 1))
         ziv = (zeta - tq * se, zeta + tq * se)
