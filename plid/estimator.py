@@ -197,10 +197,13 @@ class PLID:
     history_every : int
         Keep theta every this many samples (0: none). Default 10.
     passes : int
-        Batch passes over the data in ``fit``; each later pass restarts from the previous
-        theta with the prior covariance and Q, Q_theta multiplied by ``pass_decay``.
+        Batch passes over the data in ``fit``; each later pass restarts (x_0 = 0) from the
+        previous pass's theta, with its posterior covariance times ``pass_inflation`` and
+        Q, Q_theta multiplied by ``pass_decay``. Default 1.
     pass_decay : float
         See ``passes``. Default 0.1.
+    pass_inflation : float
+        See ``passes``. Default 100.
     progress : bool or None
         tqdm progress bar in ``fit``: None shows it on runs of 20000 samples or more.
     blas_threads : int or None
@@ -213,6 +216,7 @@ class PLID:
                  N=0.0, Q_theta=0.0, prior=None, prior_theta_var=1e4, prior_x_var=1e2,
                  basis: ObserverBasis | None = None, u_scale=None, y_scale=None,
                  history_every: int = 10, passes: int = 1, pass_decay: float = 0.1,
+                 pass_inflation: float = 100.0,
                  progress: bool | None = None, blas_threads: int | None = 1):
         if form not in _FORMS:
             raise IdentificationError(f"form must be one of {_FORMS}, got {form!r}")
@@ -238,6 +242,7 @@ class PLID:
         self.history_every = int(history_every)
         self.passes = int(passes)
         self.pass_decay = float(pass_decay)
+        self.pass_inflation = float(pass_inflation)
         self.progress = progress
         self.blas_threads = blas_threads
         self.reset()
@@ -267,14 +272,14 @@ class PLID:
         return Problem(basis, m, Qa * decay, self.R, self.N,
                        None if qt is None else np.asarray(qt, dtype=float) * decay)
 
-    def _prior(self, pb: Problem, theta0=None):
+    def _prior(self, pb: Problem, theta0=None, theta_cov0=None):
         n, q = pb.n, pb.q
         if theta0 is None:
             if self.prior is not None:
                 theta0 = self._prior_theta(pb)
             else:
                 theta0 = np.zeros(q)
-        pt = np.asarray(self.prior_theta_var, dtype=float)
+        pt = np.asarray(self.prior_theta_var if theta_cov0 is None else theta_cov0, dtype=float)
         Pt = np.eye(q) * pt if pt.ndim == 0 else (np.diag(pt) if pt.ndim == 1 else pt)
         px = np.asarray(self.prior_x_var, dtype=float)
         Px = np.eye(n) * px if px.ndim == 0 else np.diag(px)
@@ -301,9 +306,9 @@ class PLID:
         theta, _ = from_statespace((A, B, C, np.asarray(sys.D, float)), pb.basis)
         return theta
 
-    def _start(self, m: int, p: int, theta0=None, decay: float = 1.0) -> None:
+    def _start(self, m: int, p: int, theta0=None, decay: float = 1.0, theta_cov0=None) -> None:
         pb = self._problem(m, p, decay)
-        z0, P0 = self._prior(pb, theta0)
+        z0, P0 = self._prior(pb, theta0, theta_cov0)
         self._pb = pb
         self._st = (sqrt_init if self.form == "sqrt" else direct_init)(pb, z0, P0)
         self._step = sqrt_step if self.form == "sqrt" else direct_step
@@ -345,11 +350,13 @@ class PLID:
         self._sy = _scale(self.y_scale, y, "y_scale", p)
         us = u / self._su
         ys = y / self._sy
-        theta0 = None
+        theta0 = cov0 = None
         for k in range(self.passes):
-            self._start(m, p, theta0, self.pass_decay ** k)
+            self._start(m, p, theta0, self.pass_decay ** k, cov0)
             self._run(us, ys)
-            theta0 = self._st.z[:self._pb.q].copy()
+            q = self._pb.q
+            theta0 = self._st.z[:q].copy()
+            cov0 = self.covariance()[:q, :q] * self.pass_inflation
         return self.result()
 
     def _run(self, us: np.ndarray, ys: np.ndarray) -> None:

@@ -224,3 +224,16 @@ def test_blas_threads_are_limited_during_the_recursion_and_restored():
     with blas_threads(1):
         assert all(get() == 1 for get, _ in ctrls)
     assert [get() for get, _ in ctrls] == before
+
+
+def test_further_passes_refine_a_short_record(modal_plant, simulate, rng):
+    # 1000 samples at 20 dB: one pass has not converged; passes restarted from the
+    # previous estimate (re-inflated covariance, smaller Q) get closer to the truth.
+    plant = modal_plant([60.0, 180.0], [0.01, 0.01], 1, 1, 1600, rng, collocated=True)
+    theta_true, _ = from_statespace(plant, ObserverBasis.shift(4, 1))
+    u = rng.standard_normal((1000, 1))
+    y, _ = simulate(plant, u, rng, snr_db=20)
+    one = PLID(4, R=1e-2).fit(u, y)
+    three = PLID(4, R=1e-2, passes=3).fit(u, y)
+    assert _rel(three.theta, theta_true) < 0.5 * _rel(one.theta, theta_true)
+    assert three.innovations.shape == (1000, 1) and three.n_samples == 1000
