@@ -8,7 +8,10 @@ here is converted to SI (1 in = 0.0254 m, 1 lb = 0.45359237 kg) and tagged with 
 - **thesis**: stated in the thesis text (section and figure given);
 - **reconstructed**: follows from the thesis's statements by geometry (testbed.md);
 - **suggested**: an unknown (NASTRAN deck and drawings are missing), given a documented
-  starting value that calibration may change.
+  starting value;
+- **calibrated**: an unknown whose default was chosen so that the FE model
+  (:mod:`fem.testbed`) reproduces the thesis's measured bands (README, "Testbed
+  calibration"): tube outside diameter, adapter length, strut-end rotational stiffness.
 
 A :class:`Testbed` is a frozen dataclass of frozen sections (``struts``, ``adapter``, ``pzt``,
 ``udf``, ``base``, ``accelerometers``, ``electrics``, ``filters``, ``daq``, ``damping``). All
@@ -128,7 +131,9 @@ class StrutParams(_Section):
     length : float
         Strut length between its end points [m]. Thesis: 3 ft = 36 in (sec. 2.2.1, Fig. 2.2.1-2).
     outer_diameter : float
-        Tube outside diameter [m]. Suggested: 0.5 in (calibrated on first bending near 60 Hz).
+        Tube outside diameter [m]. Calibrated: 0.535 in (suggested start 0.5 in), with the
+        base flexures, to put the 12 first bending modes in 50-70 Hz and the 12 second
+        bending modes in 200-250 Hz (README, "Testbed calibration").
     walls : tuple of 6 float
         Wall thickness of strut i [m]. Suggested: 0.028, 0.035, 0.042, 0.049, 0.058, 0.065 in
         (thesis: thinnest tubing available, each strut different to break the symmetry).
@@ -137,14 +142,16 @@ class StrutParams(_Section):
         (68.9 GPa, 0.33, 2700 kg/m^3; ASM handbook values, as in ``fem.materials.ALUMINIUM``).
     base_rotational_stiffness, top_rotational_stiffness : float
         Rotational spring of each strut end in both bending directions [N m/rad]; ``inf`` (or
-        ``None`` on construction) is a clamped end. Suggested: clamped (thesis Fig. 2.2.1-2 shows flexures; their stiffness
-        is a calibration unknown).
+        ``None`` on construction) is a clamped end. Calibrated: base 1000 N m/rad (a flexure
+        about 12 times the tube's ``E I / L``), top clamped: with clamped ends the second
+        bending modes of the thin walls and the first of the thick ones cannot both be in
+        band (thesis Fig. 2.2.1-2 shows flexures; their stiffness is not given).
     """
 
     section: ClassVar[str] = "struts"
 
     length: float = _p(36 * INCH, "m", "strut length between end points (thesis: 36 in)")
-    outer_diameter: float = _p(0.5 * INCH, "m", "tube outside diameter (suggested: 0.5 in)")
+    outer_diameter: float = _p(0.535 * INCH, "m", "tube outside diameter (calibrated: 0.535 in)")
     walls: tuple = _p(
         tuple(t * INCH for t in (0.028, 0.035, 0.042, 0.049, 0.058, 0.065)), "m",
         "wall thickness of struts 0..5 (suggested: 0.028..0.065 in)", check="walls", kind=tuple,
@@ -153,10 +160,10 @@ class StrutParams(_Section):
     poisson_ratio: float = _p(0.33, "-", "tube Poisson's ratio (aluminium 6061-T6)", check="poisson")
     density: float = _p(2700.0, "kg/m^3", "tube density (aluminium 6061-T6)")
     base_rotational_stiffness: float = _p(
-        math.inf, "N m/rad", "rotational spring at the base end, inf = clamped (suggested)",
+        1000.0, "N m/rad", "rotational spring at the base end, inf = clamped (calibrated: 1000)",
         check="positive_or_inf")
     top_rotational_stiffness: float = _p(
-        math.inf, "N m/rad", "rotational spring at the top end, inf = clamped (suggested)",
+        math.inf, "N m/rad", "rotational spring at the top end, inf = clamped (calibrated: clamped)",
         check="positive_or_inf")
 
     @property
@@ -179,7 +186,9 @@ class AdapterParams(_Section):
     side : float
         Side of the square section [m]. Suggested: 1.0 in (carries the 1 in wide wafers).
     length : float
-        Length along the strut [m]. Suggested: 2.5 in (longer than the 2 in wafers).
+        Length along the strut [m]. Calibrated: 2.0 in, the wafers' length (suggested start
+        2.5 in): the lightest adapter that carries the wafers gives the lowest ratio of
+        third to first bending frequency.
     youngs_modulus, poisson_ratio, density : float
         Block material [Pa], [-], [kg/m^3]. Suggested: aluminium 6061-T6.
 
@@ -190,7 +199,7 @@ class AdapterParams(_Section):
     section: ClassVar[str] = "adapter"
 
     side: float = _p(1.0 * INCH, "m", "side of the square block (suggested: 1.0 in)")
-    length: float = _p(2.5 * INCH, "m", "block length along the strut (suggested: 2.5 in)")
+    length: float = _p(2.0 * INCH, "m", "block length along the strut (calibrated: 2.0 in)")
     youngs_modulus: float = _p(68.9e9, "Pa", "block Young's modulus (aluminium 6061-T6)")
     poisson_ratio: float = _p(0.33, "-", "block Poisson's ratio (aluminium 6061-T6)", check="poisson")
     density: float = _p(2700.0, "kg/m^3", "block density (aluminium 6061-T6)")

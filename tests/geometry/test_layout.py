@@ -84,7 +84,7 @@ def test_strut_frames_are_right_handed_with_y_normal_to_the_vertical_plane(lay):
 def test_adapters_are_centred_at_mid_span_with_ends_along_the_strut(tb, lay):
     np.testing.assert_allclose(lay.adapter_centre, 0.5 * (lay.strut_start + lay.strut_end), atol=1e-12)
     gap = np.linalg.norm(lay.adapter_end - lay.adapter_start, axis=1)
-    np.testing.assert_allclose(gap, 2.5 * IN, atol=1e-12)
+    np.testing.assert_allclose(gap, tb.adapter.length, atol=1e-12)
     # The adapter's ends lie on the strut line: distances from the two strut ends add up.
     d_start = np.linalg.norm(lay.adapter_start - lay.strut_start, axis=1)
     d_end = np.linalg.norm(lay.strut_end - lay.adapter_end, axis=1)
