@@ -35,8 +35,9 @@ Model (see ``shared/docs/testbed.md``)
 - **Strut ends**: clamped (``inf`` rotational stiffness), or flexures: the end node then
   follows its attachment in translation only (a rigid link of components 1-3) and is held in
   rotation by a spring in the strut's local frame: the given stiffness about local ``y`` and
-  ``z`` (bending), and :data:`TORSION_RIGID_FACTOR` times the tube's ``G J / L`` about the
-  axis (flexures are torsionally stiff; a penalty, since links are in global components).
+  ``z`` (bending), and :data:`TORSION_RIGID_FACTOR` times ``G J / L`` about the
+  axis (flexures are torsionally stiff; a penalty, since links are in global components;
+  scaled on a solid rod of the tube's diameter so that it does not depend on the walls).
 - **UDF**: one rigid body, master node at its centre of gravity, mass and inertia from
   :func:`geometry.solids.udf_rigid_body`; slaves: the strut top ends and the three
   accelerometer nodes, which carry the accelerometer masses as point masses.
@@ -86,7 +87,8 @@ ELEMENTS_PER_SEGMENT = 4
 #: Wafers shorter than the adapter by less than this fraction of its length are taken to
 #: cover it all (a lip of a few micrometres would be a needlessly stiff element).
 MIN_LIP = 0.01
-#: Torsional stiffness of a flexure, as a multiple of the thickest tube's ``G J / L``.
+#: Torsional stiffness of a flexure, as a multiple of ``G J / L`` of a solid rod of the
+#: tube's outside diameter (a wall-independent scale).
 TORSION_RIGID_FACTOR = 1.0e3
 
 UDF_MASTER = 10
@@ -358,8 +360,9 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
     k_top, k_base = tb.struts.top_rotational_stiffness, tb.struts.base_rotational_stiffness
     flex = np.full((6, 2), -1, dtype=np.int64)
     G = tb.struts.youngs_modulus / (2.0 * (1.0 + tb.struts.poisson_ratio))
-    _, I_max = tube_properties(tb.struts.outer_radius, max(tb.struts.walls))
-    k_tor = TORSION_RIGID_FACTOR * G * 2.0 * float(I_max) / tb.struts.length
+    # Scaled on a solid rod of the tube's outside diameter: independent of the walls, so
+    # that wall sweeps (wall_basis) leave it unchanged.
+    k_tor = TORSION_RIGID_FACTOR * G * 0.5 * math.pi * tb.struts.outer_radius**4 / tb.struts.length
 
     def rot_spring(k):  # stiffness in the strut frame: torsion about x, bending about y and z
         return [0.0, 0.0, 0.0, k_tor, k, k]
