@@ -44,7 +44,7 @@ import scipy.linalg
 from tqdm.auto import tqdm
 
 from plid._blas import blas_threads as _limit_blas
-from plid.canonical import ObserverBasis, check_order, from_statespace, split_theta, join_theta
+from plid.canonical import ObserverBasis, check_order, from_statespace, split_theta
 from plid.errors import DataError, IdentificationError
 from plid.recursion_common import Problem
 from plid.recursion_direct import direct_covariance, direct_init, direct_step
@@ -264,12 +264,8 @@ class PLID:
             check_order(self.order, p) * p, p)
         if basis.p != p:
             raise IdentificationError(f"basis has {basis.p} outputs but the data has {p}")
-        check_order(self.order, p) if basis.name == "shift" else None
-        n = basis.n
-        Q = self.Q
-        Qa = np.asarray(Q, dtype=float)
         qt = self.Q_theta
-        return Problem(basis, m, Qa * decay, self.R, self.N,
+        return Problem(basis, m, np.asarray(self.Q, dtype=float) * decay, self.R, self.N,
                        None if qt is None else np.asarray(qt, dtype=float) * decay)
 
     def _prior(self, pb: Problem, theta0=None, theta_cov0=None):
@@ -379,7 +375,9 @@ class PLID:
         try:
             self._step(pb, st, us_k, ys_k, e_out)
         except (np.linalg.LinAlgError, ValueError):
-            # A broken covariance (NaN/inf) makes LAPACK refuse; keep the run going in NaN.
+            # Only a covariance already broken (NaN/inf, which only the direct form can
+            # reach) makes LAPACK or scipy refuse; carry on in NaN so that the result
+            # reports it (finite=False) instead of raising mid-run.
             st.z[:] = np.nan
         self._k += 1
         if self.form == "direct" and self._first_bad is None:

@@ -31,7 +31,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 from numpy.lib.stride_tricks import as_strided
 from scipy.linalg.blas import dtrmm
 

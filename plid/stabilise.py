@@ -61,7 +61,6 @@ def _real_from_modal(lam, Bc, Cc, D, dt):
     B = np.zeros((n, Bc.shape[1]))
     C = np.zeros((Cc.shape[0], n))
     used = np.zeros(n, bool)
-    i = 0
     col = 0
     order = np.argsort(-np.abs(lam.imag))  # complex first, so pairs are found cleanly
     for k in order:
@@ -88,7 +87,6 @@ def _real_from_modal(lam, Bc, Cc, D, dt):
         C[:, col] = Cc[:, k].real
         C[:, col + 1] = Cc[:, k].imag
         col += 2
-        i += 1
     return control.ss(A, B, C, D, dt)
 
 
