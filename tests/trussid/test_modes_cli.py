@@ -121,6 +121,31 @@ def test_bad_n_exits_with_one_line(cli):
     assert "--n must be at least 1" in one_line_error(cli(FRAME, "--n", "0"))
 
 
-def test_default_testbed_placeholder_is_a_clear_error_until_the_testbed_lands(cli):
-    # The testbed helper replaces trussid.commands.modes.load_testbed; then this test goes.
-    assert "default testbed" in one_line_error(cli())
+def test_default_testbed_json_has_labelled_ascending_modes(cli):
+    res = cli("--n", "24", "--json")
+    assert res.returncode == 0, res.stderr
+    data = json.loads(res.stdout)
+    f, labels = data["frequencies_hz"], data["labels"]
+    assert data["model"] == "default testbed" and len(f) == len(labels) == 24
+    assert f == sorted(f) and data["n_dof"] > 0
+    assert labels[:6] == ["suspension"] * 6 and max(f[:6]) < 5.0
+    assert sum(s.endswith("bending 1 (plane y)") or s.endswith("bending 1 (plane z)") for s in labels) == 12
+    assert labels.count("UDF rigid-body") == 6
+
+
+def test_testbed_toml_is_a_model_and_the_table_shows_labels(tmp_path, cli):
+    path = tmp_path / "clamped.toml"
+    path.write_text('[base]\nsupport = "clamped"\n')
+    res = cli(path, "--n", "8")
+    assert res.returncode == 0, res.stderr
+    assert "label" in res.stdout and "strut 0 bending 1" in res.stdout and "suspension" not in res.stdout
+
+
+def test_bad_testbed_toml_exits_with_one_line_naming_the_key(tmp_path, cli):
+    path = tmp_path / "bad.toml"
+    path.write_text("[struts]\nlenght = 1.0\n")
+    assert "lenght" in one_line_error(cli(path))
+
+
+def test_decks_have_no_labels_in_json(cli):
+    assert json.loads(cli(FRAME, "--json").stdout)["labels"] is None

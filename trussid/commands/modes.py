@@ -3,6 +3,8 @@
 MODEL is a NASTRAN bulk-data deck (.bdf/.dat/.nas/.blk/.bulk), a testbed parameter file
 (.toml) or omitted (the default testbed). :func:`load_model` turns any of these into a
 :class:`LoadedModel`; other commands that take a MODEL (render, plant) can use it too.
+For a testbed the table has a label column (:mod:`fem.labels`) and ``--json`` a ``labels``
+list (``null`` for decks).
 """
 
 from __future__ import annotations
@@ -65,11 +67,27 @@ def load_model(path: str | os.PathLike | None) -> LoadedModel:
 
 
 def load_testbed(path: Path | None) -> LoadedModel:
-    """The testbed model from a parameter file, or the default testbed when ``path`` is None."""
-    what = ("the default testbed is" if path is None
-            else f"{path}: testbed parameter files (.toml) are")
-    raise UserError(f"{what} not available yet in this version; give a NASTRAN bulk-data deck "
-                    f"({', '.join(BULK_SUFFIXES)})")
+    """The testbed model from a parameter file, or the default testbed when ``path`` is None.
+
+    ``info`` is the :class:`fem.testbed.TestbedModel` (model, map of nodes and elements, the
+    parameters), so that commands can label modes or find actuators and sensors.
+    """
+    from fem.testbed import build_testbed
+    from geometry.params_toml import load_testbed as read_testbed
+    from geometry.testbed import INCH, Testbed
+
+    tb = Testbed() if path is None else read_testbed(path)
+    tbm = build_testbed(tb)
+    s = tb.struts
+    ends = " / ".join("clamped" if k == float("inf") else f"flexure {k:g} N m/rad"
+                      for k in (s.base_rotational_stiffness, s.top_rotational_stiffness))
+    notes = [f"testbed: tube OD {s.outer_diameter / INCH:.4g} in, walls "
+             f"{', '.join(f'{t / INCH:.3f}' for t in s.walls)} in; strut ends (base / top): {ends}; "
+             f"base {tb.base.support}",
+             f"mass: {tbm.model.mass_formulation}; beam theory: {tbm.model.beam_theory}",
+             "labels: where each mode's kinetic and strain energy sits (fem.labels)"]
+    return LoadedModel(model=tbm.model, source="default testbed" if path is None else str(path),
+                       notes=notes, info=tbm)
 
 
 def load_bulk_data(path: Path) -> LoadedModel:
@@ -120,16 +138,29 @@ def run(args) -> int:
 
     if args.n is not None and args.n < 1:
         raise UserError(f"--n must be at least 1, got {args.n}")
+    from fem.testbed import TestbedModel
+
     loaded = load_model(args.model)
     n = args.n or loaded.n_modes or DEFAULT_N_MODES
     system = assemble(loaded.model, autospc=loaded.autospc)
-    modes = solve_modes(system, n_modes=n)
+    labels = None
+    if isinstance(loaded.info, TestbedModel):
+        from fem.labels import label_testbed_modes
+        from fem.testbed import solve_testbed_modes
+
+        # The testbed's own solver keeps the sub-hertz suspension modes (solve_modes rounds
+        # eigenvalues below 1e-11 of max K_ii/M_ii to zero, which catches them here).
+        modes = solve_testbed_modes(loaded.info, n, system=system)
+        labels = label_testbed_modes(loaded.info, modes).labels
+    else:
+        modes = solve_modes(system, n_modes=n)
     freqs = [float(f) for f in modes.frequencies_hz]
     model = loaded.model
     if args.json:
         print(json.dumps({
             "model": loaded.source,
             "frequencies_hz": freqs,
+            "labels": labels,
             "n_dof": int(system.n_dof),
             "mass": model.mass_formulation,
             "beam_theory": model.beam_theory,
@@ -149,7 +180,7 @@ def run(args) -> int:
         print(f"only {len(freqs)} modes exist (asked for {n})")
     print(f"units: {loaded.units}")
     print()
-    print(f"{'mode':>5}  {'frequency [Hz]':>16}")
+    print(f"{'mode':>5}  {'frequency [Hz]':>16}" + ("  label" if labels else ""))
     for i, f in enumerate(freqs, start=1):
-        print(f"{i:>5}  {f:>16.6g}")
+        print(f"{i:>5}  {f:>16.6g}" + (f"  {labels[i - 1]}" if labels else ""))
     return 0
