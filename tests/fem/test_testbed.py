@@ -294,3 +294,36 @@ def test_changing_one_wall_moves_that_struts_modes(tb, default, strut):
     own2 = np.sort(m2.frequencies_hz[(lab2.strut == strut) & (lab2.order == 1)])
     assert len(own) == len(own2) == 2
     assert (abs(own2 - own) / own > 1e-3).all()
+
+
+# ------------------------------------------------------------------------------ study script
+def test_wall_thickness_study_writes_a_plot_and_prints_sensitivities(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import matplotlib.image as mpimg
+
+    root = Path(__file__).resolve().parents[2]
+    out = tmp_path / "plots" / "study.png"
+    res = subprocess.run([sys.executable, str(root / "examples" / "wall_thickness_study.py"), "--points", "2",
+                          "--modes", "20", "--out", str(out)], capture_output=True, text=True, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert out.is_file() and out.stat().st_size > 20_000
+    img = mpimg.imread(out)
+    assert img.shape[0] > 400 and img.shape[1] > 600 and img[..., :3].std() > 0.05  # not blank
+    assert not list(out.parent.glob(".study.*"))  # no temporary file left behind
+    assert "sensitivities df/dt" in res.stdout and "strut 0 bending 1" in res.stdout
+
+
+def test_wall_thickness_study_rejects_a_bad_sweep_without_writing(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    out = tmp_path / "study.png"
+    res = subprocess.run([sys.executable, str(root / "examples" / "wall_thickness_study.py"), "--points", "1",
+                          "--out", str(out)], capture_output=True, text=True)
+    assert res.returncode == 2 and "--points" in res.stderr and "Traceback" not in res.stderr
+    assert not out.exists()
