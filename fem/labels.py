@@ -31,7 +31,9 @@ Rules (in this order; fractions are of the mode's total kinetic or strain energy
    ends removed), counting only nodes whose deflection exceeds :data:`NODE_THRESHOLD` of
    the largest: first bending has no interior zero, second one, third two. This is local
    to the mode (it does not need the strut's other modes to be in the computed set) and
-   ignores the near-zero values around a node of the shape.
+   ignores the near-zero values around a node of the shape. A strut's ``y`` and ``z``
+   bending modes of one order are close in frequency and may combine into an oblique
+   plane; the label then names the larger part (both may carry the same plane).
 """
 
 from __future__ import annotations

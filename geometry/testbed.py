@@ -143,7 +143,7 @@ class StrutParams(_Section):
     base_rotational_stiffness, top_rotational_stiffness : float
         Rotational spring of each strut end in both bending directions [N m/rad]; ``inf`` (or
         ``None`` on construction) is a clamped end. Calibrated: base 1000 N m/rad (a flexure
-        about 12 times the tube's ``E I / L``), top clamped: with clamped ends the second
+        12-22 times the tubes' ``E I / L``), top clamped: with clamped ends the second
         bending modes of the thin walls and the first of the thick ones cannot both be in
         band (thesis Fig. 2.2.1-2 shows flexures; their stiffness is not given).
     """
