@@ -20,7 +20,7 @@ def test_noiseless_data_gives_parameters_to_1e_8_and_roundoff_innovations(
         n, m, p, modal_plant, simulate, rng):
     plant = modal_plant(np.linspace(50, 350, n // 2), [0.02] * (n // 2), m, p, 1600, rng)
     theta_true, _ = from_statespace(plant, ObserverBasis.shift(n, p))
-    u = rng.standard_normal((2000, m))
+    u = rng.standard_normal((1000, m))
     y, _ = simulate(plant, u)
     # Noiseless: no state noise, output noise at round-off level (R must be > 0).
     res = PLID(n, R=1e-14, Q=0.0, dt=plant.dt).fit(u, y)

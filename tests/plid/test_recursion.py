@@ -102,7 +102,7 @@ def test_second_order_terms_are_significant_in_the_moment_check():
 def test_direct_and_sqrt_forms_give_the_same_estimates(n, m, p, snr, extra, modal_plant,
                                                        simulate, rng):
     plant = modal_plant(np.linspace(50, 350, n // 2), [0.02] * (n // 2), m, p, 1600, rng)
-    u = rng.standard_normal((1000 if extra else 2000, m))
+    u = rng.standard_normal((1000, m))
     y, _ = simulate(plant, u, rng, snr)
     # Well conditioned: a prior variance of the size of the coefficients (|theta| < 10
     # here). With the default 1e4 prior the direct form's round-off alone separates the

@@ -7,7 +7,7 @@ import pytest
 from plid.errors import IdentificationError
 from plid.reduce import balanced_truncation, hankel_singular_values
 
-Z = np.exp(1j * np.linspace(0, np.pi, 1500))
+Z = np.exp(1j * np.linspace(0, np.pi, 600))
 
 
 def _hinf_on_grid(sys):
