@@ -169,11 +169,18 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True)
     u = np.atleast_2d(np.asarray(u, dtype=float).T).T
     y = np.atleast_2d(np.asarray(y, dtype=float).T).T
     p = y.shape[1]
+    m = u.shape[1]
     if block_rows is None:
         # N4SID accuracy on lightly damped plants depends strongly on the block rows (case
-        # (b) of the benchmark: 2.7 dB at 30, 0.12 dB at 40), so several are tried.
+        # (b) of the benchmark: 2.7 dB at 30, 0.12 dB at 40, 0.018 dB at 80), so several
+        # are tried; the Hankel matrices need more columns than rows.
         lo = -(-n // p) + 1
-        block_rows = sorted({max(lo, i) for i in (20, 30, 40, 60, 80)})
+        cand = {max(lo, i) for i in (20, 30, 40, 60, 80)}
+        block_rows = sorted(i for i in cand if u.shape[0] - 2 * i >= 2 * i * (m + p))
+        if not block_rows:
+            raise IdentificationError(
+                f"{u.shape[0]} samples are too few for a subspace estimate of order {n} "
+                f"(at least {2 * lo * (m + p + 1)} needed); identify from scratch instead")
     best, info = None, {"candidates": {}}
     for i in np.atleast_1d(block_rows):
         fit = n4sid(u, y, n, int(i), dt)

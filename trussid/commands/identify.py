@@ -75,14 +75,22 @@ def add_parser(subparsers):
                    help="input columns/channels to use (names; space or comma separated)")
     p.add_argument("--outputs", nargs="+", metavar="NAME",
                    help="output columns/channels to use")
-    p.add_argument("--form", choices=("sqrt", "direct"), default="sqrt",
-                   help="PLID recursion: square-root (default) or direct covariance form")
-    p.add_argument("--R", type=float, default=1e-4, metavar="VAR",
-                   help="output-noise variance, scaled units (default 1e-4: 40 dB SNR)")
+    p.add_argument("--start", choices=("subspace", "scratch", "plain"), default="subspace",
+                   help="subspace (default): a quick N4SID estimate (D = 0) refined by one "
+                   "PLID pass in a rotation observer basis (won the thesis-scale benchmarks, "
+                   "benchmarks/results/plid_thesis.md); scratch: no prior, rotation basis "
+                   "at the output-spectrum peaks, four passes with shrinking state noise; "
+                   "plain: one PLID run in the shift basis with --Q and --passes")
+    p.add_argument("--form", choices=("sqrt", "direct"), default=None,
+                   help="PLID recursion: square-root or direct covariance form (default: "
+                   "direct for --start subspace/scratch, as benchmarked; sqrt for plain)")
+    p.add_argument("--R", type=float, default=None, metavar="VAR",
+                   help="output-noise variance, scaled units (default: estimated from the "
+                   "subspace estimate's residual; 1e-4, i.e. 40 dB SNR, otherwise)")
     p.add_argument("--Q", type=float, default=1e-6, metavar="VAR",
-                   help="state-noise variance, scaled units (default 1e-6)")
+                   help="state-noise variance, scaled units, --start plain only (default 1e-6)")
     p.add_argument("--passes", type=int, default=1, metavar="P",
-                   help="batch passes over the data (default 1)")
+                   help="batch passes over the data, --start plain only (default 1)")
     p.add_argument("--json", action="store_true",
                    help="print poles and the prediction ratio as JSON")
     p.set_defaults(func=run)
@@ -108,20 +116,32 @@ def run(args) -> int:
     check_order(n, p)
     check_enough_samples(data, n * (m + p), f"an order-{n} model with {m} inputs and "
                          f"{p} outputs")
-    est = PLID(n, form=args.form, dt=data.dt, Q=args.Q, R=args.R, passes=args.passes,
-               progress=None if sys.stderr.isatty() else False)
+    start = getattr(args, "start", "plain")
+    form = args.form or ("sqrt" if start == "plain" else "direct")
+    progress = None if sys.stderr.isatty() else False
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PLIDWarning)
-        res = est.fit(data.u, data.y)
+        if start == "plain":
+            R_used = 1e-4 if args.R is None else args.R
+            est = PLID(n, form=form, dt=data.dt, Q=args.Q, R=R_used, passes=args.passes,
+                       progress=progress)
+            res = est.fit(data.u, data.y)
+            K = res.K
+        else:
+            from plid.multipass import identify
+
+            ident = identify(data.u, data.y, n, data.dt, start=start, R=args.R, form=form,
+                             progress=progress)
+            res, K = ident.result, ident.K
+            R_used = [float(r) for r in np.atleast_1d(ident.R)]
     seconds = time.perf_counter() - t0
     if not res.finite:
         raise IdentificationError(
-            f"PLID ({args.form} form) diverged on {data.n_samples} samples: the estimate is "
+            f"PLID ({form} form) diverged on {data.n_samples} samples: the estimate is "
             "not finite; try --form sqrt, a larger --Q or --R, or another --order")
     notes = [str(w.message) for w in caught if issubclass(w.category, PLIDWarning)]
     model = res.model
-    K = res.K
     if K is None:
         K = predictor_gain(model, res.Q + model.B @ res.N @ model.B.T, res.R)
     skip = prediction_burn_in(data.n_samples, n)
@@ -132,7 +152,10 @@ def run(args) -> int:
     summary = {
         "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
         "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
-        "form": args.form, "passes": args.passes, "Q": args.Q, "R": args.R,
+        "start": start, "form": form,
+        "passes": args.passes if start == "plain" else len(ident.info["passes"]),
+        "Q": args.Q if start == "plain" else [p["Q"] for p in ident.info["passes"]],
+        "R": R_used,
         "seconds": seconds, "K_source": res.K_source,
         "signal_to_prediction_error_db": ratio["overall"],
         "signal_to_prediction_error_db_per_output": ratio["per_channel"],
@@ -145,7 +168,8 @@ def run(args) -> int:
         print(json.dumps(json_safe(summary), indent=2))
         return 0
     print(f"identified an order-{n} model ({m} input(s), {p} output(s)) from "
-          f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s ({args.form} form)")
+          f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s ({form} form, "
+          f"{start} start)")
     print(f"wrote {out}")
     per = ", ".join(f"{name} {v:.2f}" for name, v in zip(data.output_names, ratio["per_channel"]))
     print(f"one-step signal-to-prediction-error ratio: {ratio['overall']:.2f} dB ({per}; "
