@@ -340,7 +340,8 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
             model.add_beams(strut_elements[i, sel], np.column_stack([strut_nodes[i, sel], strut_nodes[i, sel + 1]]),
                             sec, mat, orient=lay.strut_y[i], nsm=props["nsm"][sel], label=f"strut {i} {names[kind]}")
         lumped = props["ip_missing"] * np.diff(s)  # kg m^2 per element
-        el = np.flatnonzero(lumped > 0)
+        # (lumped beam mass has no rotary inertia at all: nothing to complete then)
+        el = np.flatnonzero(lumped > 0) if mass == "consistent" else np.zeros(0, int)
         if len(el):
             axis = lay.strut_axis[i]
             half = 0.5 * lumped[el]
@@ -508,7 +509,7 @@ def wall_basis(tbm: TestbedModel, system: System | None = None) -> WallBasis:
     ----------
     tbm : TestbedModel
         Built with ``beam_theory="euler-bernoulli"`` (the Timoshenko shear factor makes the
-        element matrices non-linear in the section properties).
+        element matrices non-linear in the section properties) and consistent mass.
     system : fem.assembly.System, optional
         ``assemble(tbm.model)`` if already available.
 
@@ -520,6 +521,9 @@ def wall_basis(tbm: TestbedModel, system: System | None = None) -> WallBasis:
     if model.beam_theory != "euler-bernoulli":
         raise ModelError("wall sweeps need the Euler-Bernoulli beam theory (Timoshenko matrices are "
                          "not linear in the section properties)")
+    if model.mass_formulation != "consistent":
+        raise ModelError("wall sweeps need the consistent mass (lumped mass leaves rotations massless, "
+                         "which the dense subset eigensolver of wall_modes does not condense)")
     tb = tbm.testbed
     system = assemble(model) if system is None else system
     T = system.T.tocsr()
@@ -608,9 +612,25 @@ def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | N
     from fem.modal import Modes
 
     system = assemble(tbm.model) if system is None else system
-    k = min(int(n_modes), system.n_dof)
-    lam, X = la.eigh(system.K.toarray(), system.M.toarray(), subset_by_index=[0, k - 1], driver="gvx",
-                     check_finite=False)
+    K, M = system.K.toarray(), system.M.toarray()
+    d = np.abs(np.diag(M))
+    rot = (system.dofs % 6) >= 3
+    massless = np.zeros(len(d), bool)
+    for sel in (rot, ~rot):
+        massless[sel] = d[sel] <= 1e-12 * d[sel].max()
+    z, m = np.flatnonzero(massless), np.flatnonzero(~massless)
+    if len(z):
+        # Lumped mass leaves the rotations massless: condense them statically (exact, they
+        # carry no inertia).
+        G = -la.cho_solve(la.cho_factor(K[np.ix_(z, z)]), K[np.ix_(z, m)])
+        Kc = K[np.ix_(m, m)] + K[np.ix_(m, z)] @ G
+        K, M = 0.5 * (Kc + Kc.T), M[np.ix_(m, m)]
+    k = min(int(n_modes), len(m))
+    lam, Y = la.eigh(K, M, subset_by_index=[0, k - 1], driver="gvx", check_finite=False)
+    X = np.zeros((system.n_dof, k))
+    X[m] = Y
+    if len(z):
+        X[z] = G @ Y
     lam = np.maximum(lam, 0.0)
     omega = np.sqrt(lam)
     return Modes(frequencies_hz=omega / (2 * np.pi), omega=omega, shapes=X, shapes_full=system.T @ X,

@@ -183,6 +183,8 @@ def test_sweep_matrices_equal_a_rebuilt_model(tb):
 def test_sweep_needs_euler_bernoulli_and_valid_walls(tb):
     with pytest.raises(ModelError, match="Euler-Bernoulli"):
         wall_basis(build_testbed(tb, beam_theory="timoshenko"))
+    with pytest.raises(ModelError, match="consistent mass"):
+        wall_basis(build_testbed(tb, mass="lumped"))
     basis = wall_basis(build_testbed(tb))
     bad = list(tb.struts.walls)
     bad[4] = tb.struts.outer_radius
@@ -213,6 +215,14 @@ def test_softer_flexures_lower_the_first_bending_modes(tb):
     stiff, soft = first_bending(1e5), first_bending(1e2)
     assert len(stiff) == len(soft) == 12
     assert (soft < stiff).all()
+
+
+def test_lumped_mass_and_timoshenko_variants_stay_close_to_the_default(tb, default):
+    """Other element options give the same bands: lumped mass within 2 %, shear within 1 %."""
+    f0 = default[1].frequencies_hz[6:30]
+    for kw, tol in ((dict(mass="lumped"), 0.02), (dict(beam_theory="timoshenko"), 0.01)):
+        f = solve_testbed_modes(build_testbed(tb, **kw), 30).frequencies_hz[6:30]
+        assert (abs(f - f0) / f0).max() < tol, kw
 
 
 def test_clamped_base_has_no_suspension(tb):
