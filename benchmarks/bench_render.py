@@ -45,8 +45,10 @@ def load(name: str):
         from fem.render import testbed_decorations
         from fem.testbed import build_testbed
 
+        from fem.testbed import solve_testbed_modes
+
         tbm = build_testbed()
-        model, decorations = tbm.model, testbed_decorations(tbm)
+        return tbm.model, solve_testbed_modes(tbm, 12), testbed_decorations(tbm)
     elif name == "frame.bdf":
         from fem.nastran import read_bdf
 

@@ -400,10 +400,9 @@ def testbed():
     """The default testbed's model, its first 18 modes (6 suspension, 12 strut bending),
     their labels and its solids as decorations."""
     testbed_mod = pytest.importorskip("fem.testbed")
-    from fem.modal import solve_modes
 
     tbm = testbed_mod.build_testbed()
-    modes = solve_modes(tbm.model, n_modes=18)
+    modes = testbed_mod.solve_testbed_modes(tbm, 18)
     try:
         from fem.labels import label_testbed_modes
 

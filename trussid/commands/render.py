@@ -107,7 +107,15 @@ def run(args) -> int:
     loaded = load_model(args.model)
     wanted = args.grid if args.grid is not None else args.mode
     system = assemble(loaded.model, autospc=loaded.autospc)
-    modes = solve_modes(system, n_modes=wanted)
+    tbm = _testbed_of(loaded)
+    if tbm is not None:
+        # as `trussid modes` does: the testbed's own solver keeps its sub-hertz suspension
+        # modes, which solve_modes would round to zero
+        from fem.testbed import solve_testbed_modes
+
+        modes = solve_testbed_modes(tbm, wanted, system=system)
+    else:
+        modes = solve_modes(system, n_modes=wanted)
     n = len(modes.frequencies_hz)
     if wanted > n:
         what = f"--grid {args.grid}: only" if args.grid is not None else f"--mode {args.mode} is out of range:"
