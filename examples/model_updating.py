@@ -63,7 +63,8 @@ def main(argv=None) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fem.testbed import build_testbed, wall_modes, wall_basis
+    from fem.labels import label_testbed_modes
+    from fem.testbed import build_testbed, solve_testbed_modes
     from geometry.testbed import INCH, Testbed
     from plid.experiment import run_experiment
     from trussid.files import atomic_path
@@ -79,16 +80,20 @@ def main(argv=None) -> int:
     nominal_tbm = build_testbed(nominal_tb)
     print(f"true walls / nominal: {np.round(truth / nominal, 4).tolist()}")
 
+    true_modes = solve_testbed_modes(true_tbm, 40)
+    lab = label_testbed_modes(true_tbm, true_modes)
+    first_bending = [j for j, (k, o) in enumerate(zip(lab.kind, lab.order)) if k == "bending" and o == 1]
+    udf = [j for j, k in enumerate(lab.kind) if k == "udf"]
     if args.exact:
-        f_true, _ = wall_modes(wall_basis(true_tbm), truth, 24)
-        measured = f_true[6:24]  # 12 strut bending + 6 UDF rigid-body modes
-        print(f"exact frequencies of the true model: {len(measured)} modes")
+        measured = true_modes.frequencies_hz[sorted(first_bending + udf)]
+        print(f"exact frequencies of the true model: {len(first_bending)} first strut bending and "
+              f"{len(udf)} UDF rigid-body modes")
         rep = update_walls(measured, nominal_tb, tbm=nominal_tbm, seed=args.seed)
         title = "exact frequencies (12 bending + 6 UDF modes)"
     else:
         plant, sensors, modes = bending_experiment_plant(tbm=true_tbm)
-        fb = modes.frequencies_hz
-        band = (0.8 * fb[6], 1.25 * fb[17])  # around the first strut bending modes
+        fb = true_modes.frequencies_hz[first_bending]
+        band = (0.8 * fb.min(), 1.25 * fb.max())  # around the first strut bending modes
         exp = run_experiment(plant, n_samples, "white", rms=1.0, band=(30.0, 90.0), seed=args.seed,
                              snr_db=args.snr, dac_bits=12, adc_bits=12, adc_full_scale="auto")
         print(f"simulated {n_samples} samples at {1 / plant.dt:g} Hz ({n_samples * plant.dt:.1f} s), "
