@@ -100,6 +100,9 @@ def _measurement(pb: Problem, st: SqrtState, yw: np.ndarray) -> None:
     D = np.ones(J)
     U = np.empty((J, p))
     V = np.empty((J, p))
+    # State correction so far is L[:, :J] @ wsum; output k sees Hw_k x + g_k . wsum.
+    wsum = np.zeros(J)
+    hx = st.Hw @ z[q:]
     for k in range(p):
         g = Gm[k]
         Uk, Vk = U[:, :k], V[:, :k]
@@ -108,13 +111,12 @@ def _measurement(pb: Problem, st: SqrtState, yw: np.ndarray) -> None:
             f = D * g + np.einsum("jr,jr->j", Vk, _rcumsum_excl(g[:, None] * Uk))
         else:
             f = g
-        tail = np.cumsum((f * f)[::-1])[::-1]     # sum_{i >= j} f_i^2
-        a = 1.0 + tail
-        a1 = np.empty_like(a)
-        a1[:-1] = a[1:]
-        a1[-1] = 1.0
-        d = np.sqrt(a1 / a)
-        beta = -f / np.sqrt(a * a1)
+        a = 1.0 + np.cumsum((f * f)[::-1])[::-1]  # 1 + sum_{i >= j} f_i^2
+        a1 = np.append(a[1:], 1.0)
+        s = np.sqrt(a * a1)
+        d = a1 / s                                 # sqrt(a_{j+1} / a_j)
+        beta = f / s
+        beta *= -1.0
         if k:
             Vf = Vk * f[:, None]
             w = D * f + np.einsum("jr,jr->j", Uk, _fcumsum_excl(Vf))   # (T_1..T_{k-1}) f
@@ -122,11 +124,12 @@ def _measurement(pb: Problem, st: SqrtState, yw: np.ndarray) -> None:
             Vk -= np.cumsum(Vf, axis=0) * beta[:, None]
         else:
             w = f
-        innov = yw[k] - st.Hw[k] @ z[q:]
-        z += (LJ @ w) * (innov / a[0])
+        innov = yw[k] - hx[k] - g @ wsum
+        wsum += w * (innov / a[0])
         U[:, k] = w
         V[:, k] = beta
         D *= d
+    z += LJ @ wsum
     # T = diag(D) + tril(U V^T, -1), built Fortran-ordered for trmm (which reads only
     # the lower triangle).
     W = V @ U.T                                  # W[j, i] = V_j . U_i = T[i, j]
