@@ -20,7 +20,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
 from fem.assembly import System, assemble
-from fem.constraints import dof_label, rigid_body_modes
+from fem.constraints import rigid_body_modes
 from fem.errors import ModelError
 
 #: Above this many reduced DOFs ``method="auto"`` switches from dense to shift-invert
@@ -318,7 +318,8 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
     model_or_system : fem.Model or System
         A model is assembled first (with ``autospc``).
     n_modes : int
-        Number of modes (capped at the number of DOFs).
+        Number of modes (capped at the number of DOFs that carry mass: massless DOFs add
+        no finite-frequency mode).
     method : {"auto", "dense", "sparse"}
         "auto": dense up to :data:`DENSE_MAX_DOF` reduced DOFs or for more than a third
         of the modes, else shift-invert Lanczos.
@@ -339,7 +340,8 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
     ------
     ModelError
         A mechanism (a zero-frequency mode that is not a rigid-body motion) in a model
-        with supports, naming the node and component that moves most.
+        with supports, or a direction with neither mass nor stiffness, naming the node and
+        component where the factorisation of K finds no stiffness.
     """
     system = model_or_system if isinstance(model_or_system, System) else assemble(model_or_system, autospc=autospc)
     if method not in ("auto", "dense", "sparse"):
