@@ -358,10 +358,10 @@ class AccelerometerParams(_Section):
         [V/(m/s^2)]. Suggested: 100 mV/g = 0.1 / 9.80665.
     conditioning_gain : float
         Voltage gain of the signal conditioner (charge amplifier) between each
-        accelerometer and the A/D [V/V]. Suggested: 2500. The thesis reached 46 dB one-step
+        accelerometer and the A/D [V/V]. Suggested: 2000. The thesis reached 46 dB one-step
         prediction with 12-bit +-10 V converters, so its sensor signals must have filled a
         good part of the A/D range; the bare 100 mV/g output of this structure is about
-        1e-3 V RMS, under one 12-bit LSB (4.9 mV). 2500 was chosen on the demo's MIMO
+        1e-3 V RMS, under one 12-bit LSB (4.9 mV). 2000 was chosen on the demo's MIMO
         experiment (all three channels driven with independent 2.5 V RMS white noise at the
         D/A): the conditioned outputs then have RMS of about 0.16, 0.20 and 0.29 of full
         scale (acc1..acc3) and peaks under full scale, so the A/D rarely clips
@@ -373,8 +373,8 @@ class AccelerometerParams(_Section):
 
     mass: float = _p(0.010, "kg", "mass of each accelerometer (suggested: 10 g)")
     sensitivity: float = _p(0.1 / G0, "V/(m/s^2)", "sensitivity (suggested: 100 mV/g)")
-    conditioning_gain: float = _p(2500.0, "V/V", "signal-conditioner gain between accelerometer "
-                                  "and A/D (suggested: 2500, fills about 1/4 of the 12-bit "
+    conditioning_gain: float = _p(2000.0, "V/V", "signal-conditioner gain between accelerometer "
+                                  "and A/D (suggested: 2000, fills about 1/4 of the 12-bit "
                                   "range in the demo)")
 
 
