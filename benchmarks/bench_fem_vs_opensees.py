@@ -197,7 +197,17 @@ def machine_info() -> dict:
         for line in fh:
             if line.startswith("MemTotal:"):
                 mem = f"{int(line.split()[1]) / 1024**2:.1f} GiB"
+    import fem
+
+    fem_dir = Path(fem.__file__).resolve().parent
+    git = subprocess.run(["git", "-C", str(fem_dir), "log", "-1", "--format=%h", "--", "."],
+                         capture_output=True, text=True)
+    dirty = subprocess.run(["git", "-C", str(fem_dir), "status", "--porcelain", "--", "."],
+                           capture_output=True, text=True).stdout.strip()
+    fem_version = (git.stdout.strip() + (" + uncommitted changes" if dirty else "")) if git.returncode == 0 \
+        else os.environ.get("TRUSSID_FEM_VERSION", "unknown")
     return {"nproc": len(os.sched_getaffinity(0)), "cpu": model, "memory": mem,
+            "fem": f"{fem_dir} ({fem_version})",
             "loadavg": os.getloadavg(), "python": platform.python_version(),
             "numpy": np.__version__, "scipy": __import__("scipy").__version__,
             "date_utc": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
@@ -223,7 +233,7 @@ def markdown(results: dict, info: dict) -> str:
     lines = [
         f"Machine: {info['nproc']} cores ({info['cpu']}), {info['memory']}, load average at start "
         f"{info['loadavg'][0]:.2f}/{info['loadavg'][1]:.2f}/{info['loadavg'][2]:.2f}; Python {info['python']}, "
-        f"numpy {info['numpy']}, scipy {info['scipy']}; {info['date_utc']}.",
+        f"numpy {info['numpy']}, scipy {info['scipy']}; {info['date_utc']}; fem from {info['fem']}.",
         "",
         "| structure | DOF | tool | setup s | assembly s | modes s | assembly+modes s | total s | CPU s | peak MB (base) | runs: totals s | load 1-min |",
         "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|---:|",
