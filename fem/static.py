@@ -6,7 +6,7 @@ import numpy as np
 
 from fem.assembly import System, assemble
 from fem.errors import ModelError
-from fem.modal import factor_stiffness
+from fem.modal import BLAS_THREADS, blas_threads, factor_stiffness
 
 
 def solve_static(model_or_system, f_full, *, autospc: bool = False) -> np.ndarray:
@@ -38,9 +38,10 @@ def solve_static(model_or_system, f_full, *, autospc: bool = False) -> np.ndarra
         raise ModelError(f"load vector has {f_full.shape[0]} rows; the model has {n_full} DOFs "
                          f"(6 per node)")
     f = system.T.T @ f_full
-    fac, j = factor_stiffness(system)
-    if fac is None:
-        where = f" at {system.dof_label(j)}" if j is not None else ""
-        raise ModelError(f"the stiffness is singular{where}: the model can move freely (add "
-                         f"supports) or is a mechanism")
-    return system.T @ fac.solve(f)
+    with blas_threads(BLAS_THREADS):
+        fac, j = factor_stiffness(system)
+        if fac is None:
+            where = f" at {system.dof_label(j)}" if j is not None else ""
+            raise ModelError(f"the stiffness is singular{where}: the model can move freely (add "
+                             f"supports) or is a mechanism")
+        return system.T @ fac.solve(f)
