@@ -601,8 +601,12 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
     return np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi), X
 
 
-def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | None = None):
+def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | None = None,
+                        max_frequency_hz: float | None = None):
     """Lowest modes of a testbed model as :class:`fem.modal.Modes`, by dense subset ``eigh``.
+
+    ``max_frequency_hz`` [Hz], when given, replaces ``n_modes``: every mode below it (LAPACK
+    finds them by value, which costs no more than a fixed count).
 
     Unlike :func:`fem.modal.solve_modes`, eigenvalues are not rounded to zero below a
     fraction of the largest ``K_ii / M_ii``: the suspension modes (below 1 Hz, eigenvalues
@@ -625,8 +629,13 @@ def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | N
         G = -la.cho_solve(la.cho_factor(K[np.ix_(z, z)]), K[np.ix_(z, m)])
         Kc = K[np.ix_(m, m)] + K[np.ix_(m, z)] @ G
         K, M = 0.5 * (Kc + Kc.T), M[np.ix_(m, m)]
-    k = min(int(n_modes), len(m))
-    lam, Y = la.eigh(K, M, subset_by_index=[0, k - 1], driver="gvx", check_finite=False)
+    if max_frequency_hz is None:
+        k = min(int(n_modes), len(m))
+        lam, Y = la.eigh(K, M, subset_by_index=[0, k - 1], driver="gvx", check_finite=False)
+    else:
+        w_max = 2 * np.pi * float(max_frequency_hz)
+        lam, Y = la.eigh(K, M, subset_by_value=[-np.inf, w_max**2], driver="gvx", check_finite=False)
+        k = len(lam)
     X = np.zeros((system.n_dof, k))
     X[m] = Y
     if len(z):

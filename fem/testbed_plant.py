@@ -21,10 +21,6 @@ from fem.plant import modal_plant, residual_flexibility
 from fem.sensors import Sensor
 from fem.testbed import TestbedModel, build_testbed, solve_testbed_modes
 
-#: Modes computed before keeping those below the Nyquist frequency.
-MAX_MODES = 120
-
-
 @dataclass
 class TestbedPlant:
     """A testbed plant and what it was made from.
@@ -158,16 +154,15 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
     tb = tbm.testbed
     chain = chain or lab_chain_of(tb, sample_rate)
     system = assemble(tbm.model)
-    n_compute = min(system.n_dof, MAX_MODES if n_modes is None else int(n_modes))
-    if n_compute < 1:
-        raise ModelError(f"n_modes must be >= 1, got {n_modes}")
-    modes = solve_testbed_modes(tbm, n_modes=n_compute, system=system)
     if n_modes is None:
-        keep = int(np.count_nonzero(modes.frequencies_hz < 0.5 * chain.sample_rate))
-        if keep == n_compute and n_compute < system.n_dof:
-            raise ModelError(f"more than {MAX_MODES} modes lie below the Nyquist frequency: give n_modes")
+        modes = solve_testbed_modes(tbm, system=system, max_frequency_hz=0.5 * chain.sample_rate)
+        if len(modes.omega) == 0:
+            raise ModelError(f"no mode lies below the Nyquist frequency {0.5 * chain.sample_rate:g} Hz")
     else:
-        keep = n_compute
+        if int(n_modes) < 1:
+            raise ModelError(f"n_modes must be >= 1, got {n_modes}")
+        modes = solve_testbed_modes(tbm, n_modes=int(n_modes), system=system)
+    keep = len(modes.omega)
     F = channel_loads(tbm)
     sensors = accelerometers(tbm, quantity)
     zeta = tb.damping.modal_ratio if damping is None else damping
@@ -178,15 +173,8 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
     cont, disc = lab_plant(structure, chain, max_mode_hz=float(modes.frequencies_hz[keep - 1]))
     wafer = wafer_of(tb)
     return TestbedPlant(continuous=cont, discrete=disc, structure=structure,
-                        modes=_first(modes, keep), loads=F,
+                        modes=modes, loads=F,
                         capacitance=tb.pzt.wafers_per_strut * wafer.capacitance, chain=chain, tbm=tbm)
 
 
 testbed_plant.__test__ = False  # a builder, not a pytest test, despite its name
-
-
-def _first(modes, k: int):
-    from dataclasses import replace
-
-    return replace(modes, frequencies_hz=modes.frequencies_hz[:k], omega=modes.omega[:k],
-                   shapes=modes.shapes[:, :k], shapes_full=modes.shapes_full[:, :k])
