@@ -142,21 +142,31 @@ def testbed_case():
     return case, level
 
 
-def run_testbed(seed=21, log=print):
+def run_testbed(seed=21, band=None, log=print):
     """Acceptance 2: 30-state SIMO models of the testbed plant from 12-bit data: stable?
     one-step prediction on a separate 12-bit validation record."""
     from plid.experiment import run_experiment
 
     case, level = testbed_case()
     kw = dict(dac_bits=12, adc_bits=12, dac_full_scale=10.0, adc_full_scale=10.0)
-    ex = run_experiment(case.plant, N_ID, "white", rms=level, seed=seed, **kw)
-    val = run_experiment(case.plant, N_VAL, "white", rms=level, seed=seed + 1000, **kw)
+    ex = run_experiment(case.plant, N_ID, "white", rms=level, band=band, seed=seed, **kw)
+    val = run_experiment(case.plant, N_VAL, "white", rms=level, band=band, seed=seed + 1000,
+                         **kw)
     u, y = ex.data.u, ex.data.y
     dt = case.plant.dt
-    out = {"case": case.name, "input_rms_V": level, "clipped": ex.clipped_total,
-           "output_rms_V": np.sqrt(np.mean(y ** 2, 0)).tolist(), "models": {}}
-    log(f"  {case.name}: input {level:.3g} V RMS, output RMS {out['output_rms_V']}, "
-        f"clipped {ex.clipped_total}")
+    # Best possible one-step ratio per channel: the A/D's own rounding (LSB^2 / 12) is
+    # unpredictable, so no model's prediction error can fall below it.
+    lsb = 20.0 / 4096
+    ms = np.mean(val.data.y ** 2, 0)
+    floor = 10 * np.log10(ms / (lsb ** 2 / 12))
+    out = {"case": case.name, "input_rms_V": level, "band": band, "clipped": ex.clipped_total,
+           "output_rms_V": np.sqrt(np.mean(y ** 2, 0)).tolist(),
+           "quantisation_bound_db": floor.tolist(),
+           "quantisation_bound_overall_db": float(-10 * np.log10(np.mean(10 ** (-floor / 10)))),
+           "models": {}}
+    log(f"  {case.name}: input {level:.3g} V RMS, band {band}, output RMS "
+        f"{out['output_rms_V']}, clipped {ex.clipped_total}, quantisation bound "
+        f"{out['quantisation_bound_db']} dB")
     from plid.metrics import default_noise_covariances, predictor_gain
 
     for i in (20, 40, 60, 80):
@@ -181,13 +191,15 @@ def run_testbed(seed=21, log=print):
             ident = identify(u, y, 30, dt, start=start)
         sec = time.perf_counter() - t0
         stable = bool(np.max(np.abs(np.linalg.eigvals(np.asarray(ident.model.A)))) < 1)
-        pr = prediction_ratio_db(ident.model, val.data.u, val.data.y, K=ident.K,
-                                 skip=300)["overall"]
+        prv = prediction_ratio_db(ident.model, val.data.u, val.data.y, K=ident.K, skip=300)
+        pr = prv["overall"]
         pr_id = prediction_ratio_db(ident.model, u, y, K=ident.K, skip=300)["overall"]
         out["models"][f"PLID {start}"] = {"stable": stable, "one_step_db_val": pr,
+                                          "one_step_db_val_per_channel": prv["per_channel"],
                                           "one_step_db_id": pr_id, "seconds": sec,
                                           "prior_block_rows": ident.info.get("subspace", {}).get("block_rows")}
-        log(f"  PLID {start}: stable {stable}, one-step {pr:.2f} dB validation, "
+        log(f"  PLID {start}: stable {stable}, one-step {pr:.2f} dB validation "
+            f"{np.round(prv['per_channel'], 2).tolist()}, "
             f"{pr_id:.2f} dB identification data ({sec:.1f}s)")
     return out
 
@@ -218,6 +230,32 @@ def speed(log=print):
     return out
 
 
+def table(out_dir) -> str:
+    """Markdown table of the saved case results (``python bench_plid_thesis.py table``)."""
+    rows = ["| case | noise | order | method | FRF max dB | FRF RMS dB | sim dB | freq err max % "
+            "| damping err max (median) % | s |", "|" + "---|" * 10]
+    for w in ("a", "b60", "b30", "b12", "tb"):
+        path = os.path.join(out_dir, f"plid_thesis_{w}.json")
+        if not os.path.exists(path):
+            continue
+        r = json.load(open(path))["result"]
+        for n, res in r["orders"].items():
+            for k in ("N4SID", "N4SID D=0", "PLID subspace", "PLID scratch"):
+                v = res.get(k)
+                if v is None:
+                    continue
+                name = k + (f" (i={v['block_rows']})" if "block_rows" in v else "")
+                if "prior_block_rows" in v and v["prior_block_rows"]:
+                    name += f" (prior i={v['prior_block_rows']})"
+                sim = "unstable" if v["sim_db"] is None else f"{v['sim_db']:.1f}"
+                fe = "-" if v["freq_err_max_pct"] is None else f"{v['freq_err_max_pct']:.4f}"
+                de = ("-" if v["damp_err_max_pct"] is None else
+                      f"{v['damp_err_max_pct']:.2f} ({v['damp_err_median_pct']:.2f})")
+                rows.append(f"| {w[0]} | {r['noise']} | {n} | {name} | {v['max_db']:.3f} | "
+                            f"{v['rms_db']:.4f} | {sim} | {fe} | {de} | {v['seconds']:.0f} |")
+    return "\n".join(rows)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("which", nargs="*",
@@ -226,6 +264,9 @@ def main(argv=None):
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
     machine = f"{platform.machine()} {platform.processor() or ''} {os.cpu_count()} cpus, shared"
+    if args.which == ["table"]:
+        print(table(args.out))
+        return
     for w in args.which:
         t0 = time.perf_counter()
         print(f"[{w}] {time.strftime('%H:%M:%S')}", flush=True)
@@ -238,6 +279,8 @@ def main(argv=None):
             r = run_case(case_testbed_like(), "12bit", (30,))
         elif w == "testbed":
             r = run_testbed()
+        elif w == "testbed_band":
+            r = run_testbed(band=(20.0, 420.0))
         elif w == "speed":
             r = speed()
         else:
