@@ -250,6 +250,10 @@ class UpdateReport:
             iv = self.damping_interval
             lines.append(f"modal damping {100 * self.damping:.4f} % "
                          f"[{100 * iv[0]:.4f}, {100 * iv[1]:.4f}] %")
+        amb = self.info.get("ambiguous_swaps") or []
+        if amb:
+            lines.append("exchanging the walls of struts " + ", ".join(f"{i}<->{j}" for i, j in amb)
+                         + " fits as well: these modes do not tell those struts apart")
         und = getattr(self.greybox, "undetermined", ())
         if und:
             lines.append("NOT determined by these modes: " + "; ".join(c.name for c in und))
@@ -269,6 +273,7 @@ class UpdateReport:
             "damping": self.damping,
             "damping_interval": None if self.damping_interval is None else list(self.damping_interval),
             "undetermined": [c.name for c in getattr(self.greybox, "undetermined", ())],
+            "ambiguous_swaps": [list(ij) for ij in self.info.get("ambiguous_swaps") or []],
         }
 
 
@@ -699,7 +704,7 @@ def _scatter(values, idx, k_all):
     return out
 
 
-def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence):
+def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence, known_sigma=False):
     """Seeded multi-start fit, then swap moves.
 
     The struts are geometrically equivalent, so exchanging two walls leaves the strut
@@ -709,7 +714,10 @@ def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence):
     pairwise exchange of the current estimate is therefore tried as a start, and the best
     fit kept, until no exchange improves the fit.
 
-    Returns the best :class:`plid.greybox.GreyboxReport` and the accepted swaps.
+    Returns the best :class:`plid.greybox.GreyboxReport`, the accepted swaps, and the
+    exchanges whose refitted cost is statistically as good as the best (likelihood-ratio
+    threshold; with unknown sigma, the residual variance of the best fit): an arrangement
+    the data cannot decide.
     """
     from plid.greybox import fit_parameters
 
@@ -733,20 +741,27 @@ def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence):
         cands.sort(key=lambda c: c[0])
         trial = [c for c in cands if c[0] < best.cost] or cands[:3]
         improved = False
+        refits = []
         for _, ij, w in trial:
             rep = fit_parameters(residual, dict(zip(WALL_NAMES, w)), bounds=bnds, jac=jac,
                                  n_starts=1, confidence=confidence, min_obs=1)
+            refits.append(([rep.estimates[n] for n in WALL_NAMES], ij, rep.cost))
             if rep.cost < best.cost * (1 - 1e-6) - 1e-300:
                 best, improved, ij_best = rep, True, ij
         if not improved:
             break
         accepted.append(ij_best)
-    return best, accepted
+    n_obs = residual(best.estimates).size
+    s2 = 1.0 if known_sigma else 2 * best.cost / max(n_obs - 6, 1)
+    thresh = 0.5 * s2 * scipy.stats.chi2.ppf(confidence, 1)
+    ambiguous = [ij for c, ij, rep_c in refits if rep_c - best.cost <= thresh and
+                 not np.allclose(c, [best.estimates[n] for n in WALL_NAMES], rtol=1e-6)]
+    return best, accepted, ambiguous
 
 
 def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_std_hz=None,
                  damping_std=None, shapes=None, sensors=None, tbm=None, n_model_modes: int | None = None,
-                 bounds=None, prior_range: float = 0.2, gate: float = 3.0, n_starts: int = 12,
+                 bounds=None, prior_range: float = 0.2, gate: float = 3.0, n_starts: int = 8,
                  seed: int = 0, confidence: float = 0.95, reduced_vectors: int = 40,
                  mac_weight: float = 1.0, unresolved_sigma: bool = True,
                  labels: bool = True) -> UpdateReport:
@@ -813,7 +828,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         reachable by the model.
     """
     from fem.sensors import sensor_matrix
-    from fem.testbed import build_testbed, wall_basis
+    from fem.testbed import build_testbed, wall_basis, wall_modes
     from geometry.testbed import Testbed
     from plid.greybox import fit_parameters
 
@@ -844,20 +859,21 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     lo, hi = _wall_bounds(bounds, nominal, r_out)
     n_model = (int(n_model_modes) if n_model_modes is not None else None)
 
-    reduced, V = reduced_wall_basis(basis, reduced_vectors)
+    if n_model is None:
+        # nominal frequencies from the full model (one solve) to size the mode set
+        f_nom, _ = wall_modes(basis, nominal, min(basis.n, max(60, 2 * k_all)))
+        n_model = int(np.count_nonzero(f_nom <= 1.5 * f_all.max())) + 4
+    n_model = max(min(n_model, basis.n), 1)
+    if n_model < k_all:
+        raise UpdateError(f"{k_all} measured modes but only {n_model} model modes considered: "
+                          "raise n_model_modes")
+    # the Ritz basis holds at least the modes compared, at each of its designs
+    reduced, V = reduced_wall_basis(basis, max(reduced_vectors, n_model))
     rows_full = None
     if sensors is not None:
         S = sensor_matrix(basis.system.node_ids, sensors)
         rows_full = np.asarray(S @ basis.system.T)  # sensors from reduced DOFs
     rows_red = None if rows_full is None else rows_full @ V
-
-    if n_model is None:
-        f_red0 = np.sqrt(np.maximum(la.eigvalsh(reduced.dense(reduced.K_ref), reduced.dense(reduced.M_ref)), 0)) / (2 * np.pi)
-        n_model = int(np.count_nonzero(f_red0 <= 1.5 * f_all.max())) + 4
-    n_model = max(min(n_model, reduced.n), 1)
-    if n_model < k_all:
-        raise UpdateError(f"{k_all} measured modes but only {n_model} model modes considered: "
-                          "raise n_model_modes")
     coarse_modes = _ModelModes(reduced, n_model, rows_red)
     full_modes = _ModelModes(basis, n_model, rows_full)
 
@@ -908,7 +924,8 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     lo1 = np.maximum(lo, nominal * (1 - prior_range))
     hi1 = np.minimum(hi, nominal * (1 + prior_range))
     _, r1, j1 = make(coarse_modes, sig)
-    coarse, swaps = _global_fit(r1, j1, initial, lo1, hi1, n_starts, seed, confidence)
+    coarse, swaps, ambiguous = _global_fit(r1, j1, initial, lo1, hi1, n_starts, seed, confidence,
+                                           known_sigma)
     start = {n: float(np.clip(coarse.estimates[n], lo[i] * (1 + 1e-9), hi[i] * (1 - 1e-9)))
              for i, n in enumerate(WALL_NAMES)}
     # Close modes the experiment cannot separate: when the paired model mode has a
@@ -1010,5 +1027,6 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         sigma_hz=_scatter(sig if known_sigma else None, idx_used, k_all),
         unresolved_hz=_scatter(unres, idx_used, k_all),
         info={"coarse_evaluations": coarse_modes.evaluations, "full_evaluations": full_modes.evaluations,
-              "n_model_modes": n_model, "swaps": swaps},
+              "n_model_modes": n_model, "swaps": swaps,
+              "ambiguous_swaps": ambiguous},
     )
