@@ -362,11 +362,13 @@ class AccelerometerParams(_Section):
         prediction with 12-bit +-10 V converters, so its sensor signals must have filled a
         good part of the A/D range; the bare 100 mV/g output of this structure is about
         1e-3 V RMS, under one 12-bit LSB (4.9 mV). 2000 was chosen on the demo's MIMO
-        experiment (all three channels driven with independent 2.5 V RMS white noise at the
-        D/A): the conditioned outputs then have RMS of about 0.16, 0.20 and 0.29 of full
-        scale (acc1..acc3) and peaks under full scale, so the A/D rarely clips
-        (``trussid demo`` reports the counts). The plant's outputs are conditioned volts:
-        sensitivity times this gain.
+        experiment (all three channels driven with independent 2.5 V RMS white noise,
+        0-400 Hz, at the D/A): the conditioned outputs then have RMS of 0.17-0.30 of full
+        scale (acc1 lowest, records of 8000-16000 samples) and the A/D clips rarely (9 of
+        48000 samples in the identification record; ``trussid demo`` reports the counts).
+        2500 put the MIMO record at 0.26-0.32 of full scale and clipped 1.4 % of one
+        channel's samples: these lightly damped outputs reach 3-4 times their RMS. The
+        plant's outputs are conditioned volts: sensitivity times this gain.
     """
 
     section: ClassVar[str] = "accelerometers"

@@ -298,19 +298,33 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None,
         warnings.simplefilter("ignore")
         idn = identify(u, y, order, dt, **kwargs)
     res = idn.result
-    hist, hidx = res.theta_history, res.history_index
+    model = idn.model
+    stab = {"applied": False, "reflected_poles": 0}
+    if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
+        # Noise can leave a lightly damped pole just outside the unit circle; reflect it in
+        # (plid.stabilise keeps the magnitude response) so that the model can be simulated.
+        from plid.stabilise import stabilise
+
+        st = stabilise(model)
+        model, res = st.model, None
+        stab = {"applied": bool(st.applied), "reflected_poles": int(np.size(st.reflected))}
+        res_hist = idn.result
+    else:
+        res_hist = res
+    hist, hidx = res_hist.theta_history, res_hist.history_index
     if hist.shape[0] < 2 and idn.prior is not None:
         # The recipe ran without a parameter history: repeat its last pass with one (same
         # basis, prior and settings, so the same estimate) for the convergence plot.
         hist, hidx = _history_of_last_pass(idn, u, y, order, dt)
-    K, K_source, kinfo = choose_predictor(idn.model, u, y, res)
-    info = {"recipe": "plid.multipass.identify", "start": idn.start,
+    K, K_source, kinfo = choose_predictor(model, u, y, res)
+    info = {"recipe": "plid.multipass.identify", "start": idn.start, "stabilised": stab,
             "basis": getattr(idn.basis, "name", ""), "R": np.asarray(idn.R).tolist(),
             "predictor": kinfo, **{k: v for k, v in idn.info.items() if k != "passes"},
             "passes": idn.info.get("passes", [])}
-    return Identified(idn.model, K, K_source, time.perf_counter() - t0,
-                      f"PLID ({res.form} form, {idn.start} start, {len(info['passes'])} pass(es))",
-                      res.innovations, hist, hidx, info)
+    method = (f"PLID ({res_hist.form} form, {idn.start} start, {len(info['passes'])} "
+              f"pass(es)){', stabilised' if stab['applied'] else ''}")
+    return Identified(model, K, K_source, time.perf_counter() - t0, method,
+                      res_hist.innovations, hist, hidx, info)
 
 
 def _history_of_last_pass(idn, u, y, order, dt):
@@ -327,7 +341,8 @@ def _history_of_last_pass(idn, u, y, order, dt):
     return r.theta_history, r.history_index
 
 
-def choose_predictor(model, u, y, res=None, ratios=(10.0, 1.0, 0.1, 1e-2, 1e-3, 1e-4)):
+def choose_predictor(model, u, y, res=None,
+                     ratios=(10.0, 1.0, 0.1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6)):
     """One-step predictor gain for ``model``, chosen on the identification record.
 
     Candidates: the estimator's own steady-state gain (when its predictor ``A - K C`` is
@@ -484,6 +499,7 @@ def _evaluate(fit, truth, rid, rval, h1_est, settings, name, kind):
         "simulation_fit_db": sim["overall_db"],
         "simulation_fit_db_per_output": sim["per_channel_db"],
         "seconds": fit.seconds, "method": fit.method, "unstable_poles": unstable,
+        "stabilised": fit.info.get("stabilised", {}),
         "poles": poles,
         "poles_in_band_matched": sum(r["frequency_hz"] is not None for r in in_band),
         "poles_in_band_true": len(in_band),
