@@ -111,8 +111,9 @@ def main(argv=None) -> int:
     print()
     print(rep.table(truth))
     err = np.abs(rep.walls / truth - 1)
-    print(f"\nlargest wall error {100 * err.max():.4f} %; intervals cover the truth for "
-          f"{int(rep.covers(truth).sum())} of 6 struts")
+    print(f"\nlargest relative wall error {err.max():.3e}; intervals cover the truth for "
+          f"{int(rep.covers(truth).sum())} of 6 struts"
+          + (" (exact data: the intervals hold only round-off)" if args.exact else ""))
     if rep.damping is not None:
         print(f"true modal damping {100 * true_tb.damping.modal_ratio:.4f} %")
 

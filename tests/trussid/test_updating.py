@@ -96,6 +96,22 @@ def test_mac_overrides_a_closer_frequency():
     assert pair_modes(measured, model, mac=mac).tolist() == [1]
 
 
+def test_modes_the_sensors_cannot_separate_take_one_measured_mode():
+    """Two bending planes of one strut (0.06 Hz apart, same shape at the sensors) form a
+    group: two measured modes near them pair with that group and the next strut, not
+    both with the one strut."""
+    from trussid.updating import mode_groups
+
+    model = np.array([50.0, 50.06, 50.2, 50.26])
+    shapes = np.array([[1.0, 0.95, 0.0, 0.05], [0.05, 0.1, 1.0, 0.9]])  # strut A, strut B
+    groups = mode_groups(model, shapes, bandwidth_hz=0.25)
+    assert groups.tolist() == [0, 0, 1, 1]
+    measured = np.array([50.03, 50.05])
+    assert pair_modes(measured, model).tolist() == [0, 1]  # frequency alone: one strut twice
+    got = pair_modes(measured, model, groups=groups)
+    assert sorted(groups[got].tolist()) == [0, 1]
+
+
 def test_disallowed_pairs_are_left_unpaired():
     allowed = np.array([[True, False], [False, False]])
     assert pair_modes([10.0, 20.0], [10.0, 20.0], allowed=allowed).tolist() == [0, -1]
