@@ -57,8 +57,8 @@ here) is what makes them honest, at the price of wall intervals of +-0.5 to +-4 
 Damping: the model's damping is one modal ratio (``Testbed.damping.modal_ratio``); it does
 not depend on the walls, so its estimate is the (inverse-variance weighted) mean of the
 paired modes' identified damping ratios, with a t-interval from their scatter or, when
-larger, from the stated standard deviations (for a mode blended with an unresolved
-neighbour, these include ``gap / (2 f sqrt 3)``: a blend looks more damped).
+larger, from the stated standard deviations (for a mode blended with unresolved
+neighbours, these include ``span / (2 f sqrt 3)``: a blend looks more damped).
 
 Which experiment
 ----------------
@@ -750,6 +750,18 @@ def _wall_bounds(bounds, nominal, r_out):
     return lo, hi
 
 
+def _cluster_span(F, j, bandwidth):
+    """Frequency span of the chain of modes around ``F[j]`` with gaps below ``bandwidth``."""
+    Fs = np.sort(F)
+    i = int(np.searchsorted(Fs, F[j]))
+    lo = hi = i
+    while lo > 0 and Fs[lo] - Fs[lo - 1] < bandwidth:
+        lo -= 1
+    while hi < Fs.size - 1 and Fs[hi + 1] - Fs[hi] < bandwidth:
+        hi += 1
+    return float(Fs[hi] - Fs[lo])
+
+
 def _scatter(values, idx, k_all):
     if values is None:
         return None
@@ -863,10 +875,11 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     mac_weight : float
         Weight of ``1 - MAC`` against the relative frequency distance in pairing.
     unresolved_sigma : bool
-        With ``frequency_std_hz``: when the paired model mode has a neighbour closer than
-        the measured half-power bandwidth ``2 zeta f`` (``damping``, else the model's
-        ratio), add ``gap / sqrt(3)`` to that mode's sigma (the identified pole may be any
-        blend of the two; the strut bending pairs' two planes are 0.05-0.1 Hz apart).
+        With ``frequency_std_hz``: when the paired model mode lies in a chain of modes
+        spaced closer than the measured half-power bandwidth ``2 zeta f`` (``damping``,
+        else the model's ratio), add ``span / sqrt(3)`` to that mode's sigma (the
+        identified pole may be any blend of them; a strut's two bending planes are
+        0.05-0.1 Hz apart).
     labels : bool
         Label the paired modes (builds the model at the updated walls: ~1 s).
 
@@ -987,10 +1000,12 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
                                            known_sigma)
     start = {n: float(np.clip(coarse.estimates[n], lo[i] * (1 + 1e-9), hi[i] * (1 - 1e-9)))
              for i, n in enumerate(WALL_NAMES)}
-    # Close modes the experiment cannot separate: when the paired model mode has a
-    # neighbour nearer than the measured mode's half-power bandwidth 2 zeta f, the
-    # identified pole is a blend of the two and may lie anywhere between them (uniform
-    # over +-gap: sigma gap / sqrt 3), a model-form error the measured sigma does not hold.
+    # Close modes the experiment cannot separate: when the paired model mode lies in a
+    # chain of modes each nearer to the next than the measured mode's half-power bandwidth
+    # 2 zeta f, the identified pole is a blend of them and may lie anywhere within the
+    # chain's span (sigma span / sqrt 3), a model-form error the measured sigma does not
+    # hold. For one strut's two planes the span is their 0.05-0.1 Hz split; for two struts
+    # with nearly equal walls it covers both pairs.
     unres = np.zeros(k)
     if unresolved_sigma:
         w1 = np.array([start[n] for n in WALL_NAMES])
@@ -999,11 +1014,9 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
                         allowed=allowed_u,
                         groups=None if sh is None else mode_groups(F1, sh1, 2 * zeta_bw * F1))
         j1 = np.where(j1 >= 0, j1, pair_modes(f, F1))
-        gap = np.abs(F1[j1][:, None] - F1[None, :])
-        gap[np.arange(k), j1] = np.inf
-        gap = gap.min(axis=1)
         zi = z_all[used] if z_all is not None else np.full(k, tb.damping.modal_ratio)
-        unres = np.where(gap < 2 * zi * f, gap / math.sqrt(3), 0.0)
+        span = np.array([_cluster_span(F1, jj, 2 * z_ * f_) for jj, z_, f_ in zip(j1, zi, f)])
+        unres = span / math.sqrt(3)
         if known_sigma:
             sig = np.sqrt(sig**2 + unres**2)
     pairs2, r2, j2 = make(full_modes, sig)
@@ -1047,7 +1060,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     zeta = ziv = None
     if z_all is not None:
         zz = z_all[used]
-        # a blend of two modes within the bandwidth looks more damped: up to gap / 2f
+        # a blend of modes within the bandwidth looks more damped: up to span / 2f
         zs = np.sqrt((zsig_all[used] if zsig_all is not None else 0.0) ** 2 + (unres / (2 * f)) ** 2)
         w = 1.0 / zs**2 if np.all(zs > 0) else np.ones(k)
         zeta = float(np.sum(w * zz) / np.sum(w))
