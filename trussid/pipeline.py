@@ -30,10 +30,12 @@ Signal chain of every record (:func:`plid.experiment.run_experiment`):
   about 55-60 dB under the signals, near the 12-bit quantisation noise, as the thesis
   reports ("the 12-bit converters give about 60 dB");
 - conditioner range: the nominal conditioning gain suits the MIMO record (all channels
-  driven). Before each experiment the lab raises the gain of any sensor whose signal is
-  weak by 1-2-5 steps, up to ``range_target`` of the A/D range, from a trial run of the
+  driven). Before each experiment the lab sets each sensor's gain in 1-2-5 steps from x0.5
+  up so that its RMS is at most ``range_target`` of the A/D range, from a trial run of the
   same length (:func:`conditioner_steps`); identification and validation records of one
-  experiment use the same setting. In a SIMO record the two accelerometers away from the
+  experiment use the same setting. (With the nominal gain kept wherever the signal was
+  strong, the driven outputs of the channel-2 and -3 SIMO records reached 0.27-0.33 of full
+  scale and clipped 9-11 samples of 8000, each clipped sample a large prediction error.) In a SIMO record the two accelerometers away from the
   driven vertex see signals some 20 dB weaker; without this step they would be recorded
   with a few dozen LSB. Recorded outputs stay in the plant's units (volts at the nominal
   conditioning gain): only the A/D range seen by each channel changes.
@@ -82,9 +84,9 @@ class DemoSettings:
     sensor_noise_g : float
         Sensor (accelerometer + conditioner) noise RMS referred to the accelerometer [g].
     range_target : float
-        A sensor whose RMS is under this fraction of the A/D full scale gets its
-        conditioner gain raised in 1-2-5 steps until the next step would pass it (a fifth:
-        the lightly damped structure's outputs have peaks of 4-5 RMS).
+        Each sensor's conditioner step is the largest 1-2-5 step (x0.5 or more) that keeps
+        its RMS at most this fraction of the A/D full scale (a fifth: the lightly damped
+        structure's outputs reach 4-5 times their RMS).
     gain_steps : tuple of float
         Conditioner gain steps within one decade (1-2-5).
     simo_channels : tuple of int
@@ -178,16 +180,18 @@ class Record:
 
 
 def conditioner_steps(y_rms, full_scale: float, target: float, steps=(1.0, 2.0, 5.0)):
-    """Extra conditioner gain per channel: the largest 1-2-5 step >= 1 that keeps
-    ``rms * step <= target * full_scale`` (1 when even that is passed).
+    """Conditioner gain step per channel relative to the nominal gain: the largest 1-2-5
+    step from 0.5 up that keeps ``rms * step <= target * full_scale`` (0.5 when even that
+    is passed).
 
-    Steps run over decades 1 .. 1e4; a channel that is silent gets the largest.
+    Steps run from 0.5 to 5e4; a channel that is silent gets the largest.
     """
-    ladder = np.sort(np.concatenate([np.asarray(steps) * 10.0**k for k in range(0, 5)]))
+    ladder = np.sort(np.concatenate([np.asarray(steps) * 10.0**k for k in range(-1, 5)]))
+    ladder = ladder[ladder >= 0.5]
     out = []
     for r in np.atleast_1d(y_rms):
         ok = ladder[ladder * r <= target * full_scale] if r > 0 else ladder
-        out.append(float(ok.max() if ok.size else 1.0))
+        out.append(float(ok.max() if ok.size else ladder.min()))
     return out
 
 
