@@ -225,9 +225,11 @@ def model_frequencies(sys, count: int, fs: float, band=None) -> np.ndarray:
 
 def basis_for(n: int, p: int, fs: float, freqs_hz, radius: float = 0.97,
               layout: str = "partition") -> ObserverBasis:
-    """A rotation basis of exactly ``n`` states for ``p`` outputs from candidate
-    frequencies (the first ``n // 2`` (partition: per-output-even share) are used; odd
-    states per output become real poles)."""
+    """A rotation basis of exactly ``n`` states for ``p`` outputs.
+
+    Partition layout: each output owns ``nu = n / p`` states, ``nu // 2`` rotation blocks
+    (the lowest ``p (nu // 2)`` of ``freqs_hz`` are used, dealt out in turn) plus one real
+    pole just below ``radius`` when ``nu`` is odd. Dense layout: ``n / 2`` blocks."""
     if layout == "partition":
         if n % p:
             raise IdentificationError(f"order {n} is not a multiple of the {p} outputs")
