@@ -98,3 +98,9 @@ def test_identify_refuses_an_unknown_start(simo):
     u, y = data(simo, 500, seed=7)
     with pytest.raises(IdentificationError, match="start"):
         identify(u, y, 6, 1 / FS, start="magic")
+
+
+def test_too_short_a_record_for_a_subspace_prior_says_to_start_from_scratch(simo):
+    u, y = data(simo, 150, seed=8)
+    with pytest.raises(IdentificationError, match="scratch"):
+        identify(u, y, 6, 1 / FS)
