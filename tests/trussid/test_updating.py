@@ -191,12 +191,12 @@ def test_bending_frequencies_alone_leave_the_arrangement_of_close_struts_open(no
     lab = label_testbed_modes(true_tbm, modes)
     bend = [j for j, (k, o) in enumerate(zip(lab.kind, lab.order)) if k == "bending" and o == 1]
     udf = [j for j, k in enumerate(lab.kind) if k == "udf"]
-    only = update_walls(modes.frequencies_hz[bend], tb, tbm=tbm, frequency_std_hz=0.01, n_starts=4,
+    only = update_walls(modes.frequencies_hz[bend], tb, tbm=tbm, frequency_std_hz=0.01, n_starts=1,
                         labels=False)
     assert only.info["ambiguous_swaps"]
     assert "do not tell those struts apart" in only.table()
     both = update_walls(modes.frequencies_hz[sorted(bend + udf)], tb, tbm=tbm, frequency_std_hz=0.01,
-                        n_starts=4, labels=False)
+                        n_starts=1, labels=False)
     assert both.info["ambiguous_swaps"] == []
     assert np.max(np.abs(both.walls / truth - 1)) < 1e-6
 
