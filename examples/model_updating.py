@@ -61,6 +61,16 @@ def main(argv=None) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
+    from trussid.errors import UserError
+
+    try:
+        return _run(args, n_samples)
+    except UserError as exc:  # bad parameters: one line, no traceback, no file
+        print(f"model_updating: error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _run(args, n_samples) -> int:
     import matplotlib.pyplot as plt
 
     from fem.labels import label_testbed_modes
