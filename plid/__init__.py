@@ -1,4 +1,27 @@
 """Identification from input/output data: PLID, experiments, FRF estimates, metrics, grey-box.
 
 Works on numpy arrays and ``control.StateSpace``; never imports ``fem`` or ``geometry``.
+Names load on first use.
 """
+
+from plid.errors import DataError, IdentificationError
+from trussid.lazy import lazy_exports
+
+_LAZY = {
+    "PLID": "estimator", "PLIDResult": "estimator",
+    "identify": "multipass", "Identification": "multipass",
+    "ObserverBasis": "canonical", "rotation_basis": "bases",
+    "n4sid": "subspace", "order_table": "order",
+    "stabilise": "stabilise", "balanced_truncation": "reduce",
+    "IOData": "datafile", "read_data": "datafile", "write_data": "datafile",
+    "save_model": "modelfile", "load_model": "modelfile",
+    "excitation": "experiment", "run_experiment": "experiment",
+    "h1": "frf", "h2": "frf", "stepped_sine": "frf",
+    "prediction_ratio_db": "metrics", "frf_error": "metrics", "compare_poles": "metrics",
+    "simulation_fit": "metrics",
+    "fit_parameters": "greybox", "fit_greybox": "greybox", "Constraint": "greybox",
+    "identify_dc_motor": "dcmotor",
+}
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)
+
+__all__ = ["DataError", "IdentificationError", *_LAZY]

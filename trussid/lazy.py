@@ -1,0 +1,28 @@
+"""Package exports resolved on first use (PEP 562), so ``import fem`` stays cheap.
+
+The packages' public names live in submodules that import scipy, python-control, trimesh
+or VTK. Importing them eagerly would make every command (even ``trussid --help``) and
+every error class pay for all of them.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+
+def lazy_exports(package: str, exports: dict[str, str]):
+    """``(__getattr__, __dir__)`` for a package whose ``exports`` map names to submodules."""
+
+    def __getattr__(name: str):
+        module = exports.get(name)
+        if module is None:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(f"{package}.{module}"), name)
+        globals_ = importlib.import_module(package).__dict__
+        globals_[name] = value  # cache: later look-ups skip this function
+        return value
+
+    def __dir__():
+        return sorted(set(exports) | set(importlib.import_module(package).__dict__))
+
+    return __getattr__, __dir__
