@@ -31,7 +31,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import as_strided
 from scipy.linalg.blas import dtrmm
 
 from plid.recursion_common import Problem, psd_factor
@@ -103,23 +102,28 @@ def _measurement(pb: Problem, st: SqrtState, yw: np.ndarray) -> None:
     # State correction so far is L[:, :J] @ wsum; output k sees Hw_k x + g_k . wsum.
     wsum = np.zeros(J)
     hx = st.Hw @ z[q:]
+    ff = np.zeros(J + 1)                       # f_j^2 with a zero sentinel at J
     for k in range(p):
         g = Gm[k]
         Uk, Vk = U[:, :k], V[:, :k]
         if k:
             # f = (T_1 ... T_{k-1})^T g
-            f = D * g + np.einsum("jr,jr->j", Vk, _rcumsum_excl(g[:, None] * Uk))
+            f = D * g
+            f += np.einsum("jr,jr->j", Vk, _rcumsum_excl(g[:, None] * Uk))
         else:
             f = g
-        a = 1.0 + np.cumsum((f * f)[::-1])[::-1]  # 1 + sum_{i >= j} f_i^2
-        a1 = np.append(a[1:], 1.0)
+        np.multiply(f, f, out=ff[:J])
+        a_ext = np.cumsum(ff[::-1])[::-1]
+        a_ext += 1.0                               # a_j = 1 + sum_{i >= j} f_i^2, a_J = 1
+        a, a1 = a_ext[:J], a_ext[1:]
         s = np.sqrt(a * a1)
         d = a1 / s                                 # sqrt(a_{j+1} / a_j)
         beta = f / s
         beta *= -1.0
         if k:
             Vf = Vk * f[:, None]
-            w = D * f + np.einsum("jr,jr->j", Uk, _fcumsum_excl(Vf))   # (T_1..T_{k-1}) f
+            w = D * f                              # (T_1 .. T_{k-1}) f
+            w += np.einsum("jr,jr->j", Uk, _fcumsum_excl(Vf))
             Vk *= d[:, None]
             Vk -= np.cumsum(Vf, axis=0) * beta[:, None]
         else:
@@ -184,10 +188,10 @@ def sqrt_step(pb: Problem, st: SqrtState, u: np.ndarray, y: np.ndarray,
 
     # Second-order term sum_jl Sv[j,l] L_aj L_al^T = sum_k G_k G_k^T with Sv = Ws Ws^T and
     # G_k = sum_j Ws[j,k] L_aj; plus sum_jl c_jl c_lj^T, input noise and Q.
-    N_ = L.shape[0]
-    LA3 = as_strided(L, shape=(p, n, np_), strides=(n * 8, 8, N_ * 8), writeable=False)
-    G = np.einsum("jk,jic->ikc", psd_factor(Sv), LA3).reshape(n, p * np_)
-    W = G @ G.T
+    G = (psd_factor(Sv).T @ np.ascontiguousarray(LA).reshape(p, n * np_)).reshape(p, n, np_)
+    W = G[0] @ G[0].T
+    for k in range(1, p):
+        W += G[k] @ G[k].T
     W += c3.transpose(1, 0, 2).reshape(n, p * p) @ c3.transpose(1, 2, 0).reshape(n, p * p).T
     if pb.N is not None:
         LB3 = L[np_:q, :q].reshape(m, n, q)
@@ -196,12 +200,10 @@ def sqrt_step(pb: Problem, st: SqrtState, u: np.ndarray, y: np.ndarray,
     W += pb.Q
     Wf = psd_factor(0.5 * (W + W.T))
 
-    # New x rows: Phi L_t + A_hat L_xt, with Phi L_t = sum_k coef_k L[block k, :q] read
-    # through a strided view of the (Fortran-ordered) factor, no copy.
-    K = p + m
-    Lt3 = as_strided(L, shape=(K, n, q), strides=(n * 8, 8, N_ * 8), writeable=False)
+    # New x rows: Phi L_t + A_hat L_xt, with Phi L_t = sum_k coef_k L[block k, :q] as one
+    # matmul over a (q, p + m, n) view of the (Fortran-ordered) factor, no copy.
     Lxt_new = Ahat @ L[q:, :q]
-    Lxt_new += np.einsum("k,kic->ic", coef, Lt3)
+    Lxt_new += np.matmul(coef, L[:q, :q].T.reshape(q, p + m, n)).T
     Lt = L[:q, :q]
     AL = Ahat @ L[q:, q:]
 
