@@ -161,6 +161,32 @@ def test_pole_standard_deviation_is_the_first_order_change_of_the_pole(rng):
     np.testing.assert_allclose(got.damping_std, np.abs(zp - zm) / 2, rtol=1e-4)
 
 
+@pytest.mark.slow
+def test_plid_covariance_and_segment_scatter_agree_on_pole_uncertainty(full):
+    """Two independent estimates of an identified frequency's standard deviation -- PLID's
+    posterior covariance propagated to the pole, and the scatter over four sub-records --
+    agree within a factor 3 on a plant the model order fits, and the actual errors are
+    within 4 of them."""
+    from plid.experiment import run_experiment
+    from trussid.updating import modes_from_data
+
+    w = 2 * np.pi * np.array([50.0, 80.0])
+    A = la.block_diag(*[[[0, 1], [-wi**2, -2 * zi * wi]] for wi, zi in zip(w, (0.005, 0.01))])
+    B = np.array([[0.0], [1.0], [0.0], [1.0]])
+    C = np.array([[1e3, 0, 5e2, 0], [3e2, 0, -1e3, 0]])
+    sysd = control.c2d(control.ss(A, B, C, np.zeros((2, 1))), 1 / 1600)
+    for seed in range(3 if full else 1):
+        exp = run_experiment(sysd, 8000, "white", seed=seed, snr_db=30)
+        m1, _ = modes_from_data(exp.data.u, exp.data.y, 1 / 1600, 4, band=(30, 100), uncertainty="plid")
+        m2, _ = modes_from_data(exp.data.u, exp.data.y, 1 / 1600, 4, band=(30, 100),
+                                uncertainty="segments", n_segments=4)
+        ratio = m1.frequency_std_hz / m2.frequency_std_hz
+        assert np.all((ratio > 1 / 3) & (ratio < 3)), ratio
+        ratio_z = m1.damping_std / m2.damping_std
+        assert np.all((ratio_z > 1 / 3) & (ratio_z < 3)), ratio_z
+        assert np.all(np.abs(m1.frequencies_hz - [50.0, 80.0]) < 4 * m1.frequency_std_hz)
+
+
 # --------------------------------------------------------------------------- updating
 
 
