@@ -4,7 +4,7 @@ Same model and moments as :mod:`plid.recursion_direct` (see ``docs/plid.md``); o
 arithmetic differs.
 
 - ``L`` is lower triangular with ``z = [theta; x]`` (parameters first), stored in Fortran
-  order (columns contiguous, which the column recurrences below walk along).
+  order (so that BLAS trmm updates its leading columns in place).
 - Measurement update: outputs are whitened by the Cholesky factor of ``R`` and processed
   one at a time with Carlson's triangular rank-one update (Carlson 1973,
   "Fast triangular formulation of the square root filter", AIAA J. 11(9)). For
@@ -20,7 +20,9 @@ arithmetic differs.
 - Time update: ``F = [[I, 0], [Phi, A_hat]]`` leaves the theta rows of ``L`` unchanged
   (still triangular), so only the n x rows are rebuilt: ``L_xt <- Phi L_tt + A_hat L_xt``
   and ``L_xx`` from the LQ factorisation of ``[A_hat L_xx, W]`` with ``W W^T`` the noise and
-  second-order moment terms, O(n^2 (2n)) plus O(n q (p + m)) for the products.
+  second-order moment terms, O(n^2 (2n)) plus O(n q (p + m)) for the products. (That
+  n x n sum is formed and factored: it is small, and a sum of products of factor rows
+  plus Q, so no cancellation is involved.)
 - A parameter drift ``Q_theta`` changes the theta rows too; it is applied by an LQ of
   ``[L_tt, Q_theta^(1/2)]`` whose rotation is carried into the x rows (O(q^3): the
   drift option costs time in this form).
