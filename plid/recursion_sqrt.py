@@ -21,8 +21,8 @@ arithmetic differs.
   (still triangular), so only the n x rows are rebuilt: ``L_xt <- Phi L_tt + A_hat L_xt``
   and ``L_xx`` from the LQ factorisation of ``[A_hat L_xx, W]`` with ``W W^T`` the noise and
   second-order moment terms, O(n^2 (2n)) plus O(n q (p + m)) for the products. (That
-  n x n sum is formed and factored: it is small, and a sum of products of factor rows
-  plus Q, so no cancellation is involved.)
+  n x n sum is formed from factor rows and factored; it is a covariance, so it is PSD up
+  to round-off, which ``psd_factor`` clips.)
 - A parameter drift ``Q_theta`` changes the theta rows too; it is applied by an LQ of
   ``[L_tt, Q_theta^(1/2)]`` whose rotation is carried into the x rows (O(q^3): the
   drift option costs time in this form).
