@@ -34,14 +34,17 @@ a global search):
    as a :class:`fem.testbed.WallBasis` so that :func:`fem.testbed.wall_modes` and
    :func:`fem.sensitivity.eigenvalue_sensitivities` apply unchanged; frequency error about
    3e-7 relative for walls within +-15 %): :func:`plid.greybox.fit_parameters` with its
-   seeded multi-start over the prior box ``nominal * (1 +- prior_range)``.
+   seeded multi-start over the prior box ``nominal * (1 +- prior_range)``, then pairwise
+   wall exchanges as further starts (:func:`_global_fit`): each arrangement of walls over
+   the equivalent struts is its own local minimum. Exchanges that fit as well as the best
+   are reported (the modes do not tell those struts apart).
 2. *Local*, on the full model, from the stage-1 estimate, within the physical bounds: the
    estimate, the identifiability analysis and the intervals.
 
 Intervals
 ---------
-With measured-frequency standard deviations ``frequency_std_hz`` (e.g. from the scatter of
-identifications on separate records, :func:`modes_from_data`), the residuals are in units
+With measured-frequency standard deviations ``frequency_std_hz`` (from PLID's parameter
+covariance or the scatter over sub-records, :func:`modes_from_data`), the residuals are in units
 of sigma, and the walls' covariance is ``(J^T J)^-1`` in ``ln t`` (known-sigma, normal
 quantile), inflated by the Birge ratio ``sqrt(chi2 / dof)`` when the fit is worse than the
 stated sigmas explain. Without them, residuals are relative frequency errors and the
@@ -52,7 +55,8 @@ frequency sigmas of about 1e-4 Hz, yet each identified pole sits about 0.005 Hz 
 model mode it is paired with, because it blends the strut's two bending planes (0.05-0.1 Hz
 apart, inside the 0.25 Hz half-power bandwidth). The statistical sigma alone would give
 intervals that miss; the unresolved-mode term (``unresolved_sigma``, about 0.03-0.06 Hz
-here) is what makes them honest, at the price of wall intervals of +-0.5 to +-4 %.
+here; 0.14 Hz where two struts' bending pairs overlap) is what makes them honest, at the
+price of 95 % wall intervals of about +-0.4 % to +-9 %.
 
 Damping: the model's damping is one modal ratio (``Testbed.damping.modal_ratio``); it does
 not depend on the walls, so its estimate is the (inverse-variance weighted) mean of the
