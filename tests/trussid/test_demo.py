@@ -117,7 +117,7 @@ def test_figures_are_non_trivial_png_images(report):
     for name in expected:
         w, h = _png_size(out / name)
         assert w >= 500 and h >= 400, name
-        img = mpimg.imread(out / name)[..., :3]
+        img = mpimg.imread(out / name)[::3, ::3, :3]  # every 9th pixel is plenty
         # A drawn figure has many distinct colours and most pixels white background.
         colours = np.unique((img.reshape(-1, 3) * 255).astype(np.uint8), axis=0)
         assert colours.shape[0] > 50, name
