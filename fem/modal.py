@@ -22,7 +22,7 @@ import scipy.sparse.linalg as sla
 from fem.assembly import System, assemble
 from fem.constraints import rigid_body_modes
 from fem.errors import ModelError
-from plid._blas import blas_threads  # shared OpenBLAS thread control (ctypes, no dependency)
+from trussid.threads import blas_threads
 
 #: OpenBLAS threads used by the eigen and static solutions. The BLAS calls inside
 #: SuperLU and ARPACK are small (supernodes of tens of columns, level-2 updates), so

@@ -47,7 +47,7 @@ import numpy as np
 import scipy.linalg
 from tqdm.auto import tqdm
 
-from plid._blas import blas_threads as _limit_blas
+from trussid.threads import blas_threads as _limit_blas
 from plid.canonical import ObserverBasis, check_order, from_statespace, split_theta
 from plid.errors import DataError, IdentificationError
 from plid.recursion_common import Problem

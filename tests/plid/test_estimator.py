@@ -215,15 +215,14 @@ def test_bad_options_are_refused(kwargs, match):
 
 
 def test_blas_threads_are_limited_during_the_recursion_and_restored():
-    from plid._blas import _controls, blas_threads
+    from trussid.threads import blas_thread_counts, blas_threads
 
-    ctrls = _controls()
-    if not ctrls:
-        pytest.skip("no OpenBLAS library found to control")
-    before = [get() for get, _ in ctrls]
+    before = blas_thread_counts()
+    if not before:
+        pytest.skip("no BLAS library found to control")
     with blas_threads(1):
-        assert all(get() == 1 for get, _ in ctrls)
-    assert [get() for get, _ in ctrls] == before
+        assert blas_thread_counts() == [1] * len(before)
+    assert blas_thread_counts() == before
 
 
 def test_further_passes_refine_a_short_record(modal_plant, simulate, rng):
