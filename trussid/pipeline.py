@@ -27,8 +27,9 @@ Signal chain of every record (:func:`plid.experiment.run_experiment`):
   0-800 Hz band (default 10 ug, about 0.35 ug/sqrt(Hz): a low-noise piezoelectric
   accelerometer with its charge amplifier). It is amplified with the signal by the
   conditioner, so it is independent of the gain setting. In the MIMO record it lies
-  about 55-60 dB under the signals, near the 12-bit quantisation noise, as the thesis
-  reports ("the 12-bit converters give about 60 dB");
+  59-64 dB under the signals, near the 12-bit quantisation noise (62-67 dB), as the
+  thesis reports ("the 12-bit converters give about 60 dB"); in a SIMO record the two
+  accelerometers away from the driven vertex get only 38-50 dB;
 - conditioner range: the nominal conditioning gain suits the MIMO record (all channels
   driven). Before each experiment the lab sets each sensor's gain in 1-2-5 steps from x0.5
   up so that its RMS is at most ``range_target`` of the A/D range, from a trial run of the
