@@ -113,6 +113,9 @@ def _run(args, n_samples) -> int:
               f"{band[0]:.1f}-{band[1]:.1f} Hz")
         for f, z, sf in zip(ident.frequencies_hz, ident.damping, ident.frequency_std_hz):
             print(f"  {f:9.4f} Hz +- {sf:.4f}   damping {100 * z:.3f} %")
+        if info["std_fallback"]:
+            print(f"  (modes {info['std_fallback']}: PLID's covariance gave no positive variance; "
+                  "they take the largest of the others)")
         rep = update_walls(ident.frequencies_hz, nominal_tb, tbm=nominal_tbm, damping=ident.damping,
                            frequency_std_hz=ident.frequency_std_hz, damping_std=ident.damping_std,
                            shapes=ident.shapes, sensors=strut_sensors(nominal_tbm), seed=args.seed)

@@ -560,8 +560,10 @@ def _pole_std(lam, s, V, W, cv, theta_cov, n, p, sys):
         mag = abs(s[k])
         a_f = np.real(np.conj(s[k]) * gs) / (2 * np.pi * mag)
         a_z = -np.real(gs) / mag + s[k].real * np.real(np.conj(s[k]) * gs) / mag**3
-        fstd[k] = math.sqrt(max(a_f @ caa @ a_f, 0.0))
-        zstd[k] = math.sqrt(max(a_z @ caa @ a_z, 0.0))
+        vf, vz = a_f @ caa @ a_f, a_z @ caa @ a_z
+        # a covariance that lost definiteness (PLID's direct form can) gives no variance
+        fstd[k] = math.sqrt(vf) if vf > 0 else np.nan
+        zstd[k] = math.sqrt(vz) if vz > 0 else np.nan
     return fstd, zstd
 
 
@@ -595,13 +597,14 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
     n_segments : int
     max_damping : float
     identify_kwargs : dict, optional
-        Passed to :func:`plid.multipass.identify`.
+        Passed to :func:`plid.multipass.identify` (default here ``form="sqrt"``).
 
     Returns
     -------
     modes : IdentifiedModes
     info : dict
-        ``identification`` (full record), ``segment_models``.
+        ``identification`` (full record), ``segment_models``, ``std_fallback`` (modes
+        whose PLID variance was not positive and took the largest of the others).
     """
     import warnings
 
@@ -612,7 +615,9 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
         raise UpdateError(f"uncertainty must be 'plid', 'segments' or 'none', got {uncertainty!r}")
     u = np.asarray(u, float).reshape(len(u), -1)
     y = np.asarray(y, float).reshape(len(y), -1)
-    kw = dict(identify_kwargs or {})
+    # the square-root form: on one of five 16000-sample bending records the direct form
+    # (identify's default) diverged to unstable poles; the square-root one did not
+    kw = {"form": "sqrt", **(identify_kwargs or {})}
 
     def ident(uu, yy):
         with warnings.catch_warnings():
@@ -625,6 +630,17 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
     if n_modes is not None and len(modes.frequencies_hz) > n_modes:
         strongest = np.sort(np.argsort(modes.strength)[::-1][:n_modes])
         modes = modes.select(strongest)
+    fallback = []
+    if uncertainty == "plid":
+        # a pole whose propagated variance is not positive (the covariance lost
+        # definiteness) takes the largest standard deviation of the others: conservative
+        fs, zs = modes.frequency_std_hz.copy(), modes.damping_std.copy()
+        for a in (fs, zs):
+            bad = ~(np.isfinite(a) & (a > 0))
+            if bad.any() and (~bad).any():
+                a[bad] = a[~bad].max()
+            fallback += np.flatnonzero(bad).tolist()
+        modes = replace(modes, frequency_std_hz=fs, damping_std=zs)
     seg_models = []
     if uncertainty == "segments":
         if n_segments < 2:
@@ -650,7 +666,8 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
             fstd = np.where(cnt >= 2, np.nanstd(fs_seg, axis=0, ddof=1), np.nan) / math.sqrt(n_segments)
             zstd = np.where(cnt >= 2, np.nanstd(zs_seg, axis=0, ddof=1), np.nan) / math.sqrt(n_segments)
         modes = replace(modes, frequency_std_hz=fstd, damping_std=zstd)
-    return modes, {"identification": full, "segment_models": seg_models}
+    return modes, {"identification": full, "segment_models": seg_models,
+                   "std_fallback": sorted(set(fallback))}
 
 
 # --------------------------------------------------------------------------- experiment
@@ -834,7 +851,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
                  bounds=None, prior_range: float = 0.2, gate: float = 3.0, n_starts: int = 8,
                  seed: int = 0, confidence: float = 0.95, reduced_vectors: int = 40,
                  mac_weight: float = 1.0, unresolved_sigma: bool = True,
-                 labels: bool = True) -> UpdateReport:
+                 labels: bool = True, threads: int | None = 1) -> UpdateReport:
     """Estimate the six strut wall thicknesses from measured natural frequencies.
 
     Parameters
@@ -886,6 +903,11 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         0.05-0.1 Hz apart).
     labels : bool
         Label the paired modes (builds the model at the updated walls: ~1 s).
+    threads : int or None
+        BLAS threads during the fits (:func:`trussid.threads.blas_threads`; None leaves
+        the setting). One by default: the fits are thousands of small eigen-solutions,
+        which threads only slow down (measured on the loaded 2-core machine: the
+        exact-frequency test took 21 s with two threads, 3 s with one).
 
     Returns
     -------
@@ -902,6 +924,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     from fem.testbed import build_testbed, wall_basis, wall_modes
     from geometry.testbed import Testbed
     from plid.greybox import fit_parameters
+    from trussid.threads import blas_threads
 
     f_all = _vector("measured_freqs_hz", measured_freqs_hz, np.size(measured_freqs_hz))
     k_all = f_all.size
@@ -922,188 +945,189 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
             raise UpdateError(f"shapes must be (n_sensors={len(sensors)}, n_modes={k_all}), "
                               f"got {sh_all.shape}")
 
-    tb = Testbed() if tb_nominal is None else tb_nominal
-    tbm = build_testbed(tb) if tbm is None else tbm
-    basis = wall_basis(tbm)
-    nominal = np.array(basis.walls_ref, float)
-    r_out = basis.r_out
-    lo, hi = _wall_bounds(bounds, nominal, r_out)
-    n_model = (int(n_model_modes) if n_model_modes is not None else None)
+    with blas_threads(threads):  # small dense eigen-solves, thousands of them
+        tb = Testbed() if tb_nominal is None else tb_nominal
+        tbm = build_testbed(tb) if tbm is None else tbm
+        basis = wall_basis(tbm)
+        nominal = np.array(basis.walls_ref, float)
+        r_out = basis.r_out
+        lo, hi = _wall_bounds(bounds, nominal, r_out)
+        n_model = (int(n_model_modes) if n_model_modes is not None else None)
 
-    if n_model is None:
-        # nominal frequencies from the full model (one solve) to size the mode set
-        f_nom, _ = wall_modes(basis, nominal, min(basis.n, max(60, 2 * k_all)))
-        n_model = int(np.count_nonzero(f_nom <= 1.5 * f_all.max())) + 4
-    n_model = max(min(n_model, basis.n), 1)
-    if n_model < k_all:
-        raise UpdateError(f"{k_all} measured modes but only {n_model} model modes considered: "
-                          "raise n_model_modes")
-    # the Ritz basis holds at least the modes compared, at each of its designs
-    reduced, V = reduced_wall_basis(basis, max(reduced_vectors, n_model))
-    rows_full = None
-    if sensors is not None:
-        S = sensor_matrix(basis.system.node_ids, sensors)
-        rows_full = np.asarray(S @ basis.system.T)  # sensors from reduced DOFs
-    rows_red = None if rows_full is None else rows_full @ V
-    coarse_modes = _ModelModes(reduced, n_model, rows_red)
-    full_modes = _ModelModes(basis, n_model, rows_full)
+        if n_model is None:
+            # nominal frequencies from the full model (one solve) to size the mode set
+            f_nom, _ = wall_modes(basis, nominal, min(basis.n, max(60, 2 * k_all)))
+            n_model = int(np.count_nonzero(f_nom <= 1.5 * f_all.max())) + 4
+        n_model = max(min(n_model, basis.n), 1)
+        if n_model < k_all:
+            raise UpdateError(f"{k_all} measured modes but only {n_model} model modes considered: "
+                              "raise n_model_modes")
+        # the Ritz basis holds at least the modes compared, at each of its designs
+        reduced, V = reduced_wall_basis(basis, max(reduced_vectors, n_model))
+        rows_full = None
+        if sensors is not None:
+            S = sensor_matrix(basis.system.node_ids, sensors)
+            rows_full = np.asarray(S @ basis.system.T)  # sensors from reduced DOFs
+        rows_red = None if rows_full is None else rows_full @ V
+        coarse_modes = _ModelModes(reduced, n_model, rows_red)
+        full_modes = _ModelModes(basis, n_model, rows_full)
 
-    # Sensitivity-aware gate at the nominal walls: which measured modes can be paired at all.
-    f0, d0, sh0 = full_modes(nominal)
-    reach = np.abs(d0) @ (prior_range * nominal)
-    tol = gate * (reach[None, :] + (sig_all[:, None] if known_sigma else 0.0)) + 5e-3 * f_all[:, None]
-    allowed = np.abs(f_all[:, None] - f0[None, :]) <= tol
-    mac0 = None if sh_all is None else _mac(sh_all, sh0)
-    pair0 = pair_modes(f_all, f0, scale_hz=np.maximum(tol, 1e-300), mac=mac0, mac_weight=mac_weight,
-                       allowed=allowed)
-    used = pair0 >= 0
-    if not used.any():
-        raise UpdateError("no measured frequency lies within reach of a model mode "
-                          f"(measured {np.round(f_all, 3).tolist()} Hz; model {np.round(f0, 3).tolist()} Hz)")
-    f = f_all[used]
-    k = f.size
-    sig = sig_all[used] if known_sigma else f  # relative residuals without sigmas
-    allowed_u = allowed[used]
-    sh = None if sh_all is None else sh_all[:, used]
-    if not known_sigma and k < 7:
-        raise UpdateError(f"{k} paired modes cannot determine 6 walls with intervals: give at least 7, "
-                          "or frequency_std_hz")
-    # fewer than 6 modes: the fit still runs, and its identifiability analysis names the
-    # wall combinations they leave open
+        # Sensitivity-aware gate at the nominal walls: which measured modes can be paired at all.
+        f0, d0, sh0 = full_modes(nominal)
+        reach = np.abs(d0) @ (prior_range * nominal)
+        tol = gate * (reach[None, :] + (sig_all[:, None] if known_sigma else 0.0)) + 5e-3 * f_all[:, None]
+        allowed = np.abs(f_all[:, None] - f0[None, :]) <= tol
+        mac0 = None if sh_all is None else _mac(sh_all, sh0)
+        pair0 = pair_modes(f_all, f0, scale_hz=np.maximum(tol, 1e-300), mac=mac0, mac_weight=mac_weight,
+                           allowed=allowed)
+        used = pair0 >= 0
+        if not used.any():
+            raise UpdateError("no measured frequency lies within reach of a model mode "
+                              f"(measured {np.round(f_all, 3).tolist()} Hz; model {np.round(f0, 3).tolist()} Hz)")
+        f = f_all[used]
+        k = f.size
+        sig = sig_all[used] if known_sigma else f  # relative residuals without sigmas
+        allowed_u = allowed[used]
+        sh = None if sh_all is None else sh_all[:, used]
+        if not known_sigma and k < 7:
+            raise UpdateError(f"{k} paired modes cannot determine 6 walls with intervals: give at least 7, "
+                              "or frequency_std_hz")
+        # fewer than 6 modes: the fit still runs, and its identifiability analysis names the
+        # wall combinations they leave open
 
-    zeta_bw = float(np.median(z_all)) if z_all is not None else float(tb.damping.modal_ratio)
+        zeta_bw = float(np.median(z_all)) if z_all is not None else float(tb.damping.modal_ratio)
 
-    def make(mm, sig):
-        def pairs(p):
-            w = np.array([p[n] for n in WALL_NAMES])
-            F, dF, shp = mm(w)
-            mac = groups = None
-            if sh is not None:
-                mac = _mac(sh, shp)
-                groups = mode_groups(F, shp, 2 * zeta_bw * F)
-            j = pair_modes(f, F, mac=mac, mac_weight=mac_weight, allowed=allowed_u, groups=groups)
-            # every gated mode stays pairable (the residual length must not change)
-            j = np.where(j >= 0, j, pair_modes(f, F, mac=mac, mac_weight=mac_weight))
-            return w, F, dF, j, mac
+        def make(mm, sig):
+            def pairs(p):
+                w = np.array([p[n] for n in WALL_NAMES])
+                F, dF, shp = mm(w)
+                mac = groups = None
+                if sh is not None:
+                    mac = _mac(sh, shp)
+                    groups = mode_groups(F, shp, 2 * zeta_bw * F)
+                j = pair_modes(f, F, mac=mac, mac_weight=mac_weight, allowed=allowed_u, groups=groups)
+                # every gated mode stays pairable (the residual length must not change)
+                j = np.where(j >= 0, j, pair_modes(f, F, mac=mac, mac_weight=mac_weight))
+                return w, F, dF, j, mac
 
-        def residual(p):
-            _, F, _, j, _ = pairs(p)
-            return (F[j] - f) / sig
+            def residual(p):
+                _, F, _, j, _ = pairs(p)
+                return (F[j] - f) / sig
 
-        def jac(p):
-            _, _, dF, j, _ = pairs(p)
-            return dF[j] / sig[:, None]
+            def jac(p):
+                _, _, dF, j, _ = pairs(p)
+                return dF[j] / sig[:, None]
 
-        return pairs, residual, jac
+            return pairs, residual, jac
 
-    initial = dict(zip(WALL_NAMES, nominal))
-    lo1 = np.maximum(lo, nominal * (1 - prior_range))
-    hi1 = np.minimum(hi, nominal * (1 + prior_range))
-    _, r1, j1 = make(coarse_modes, sig)
-    coarse, swaps, ambiguous = _global_fit(r1, j1, initial, lo1, hi1, n_starts, seed, confidence,
-                                           known_sigma)
-    start = {n: float(np.clip(coarse.estimates[n], lo[i] * (1 + 1e-9), hi[i] * (1 - 1e-9)))
-             for i, n in enumerate(WALL_NAMES)}
-    # Close modes the experiment cannot separate: when the paired model mode lies in a
-    # chain of modes each nearer to the next than the measured mode's half-power bandwidth
-    # 2 zeta f, the identified pole is a blend of them and may lie anywhere within the
-    # chain's span (sigma span / sqrt 3), a model-form error the measured sigma does not
-    # hold. For one strut's two planes the span is their 0.05-0.1 Hz split; for two struts
-    # with nearly equal walls it covers both pairs.
-    unres = np.zeros(k)
-    if unresolved_sigma:
-        w1 = np.array([start[n] for n in WALL_NAMES])
-        F1, _, sh1 = full_modes(w1)
-        j1 = pair_modes(f, F1, mac=None if sh is None else _mac(sh, sh1), mac_weight=mac_weight,
-                        allowed=allowed_u,
-                        groups=None if sh is None else mode_groups(F1, sh1, 2 * zeta_bw * F1))
-        j1 = np.where(j1 >= 0, j1, pair_modes(f, F1))
-        zi = z_all[used] if z_all is not None else np.full(k, tb.damping.modal_ratio)
-        span = np.array([_cluster_span(F1, jj, 2 * z_ * f_) for jj, z_, f_ in zip(j1, zi, f)])
-        unres = span / math.sqrt(3)
+        initial = dict(zip(WALL_NAMES, nominal))
+        lo1 = np.maximum(lo, nominal * (1 - prior_range))
+        hi1 = np.minimum(hi, nominal * (1 + prior_range))
+        _, r1, j1 = make(coarse_modes, sig)
+        coarse, swaps, ambiguous = _global_fit(r1, j1, initial, lo1, hi1, n_starts, seed, confidence,
+                                               known_sigma)
+        start = {n: float(np.clip(coarse.estimates[n], lo[i] * (1 + 1e-9), hi[i] * (1 - 1e-9)))
+                 for i, n in enumerate(WALL_NAMES)}
+        # Close modes the experiment cannot separate: when the paired model mode lies in a
+        # chain of modes each nearer to the next than the measured mode's half-power bandwidth
+        # 2 zeta f, the identified pole is a blend of them and may lie anywhere within the
+        # chain's span (sigma span / sqrt 3), a model-form error the measured sigma does not
+        # hold. For one strut's two planes the span is their 0.05-0.1 Hz split; for two struts
+        # with nearly equal walls it covers both pairs.
+        unres = np.zeros(k)
+        if unresolved_sigma:
+            w1 = np.array([start[n] for n in WALL_NAMES])
+            F1, _, sh1 = full_modes(w1)
+            j1 = pair_modes(f, F1, mac=None if sh is None else _mac(sh, sh1), mac_weight=mac_weight,
+                            allowed=allowed_u,
+                            groups=None if sh is None else mode_groups(F1, sh1, 2 * zeta_bw * F1))
+            j1 = np.where(j1 >= 0, j1, pair_modes(f, F1))
+            zi = z_all[used] if z_all is not None else np.full(k, tb.damping.modal_ratio)
+            span = np.array([_cluster_span(F1, jj, 2 * z_ * f_) for jj, z_, f_ in zip(j1, zi, f)])
+            unres = span / math.sqrt(3)
+            if known_sigma:
+                sig = np.sqrt(sig**2 + unres**2)
+        pairs2, r2, j2 = make(full_modes, sig)
+        rep = fit_parameters(r2, start, bounds={n: (a, b) for n, a, b in zip(WALL_NAMES, lo, hi)},
+                             jac=j2, n_starts=1, confidence=confidence, min_obs=1)
+        est = {n: rep.estimates[n] for n in WALL_NAMES}
+        walls, F, dF, j, mac = pairs2(est)
+        r = (F[j] - f) / sig
+        chi2 = float(r @ r)
+        dof = max(k - 6, 0)
+
+        # Intervals in ln t.
+        intervals = np.full((6, 2), np.nan)
+        std_log = np.full(6, np.nan)
         if known_sigma:
-            sig = np.sqrt(sig**2 + unres**2)
-    pairs2, r2, j2 = make(full_modes, sig)
-    rep = fit_parameters(r2, start, bounds={n: (a, b) for n, a, b in zip(WALL_NAMES, lo, hi)},
-                         jac=j2, n_starts=1, confidence=confidence, min_obs=1)
-    est = {n: rep.estimates[n] for n in WALL_NAMES}
-    walls, F, dF, j, mac = pairs2(est)
-    r = (F[j] - f) / sig
-    chi2 = float(r @ r)
-    dof = max(k - 6, 0)
+            jl = (dF[j] / sig[:, None]) * walls[None, :]
+            birge = math.sqrt(chi2 / dof) if dof > 0 else 1.0
+            infl = max(1.0, birge)
+            try:
+                cov = la.inv(jl.T @ jl) * infl**2
+                ok = np.isfinite(cov).all()
+            except la.LinAlgError:
+                ok = False
+            zq = scipy.stats.norm.ppf(0.5 + confidence / 2)
+            for i, n in enumerate(WALL_NAMES):
+                if ok and rep.determined.get(n, True) and n not in rep.at_bound:
+                    std_log[i] = math.sqrt(max(cov[i, i], 0.0))
+                    intervals[i] = walls[i] * np.exp([-zq * std_log[i], zq * std_log[i]])
+            source = "known sigma"
+        else:
+            birge = math.sqrt(chi2 / dof) if dof > 0 else float("nan")
+            for i, n in enumerate(WALL_NAMES):
+                iv = rep.intervals.get(n)
+                if iv is not None:
+                    intervals[i] = iv
+                    se = rep.std_errors.get(n)
+                    std_log[i] = se if se is not None else np.nan
+            source = "residual scatter"
 
-    # Intervals in ln t.
-    intervals = np.full((6, 2), np.nan)
-    std_log = np.full(6, np.nan)
-    if known_sigma:
-        jl = (dF[j] / sig[:, None]) * walls[None, :]
-        birge = math.sqrt(chi2 / dof) if dof > 0 else 1.0
-        infl = max(1.0, birge)
-        try:
-            cov = la.inv(jl.T @ jl) * infl**2
-            ok = np.isfinite(cov).all()
-        except la.LinAlgError:
-            ok = False
-        zq = scipy.stats.norm.ppf(0.5 + confidence / 2)
-        for i, n in enumerate(WALL_NAMES):
-            if ok and rep.determined.get(n, True) and n not in rep.at_bound:
-                std_log[i] = math.sqrt(max(cov[i, i], 0.0))
-                intervals[i] = walls[i] * np.exp([-zq * std_log[i], zq * std_log[i]])
-        source = "known sigma"
-    else:
-        birge = math.sqrt(chi2 / dof) if dof > 0 else float("nan")
-        for i, n in enumerate(WALL_NAMES):
-            iv = rep.intervals.get(n)
-            if iv is not None:
-                intervals[i] = iv
-                se = rep.std_errors.get(n)
-                std_log[i] = se if se is not None else np.nan
-        source = "residual scatter"
+        # Damping: one modal ratio, the weighted mean of the paired modes' ratios.
+        zeta = ziv = None
+        if z_all is not None:
+            zz = z_all[used]
+            # a blend of modes within the bandwidth looks more damped: up to span / 2f
+            zs = np.sqrt((zsig_all[used] if zsig_all is not None else 0.0) ** 2 + (unres / (2 * f)) ** 2)
+            w = 1.0 / zs**2 if np.all(zs > 0) else np.ones(k)
+            zeta = float(np.sum(w * zz) / np.sum(w))
+            scatter = math.sqrt(float(np.sum(w * (zz - zeta) ** 2) / np.sum(w) / max(k - 1, 1)))
+            stated = math.sqrt(1.0 / float(np.sum(w))) if np.all(zs > 0) else 0.0
+            se = max(scatter, stated)
+            tq = scipy.stats.t.ppf(0.5 + confidence / 2, max(k - 1, 1))
+            ziv = (zeta - tq * se, zeta + tq * se)
 
-    # Damping: one modal ratio, the weighted mean of the paired modes' ratios.
-    zeta = ziv = None
-    if z_all is not None:
-        zz = z_all[used]
-        # a blend of modes within the bandwidth looks more damped: up to span / 2f
-        zs = np.sqrt((zsig_all[used] if zsig_all is not None else 0.0) ** 2 + (unres / (2 * f)) ** 2)
-        w = 1.0 / zs**2 if np.all(zs > 0) else np.ones(k)
-        zeta = float(np.sum(w * zz) / np.sum(w))
-        scatter = math.sqrt(float(np.sum(w * (zz - zeta) ** 2) / np.sum(w) / max(k - 1, 1)))
-        stated = math.sqrt(1.0 / float(np.sum(w))) if np.all(zs > 0) else 0.0
-        se = max(scatter, stated)
-        tq = scipy.stats.t.ppf(0.5 + confidence / 2, max(k - 1, 1))
-        ziv = (zeta - tq * se, zeta + tq * se)
+        # Report: pairs over all measured modes, with nominal frequencies of the same pairs.
+        idx_used = np.flatnonzero(used)
+        pairing = np.full(k_all, -1)
+        pairing[idx_used] = j
+        model_hz = np.full(k_all, np.nan)
+        model_hz[idx_used] = F[j]
+        nominal_hz = np.full(k_all, np.nan)
+        nominal_hz[idx_used] = f0[pair0[used]]
+        mac_all = None
+        if mac is not None:
+            mac_all = np.full(k_all, np.nan)
+            mac_all[idx_used] = mac[np.arange(k), j]
+        lab = [""] * k_all
+        if labels:
+            from fem.labels import label_testbed_modes
+            from fem.testbed import solve_testbed_modes
 
-    # Report: pairs over all measured modes, with nominal frequencies of the same pairs.
-    idx_used = np.flatnonzero(used)
-    pairing = np.full(k_all, -1)
-    pairing[idx_used] = j
-    model_hz = np.full(k_all, np.nan)
-    model_hz[idx_used] = F[j]
-    nominal_hz = np.full(k_all, np.nan)
-    nominal_hz[idx_used] = f0[pair0[used]]
-    mac_all = None
-    if mac is not None:
-        mac_all = np.full(k_all, np.nan)
-        mac_all[idx_used] = mac[np.arange(k), j]
-    lab = [""] * k_all
-    if labels:
-        from fem.labels import label_testbed_modes
-        from fem.testbed import solve_testbed_modes
-
-        tbm_u = build_testbed(tb.with_walls(tuple(float(x) for x in walls)),
-                              elements_per_segment=tbm.elements_per_segment)
-        ml = label_testbed_modes(tbm_u, solve_testbed_modes(tbm_u, n_model)).labels
-        for i, jj in zip(idx_used, j):
-            lab[i] = ml[jj]
-    return UpdateReport(
-        walls=walls, nominal=nominal, intervals=intervals, std_log=std_log, interval_source=source,
-        measured_hz=f_all, used=used, pairing=pairing, model_hz=model_hz, nominal_hz=nominal_hz,
-        labels=lab, mac=mac_all, chi2=chi2, dof=dof, birge=birge, damping=zeta, damping_interval=ziv,
-        greybox=rep, coarse=coarse, confidence=confidence,
-        sigma_hz=_scatter(sig if known_sigma else None, idx_used, k_all),
-        unresolved_hz=_scatter(unres, idx_used, k_all),
-        info={"coarse_evaluations": coarse_modes.evaluations, "full_evaluations": full_modes.evaluations,
-              "n_model_modes": n_model, "swaps": swaps,
-              "ambiguous_swaps": ambiguous},
-    )
+            tbm_u = build_testbed(tb.with_walls(tuple(float(x) for x in walls)),
+                                  elements_per_segment=tbm.elements_per_segment)
+            ml = label_testbed_modes(tbm_u, solve_testbed_modes(tbm_u, n_model)).labels
+            for i, jj in zip(idx_used, j):
+                lab[i] = ml[jj]
+        return UpdateReport(
+            walls=walls, nominal=nominal, intervals=intervals, std_log=std_log, interval_source=source,
+            measured_hz=f_all, used=used, pairing=pairing, model_hz=model_hz, nominal_hz=nominal_hz,
+            labels=lab, mac=mac_all, chi2=chi2, dof=dof, birge=birge, damping=zeta, damping_interval=ziv,
+            greybox=rep, coarse=coarse, confidence=confidence,
+            sigma_hz=_scatter(sig if known_sigma else None, idx_used, k_all),
+            unresolved_hz=_scatter(unres, idx_used, k_all),
+            info={"coarse_evaluations": coarse_modes.evaluations, "full_evaluations": full_modes.evaluations,
+                  "n_model_modes": n_model, "swaps": swaps,
+                  "ambiguous_swaps": ambiguous},
+        )
