@@ -486,7 +486,8 @@ def pair_modes(measured_hz, model_hz, *, scale_hz=None, mac=None, mac_weight: fl
 # --------------------------------------------------------------------------- identified side
 
 
-def modes_of_model(sys, band=None, *, max_damping: float = 0.2, theta_cov=None) -> IdentifiedModes:
+def modes_of_model(sys, band=None, *, max_damping: float = 0.2, min_damping: float = 0.0,
+                   theta_cov=None) -> IdentifiedModes:
     """Modes of an identified (discrete or continuous) ``control.StateSpace``.
 
     One mode per complex-conjugate pole pair with a positive imaginary part; frequency
@@ -500,6 +501,8 @@ def modes_of_model(sys, band=None, *, max_damping: float = 0.2, theta_cov=None) 
         Keep modes with frequencies in this band.
     max_damping : float
         Drop modes more damped than this (noise and filter poles).
+    min_damping : float
+        Drop modes damped less than this (default: unstable poles, which no structure has).
     theta_cov : (n (p + m), n (p + m)) array, optional
         Posterior covariance of a PLID model's ``theta = [vec(Abar); vec(B)]``
         (:class:`plid.estimator.PLIDResult`, where ``A = F + Abar C`` with ``F``, ``C``
@@ -524,7 +527,7 @@ def modes_of_model(sys, band=None, *, max_damping: float = 0.2, theta_cov=None) 
     wn = np.abs(s)
     f = wn / (2 * np.pi)
     z = -s.real / np.maximum(wn, 1e-300)
-    sel = (z < max_damping) & (z > -1.0)
+    sel = (z < max_damping) & (z > min_damping)
     if band is not None:
         sel &= (f >= band[0]) & (f <= band[1])
     cv = C @ V
