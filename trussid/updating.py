@@ -836,7 +836,7 @@ def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence, know
             rep = fit_parameters(residual, dict(zip(WALL_NAMES, w)), bounds=bnds, jac=jac,
                                  n_starts=1, confidence=confidence, min_obs=1)
             refits.append(([rep.estimates[n] for n in WALL_NAMES], ij, rep.cost))
-            if rep.cost < best.cost * (1 - 1e-6) - 1e-300:
+            if rep.cost < best.cost * (1 - 1e-6) - 1e-16:  # not round-off
                 best, improved, ij_best = rep, True, ij
         if not improved:
             break

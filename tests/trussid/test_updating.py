@@ -191,12 +191,13 @@ def test_plid_covariance_and_segment_scatter_agree_on_pole_uncertainty(full):
 
 
 def test_walls_recovered_from_exact_frequencies_within_1e_3(nominal):
-    """Acceptance 4a. Seed 105 perturbs the walls so that struts 0 and 2 swap places in
-    the bending-frequency order relative to nominal: the multi-start alone ends in the
-    wrong arrangement, the swap moves find the right one."""
+    """Acceptance 4a. Seed 105 perturbs the walls so that struts 1 and 2 swap places in
+    the wall (and bending-frequency) order relative to nominal: the seeded multi-start
+    ends in the wrong arrangement, a wall exchange move finds the right one."""
     tb, tbm, basis = nominal
     truth = perturbed(tb, 105)
     assert np.max(np.abs(truth / np.array(tb.struts.walls) - 1)) <= 0.15
+    assert truth[2] < truth[1]  # crossed over
     measured = first_bending_and_udf(build_testbed(tb.with_walls(tuple(truth))))[::-1]  # any order
     assert len(measured) == 18
     rep = update_walls(measured, tb, tbm=tbm, n_starts=4, labels=False)
@@ -204,6 +205,7 @@ def test_walls_recovered_from_exact_frequencies_within_1e_3(nominal):
     assert rep.used.all()
     np.testing.assert_allclose(rep.model_hz, measured, rtol=1e-6)
     assert rep.greybox.identifiable
+    assert rep.info["swaps"]  # the exchange moves were needed
 
 
 def test_bending_frequencies_alone_leave_the_arrangement_of_close_struts_open(nominal):
