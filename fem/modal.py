@@ -382,22 +382,74 @@ def _solve_modes(system: System, n_modes: int, method: str, sigma, tol) -> Modes
                  node_ids=system.node_ids, xyz=system.xyz, n_dof=n, method=used)
 
 
+def rigid_null_dimension(system: System) -> int:
+    """Number of independent rigid-body motions the constrained model admits freely.
+
+    The six rigid-body motions of the nodes are taken to the reduced DOFs; those the
+    constraints admit (``T q = r``: no support or rigid link resists them) are kept, and
+    of these the ones with no strain energy are counted. "No strain energy" is judged
+    against the round-off of the quadratic form itself, ``eps |q|^T |K| |q|``, not against
+    the largest eigenvalue: a model of short, stiff elements hung on soft springs has real
+    sub-hertz modes far below ``1e-12 max(K_ii / M_ii)`` whose shapes are nearly rigid, and
+    those must keep their frequencies.
+    """
+    xyz = system.xyz
+    size = float(np.ptp(xyz, axis=0).max()) or 1.0
+    R = rigid_body_modes(xyz)                      # (6 n_nodes, 6)
+    Q = R[system.dofs]                             # reduced coordinates of each motion
+    w = np.tile(np.r_[np.ones(3), np.full(3, size)], len(xyz))[:, None]  # rotations in length units
+    D = (system.T @ Q - R) * w
+    _, sv, Vt = np.linalg.svd(D, full_matrices=True)
+    sv = np.r_[sv, np.zeros(6 - len(sv))]
+    admissible = Vt[sv <= 1e-9 * max(np.linalg.norm(R * w), 1.0)].T   # (6, a)
+    if admissible.shape[1] == 0:
+        return 0
+    Qa = Q @ admissible
+    K, M = system.K, system.M
+    G = Qa.T @ (K @ Qa)
+    H = Qa.T @ (M @ Qa)
+    absQ = np.abs(Qa)
+    bound = np.finfo(float).eps * (absQ.T @ (abs(K) @ absQ))   # round-off of each entry of G
+    h = np.diag(H)
+    if not (h > 0).all():
+        return 0                                   # a massless rigid motion: leave it to the solver
+    s = 1.0 / np.sqrt(h)
+    mu = np.linalg.eigvalsh((G * s[:, None] * s[None, :]))
+    tol = 1e3 * np.max(np.diag(bound) * s**2)
+    Hs = H * s[:, None] * s[None, :]
+    # Rayleigh quotients mu / eig(H): H is well conditioned after scaling (rigid motions of
+    # a body with mass), so the count of tiny mu is the null dimension.
+    if np.linalg.cond(Hs) > 1e8:
+        return 0
+    return int(np.count_nonzero(np.abs(mu) <= tol))
+
+
 def _zero_modes(system: System, lam, X, shapes_full, proven: bool) -> np.ndarray:
-    """Clamp rigid-body eigenvalues to 0; raise for mechanisms of supported models."""
+    """Clamp the rigid-body eigenvalues to 0; raise for mechanisms of supported models."""
     lam = np.array(lam, dtype=float)
-    small = np.flatnonzero(lam < ZERO_EIGENVALUE * eigenvalue_scale(system))
-    if small.size:
-        rigid = _is_rigid(system.xyz, shapes_full[:, small])
-        lam[small[rigid]] = 0.0
-        other = small[~rigid]
-        if system.has_supports and other.size and not proven:
-            ok, j = factor_stiffness(system)
-            if ok is None:
-                if j is None:  # exactly singular: name what moves most in the first such mode
-                    j = int(np.argmax(np.abs(X[:, other[0]])))
-                raise ModelError(f"mechanism: {system.dof_label(j)} has no stiffness (it can move "
-                                 f"without straining the structure)")
+    r = rigid_null_dimension(system)
+    limit = ZERO_EIGENVALUE * eigenvalue_scale(system)
+    rigid = np.zeros(len(lam), bool)
+    rigid[:r] = lam[:r] < limit                    # ascending: the r lowest are rigid-body modes
+    lam[rigid] = 0.0
+    other = np.flatnonzero(~rigid & (lam < limit) & ~_is_rigid_any(system, shapes_full, lam, limit))
+    if system.has_supports and other.size and not proven:
+        ok, j = factor_stiffness(system)
+        if ok is None:
+            if j is None:  # exactly singular: name what moves most in the first such mode
+                j = int(np.argmax(np.abs(X[:, other[0]])))
+            raise ModelError(f"mechanism: {system.dof_label(j)} has no stiffness (it can move "
+                             f"without straining the structure)")
     return np.maximum(lam, 0.0)
+
+
+def _is_rigid_any(system: System, shapes_full, lam, limit) -> np.ndarray:
+    """Per mode: True for shapes that move the nodes rigidly (only where ``lam < limit``)."""
+    out = np.zeros(len(lam), bool)
+    small = np.flatnonzero(lam < limit)
+    if small.size:
+        out[small] = _is_rigid(system.xyz, shapes_full[:, small])
+    return out
 
 
 def _is_rigid(xyz: np.ndarray, Z: np.ndarray, tol: float = 1e-5) -> np.ndarray:

@@ -608,10 +608,10 @@ def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | N
     ``max_frequency_hz`` [Hz], when given, replaces ``n_modes``: every mode below it (LAPACK
     finds them by value, which costs no more than a fixed count).
 
-    Unlike :func:`fem.modal.solve_modes`, eigenvalues are not rounded to zero below a
-    fraction of the largest ``K_ii / M_ii``: the suspension modes (below 1 Hz, eigenvalues
-    ~10) sit under that threshold for this model's short, stiff elements, yet are real.
-    The testbed has no zero-frequency mode (clamped, or hung on bungees).
+    It gives the same modes as :func:`fem.modal.solve_modes` (which keeps the sub-hertz
+    suspension modes too: it clamps only the rigid-body null space), and adds finding all
+    modes below a frequency by value, which the plant uses. The testbed has no
+    zero-frequency mode (clamped, or hung on bungees).
     """
     from fem.modal import Modes
 
