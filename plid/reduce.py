@@ -22,7 +22,7 @@ import scipy.linalg
 
 from plid.errors import IdentificationError
 
-__all__ = ["ReductionResult", "hankel_singular_values", "balanced_truncation"]
+__all__ = ["ReductionResult", "hankel_singular_values", "balanced_truncation", "state_covariance"]
 
 
 @dataclass
@@ -82,7 +82,24 @@ def hankel_singular_values(sys: control.StateSpace) -> np.ndarray:
     return scipy.linalg.svdvals(Lo.T @ Lc)
 
 
-def balanced_truncation(sys: control.StateSpace, order: int) -> ReductionResult:
+def state_covariance(A, B, u) -> np.ndarray:
+    """``(1/N) sum_k x_k x_k^T`` of ``x[k+1] = A x[k] + B u[k]`` from rest: the
+    controllability Gramian of ``(A, B)`` weighted by the spectrum of the input ``u``
+    (for white unit-variance ``u`` and a long record it tends to the usual Gramian)."""
+    A, B = np.asarray(A, float), np.asarray(B, float)
+    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+    n = A.shape[0]
+    # control.forced_response would do; this avoids building an output map of n rows.
+    x = np.zeros(n)
+    Bu = u @ B.T
+    X = np.empty((u.shape[0], n))
+    for k in range(u.shape[0]):  # the recursion itself: nothing to vectorise over samples
+        X[k] = x
+        x = A @ x + Bu[k]
+    return X.T @ X / u.shape[0]
+
+
+def balanced_truncation(sys: control.StateSpace, order: int, u=None) -> ReductionResult:
     """Reduce a discrete model to ``order`` states by square-root balanced truncation.
 
     Parameters
@@ -91,6 +108,14 @@ def balanced_truncation(sys: control.StateSpace, order: int) -> ReductionResult:
         Discrete-time model; unstable modes are kept unreduced.
     order : int
         Total states of the reduced model (at least the number of unstable states).
+    u : array (N, m), optional
+        An input record. When given, the controllability Gramian is replaced by the state
+        covariance under this input (:func:`state_covariance`), i.e. the truncation is
+        weighted by the input's spectrum: states that only a band the input does not reach
+        would excite (an identified model's noise modes above a band-limited excitation)
+        rank low even when their white-noise Hankel singular values are large. ``hsv`` then
+        holds these input-weighted values and ``error_bound`` is ``nan`` (the H-infinity
+        bound holds for the unweighted truncation only).
     """
     if not isinstance(sys, control.StateSpace) or not control.isdtime(sys, strict=True):
         raise IdentificationError("balanced_truncation needs a discrete-time control.StateSpace")
@@ -108,14 +133,22 @@ def balanced_truncation(sys: control.StateSpace, order: int) -> ReductionResult:
     if ns == 0:
         return ReductionResult(sys, np.array([]), nu, 0.0)
     As, Bs, Cs = stable
-    Lc = _factor(scipy.linalg.solve_discrete_lyapunov(As, Bs @ Bs.T))
+    if u is None:
+        Wc = scipy.linalg.solve_discrete_lyapunov(As, Bs @ Bs.T)
+    else:
+        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        if u.shape[1] != B.shape[1]:
+            raise IdentificationError(
+                f"u has {u.shape[1]} columns but the model has {B.shape[1]} inputs")
+        Wc = state_covariance(As, Bs, u)
+    Lc = _factor(Wc)
     Lo = _factor(scipy.linalg.solve_discrete_lyapunov(As.T, Cs.T @ Cs))
     U, s, Vt = scipy.linalg.svd(Lo.T @ Lc)
     if r > 0 and s[r - 1] <= s[0] * 1e-14:
         raise IdentificationError(
             f"order {order} keeps Hankel singular values at round-off level; choose a lower order"
         )
-    bound = 2.0 * float(np.sum(s[r:]))
+    bound = 2.0 * float(np.sum(s[r:])) if u is None else float("nan")
     if r == 0:
         Ar = np.zeros((0, 0))
         Br = np.zeros((0, B.shape[1]))
