@@ -6,13 +6,18 @@ One-step signal-to-prediction-error ratio [dB]
     Run the model's one-step (Kalman) predictor over validation data from x0 = 0,
     x[k+1] = A x[k] + B u[k] + K (y[k] - C x[k] - D u[k]),  yhat[k] = C x[k] + D u[k].
     Per output channel j: ``20 log10( RMS(y_j) / RMS(y_j - yhat_j) )``, where RMS(y_j) is
-    the RMS of the measured sensor signal (mean not removed). Overall:
-    ``-10 log10( mean_j ( MS(e_j) / MS(y_j) ) )`` -- the mean of the normalised error
-    powers, so it is independent of channel units and dominated by the worst channel.
+    the RMS of the measured sensor signal (mean not removed). Overall (``overall``): the
+    thesis's figure, "the sensor signal RMS was 46 dB higher than the sensor error"
+    (Vallone 1997, ch. 2), the RMS over all sensors and samples:
+    ``10 log10( sum_jk y_j[k]^2 / sum_jk e_j[k]^2 )``. It weighs the channels by their
+    signal power in the data's units (for the testbed all are volts at the A/D), so it
+    needs channels in comparable units. ``mean_normalised``:
+    ``-10 log10( mean_j ( MS(e_j) / MS(y_j) ) )``, the mean of the normalised error
+    powers, independent of channel units and dominated by the worst channel.
     The first ``skip`` samples (the predictor's start-up from x0 = 0) are left out.
 Simulation fit [dB]
-    The same ratio for the model simulated open loop (no K) against the noise-free output
-    of validation data; also the NRMSE fit ``100 (1 - ||e|| / ||y - mean(y)||)`` [%].
+    The same ratios for the model simulated open loop (no K) against the noise-free output
+    of validation data, ``overall_db`` being the mean-normalised one; also the NRMSE fit ``100 (1 - ||e|| / ||y - mean(y)||)`` [%].
 FRF error
     Per channel (output i, input j) over a band: magnitude error
     ``20 log10|H_model| - 20 log10|H_ref|`` [dB] and phase error ``angle(H_model / H_ref)``
@@ -78,6 +83,60 @@ def default_noise_covariances(sys, u, y, rel: float = 1e-2):
     return Q, R
 
 
+#: State-to-output noise ratios tried by :func:`choose_predictor`.
+PREDICTOR_RATIOS = (100.0, 10.0, 1.0, 0.1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
+
+
+def choose_predictor(model: control.StateSpace, u, y, candidates=None,
+                     ratios=PREDICTOR_RATIOS):
+    """One-step predictor gain for ``model``, chosen on the (identification) data given.
+
+    Candidates: the gains in ``candidates`` (``{label: K}``, e.g. the estimator's own) whose
+    predictor ``A - K C`` is stable, and steady-state Kalman gains with output noise
+    ``R = diag(RMS(y_j)^2)`` and state noise ``Q = a (B diag(RMS(u_j)^2) B^T + 1e-3 tr/n I)``
+    for each ratio ``a`` (only the ratio of Q to R matters to K). An identified model's own
+    error acts as noise of a level not known beforehand, so the candidate with the best
+    one-step ratio (``overall``, module docstring) on ``u, y`` is kept; give it the
+    identification record, never the validation record.
+
+    Returns
+    -------
+    K : ndarray (n, p)
+    label : str
+    info : dict
+        ``{"chosen": label, "identification_ratio_db": {label: dB}}``.
+    """
+    u, y = _check_sizes(model, u, y)
+    A, B, C = (np.asarray(M, dtype=float) for M in (model.A, model.B, model.C))
+    n = A.shape[0]
+    skip = u.shape[0] // 8  # past any candidate predictor's start-up from x0 = 0
+    Qin = B @ np.diag(np.mean(u ** 2, axis=0)) @ B.T
+    Qin = Qin + 1e-3 * (np.trace(Qin) / max(n, 1)) * np.eye(n)
+    R = np.diag(np.maximum(np.mean(y ** 2, axis=0), 1e-300))
+    cands = []
+    for label, K in (candidates or {}).items():
+        K = None if K is None else np.asarray(K, dtype=float)
+        if (K is not None and K.shape == (n, C.shape[0]) and np.all(np.isfinite(K))
+                and np.max(np.abs(np.linalg.eigvals(A - K @ C)), initial=0) < 1):
+            cands.append((label, K))
+    for a in ratios:
+        try:
+            cands.append((f"kalman Q/R ratio {a:g}", predictor_gain(model, a * Qin, R)))
+        except (DataError, np.linalg.LinAlgError):  # no stabilising solution: skip it
+            continue
+    if not cands:
+        raise DataError("no stable one-step predictor for this model")
+    scores = []
+    for label, K in cands:
+        with np.errstate(all="ignore"):
+            r = prediction_ratio_db(model, u, y, K=K, skip=skip)["overall"]
+        scores.append(r if np.isfinite(r) else -np.inf)
+    best = int(np.argmax(scores))
+    return cands[best][1], cands[best][0], {
+        "chosen": cands[best][0],
+        "identification_ratio_db": {lab: sc for (lab, _), sc in zip(cands, scores)}}
+
+
 def one_step_predict(sys: control.StateSpace, u, y, K=None, Q=None, R=None) -> np.ndarray:
     """One-step-ahead output predictions yhat[k] (given data up to k-1), shape (N, p).
 
@@ -102,26 +161,30 @@ def one_step_predict(sys: control.StateSpace, u, y, K=None, Q=None, R=None) -> n
 
 
 def _ratio_db(ref, err, skip):
+    """Per-channel, pooled and mean-normalised ratios [dB] (module docstring)."""
     ref, err = ref[skip:], err[skip:]
     ms_ref = np.mean(ref**2, axis=0)
     ms_err = np.mean(err**2, axis=0)
     with np.errstate(divide="ignore"):
         per = 10 * np.log10(ms_ref / ms_err)
-        overall = -10 * np.log10(np.mean(ms_err / ms_ref))
-    return per, float(overall)
+        pooled = 10 * np.log10(np.sum(ms_ref) / np.sum(ms_err))
+        normalised = -10 * np.log10(np.mean(ms_err / ms_ref))
+    return per, float(pooled), float(normalised)
 
 
 def prediction_ratio_db(sys, u, y, K=None, Q=None, R=None, skip: int = 0) -> dict:
     """One-step signal-to-prediction-error ratio [dB] (see the module docstring).
 
-    Returns ``{"per_channel": [dB per output], "overall": dB, "skip": skip}``.
+    Returns ``{"per_channel": [dB per output], "overall": dB, "mean_normalised": dB,
+    "skip": skip}``.
     """
     u, y = _check_sizes(sys, u, y)
     if not 0 <= skip < u.shape[0]:
         raise DataError(f"skip={skip} leaves no samples of {u.shape[0]}")
     yhat = one_step_predict(sys, u, y, K, Q, R)
-    per, overall = _ratio_db(y, y - yhat, skip)
-    return {"per_channel": per.tolist(), "overall": overall, "skip": int(skip)}
+    per, overall, normalised = _ratio_db(y, y - yhat, skip)
+    return {"per_channel": per.tolist(), "overall": overall, "mean_normalised": normalised,
+            "skip": int(skip)}
 
 
 def simulation_fit(sys, u, y_clean, skip: int = 0) -> dict:
@@ -132,7 +195,7 @@ def simulation_fit(sys, u, y_clean, skip: int = 0) -> dict:
     u, y_clean = _check_sizes(sys, u, y_clean)
     ysim = simulate(sys, u)
     e = (y_clean - ysim)[skip:]
-    per, overall = _ratio_db(y_clean, y_clean - ysim, skip)
+    per, _, overall = _ratio_db(y_clean, y_clean - ysim, skip)
     yc = y_clean[skip:]
     nrmse = 100 * (1 - np.linalg.norm(e, axis=0) / np.linalg.norm(yc - yc.mean(axis=0), axis=0))
     return {"per_channel_db": per.tolist(), "overall_db": overall,
@@ -274,5 +337,5 @@ def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
 
 
 __all__ = ["predictor_gain", "default_noise_covariances", "one_step_predict",
-           "prediction_ratio_db", "simulation_fit", "modal_parameters", "compare_poles",
+           "prediction_ratio_db", "choose_predictor", "simulation_fit", "modal_parameters", "compare_poles",
            "frf_error"]
