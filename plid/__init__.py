@@ -9,7 +9,7 @@ from trussid.lazy import lazy_exports
 
 _LAZY = {
     "PLID": "estimator", "PLIDResult": "estimator",
-    "identify": "multipass", "Identification": "multipass",
+    "identify": "multipass", "identify_reduced": "multipass", "Identification": "multipass",
     "ObserverBasis": "canonical", "rotation_basis": "bases",
     "n4sid": "subspace", "order_table": "order",
     "stabilise": "stabilise", "balanced_truncation": "reduce",
