@@ -47,7 +47,6 @@ Identification data and validation data are separate records with different seed
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import time
@@ -278,58 +277,61 @@ class Identified:
     info: dict = field(default_factory=dict)
 
 
-def identify_model(u, y, order: int, dt: float, *, block_rows=None,
-                   progress: bool = False) -> Identified:
+def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
+                   progress: bool = False, log=None) -> Identified:
     """Identify an order-``order`` model from one record: the one switchable call.
 
-    Runs the project's identification recipe :func:`plid.multipass.identify` (the winner of
-    the PLID-at-thesis-scale benchmarks, ``benchmarks/results/plid_thesis.md``: an N4SID
-    prior with D = 0, converted into a rotation observer basis, refined by PLID), keeping
-    the parameter history for the convergence plot, then chooses the one-step predictor
-    gain (:func:`choose_predictor`) on the identification record.
+    Runs the project's identification recipe for under-modelled structures,
+    :func:`plid.multipass.identify_reduced`: the PLID recipe :func:`plid.multipass.identify`
+    (an N4SID prior with D = 0 in a rotation observer basis, refined by PLID) at ``order``
+    and at the higher orders ``via``, the latter reduced to ``order`` by input-weighted
+    balanced truncation and refined by PLID; the candidate with the best one-step
+    prediction on the identification record wins, with its predictor gain
+    (:func:`plid.metrics.choose_predictor`). Measured in
+    ``benchmarks/results/plid_thesis.md``. The parameter history of the winning PLID pass is
+    kept for the convergence plot.
     """
-    from plid.multipass import identify
+    from plid.multipass import identify_reduced
 
     t0 = time.perf_counter()
-    kwargs = {}
-    params = inspect.signature(identify).parameters
-    if "history_every" in params:
-        kwargs["history_every"] = 10
-    if "progress" in params:
-        kwargs["progress"] = progress
-    if block_rows is not None:
-        kwargs["block_rows"] = list(block_rows)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        idn = identify(u, y, order, dt, **kwargs)
+        idn = identify_reduced(u, y, order, dt, via=via, progress=progress, log=log,
+                               block_rows=None if block_rows is None else list(block_rows))
     res = idn.result
     model = idn.model
-    stab = {"applied": False, "reflected_poles": 0}
+    chosen = idn.info.get("chosen", "")
+    stab = {"applied": chosen.endswith("stabilised"), "reflected_poles": 0}
+    if stab["applied"]:
+        # identify_reduced reflected the candidate's unstable poles in (plid.stabilise).
+        stab["reflected_poles"] = int(np.sum(np.abs(np.linalg.eigvals(
+            np.asarray(res.model.A))) > 1))
     if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
-        # Noise can leave a lightly damped pole just outside the unit circle; reflect it in
-        # (plid.stabilise keeps the magnitude response) so that the model can be simulated.
+        # No stable candidate (none was measured on the testbed): reflect the poles outside
+        # the unit circle in (plid.stabilise keeps the magnitude response) so that the model
+        # can be simulated, and choose its predictor afresh.
         from plid.stabilise import stabilise
 
         st = stabilise(model)
-        model, res = st.model, None
+        model = st.model
         stab = {"applied": bool(st.applied), "reflected_poles": int(np.size(st.reflected))}
-        res_hist = idn.result
+        K, K_source, kinfo = choose_predictor(model, u, y, None)
     else:
-        res_hist = res
-    hist, hidx = res_hist.theta_history, res_hist.history_index
+        K, kinfo = idn.K, idn.info.get("predictor") or {}
+        K_source = kinfo.get("chosen", "")
+    hist, hidx = res.theta_history, res.history_index
     if hist.shape[0] < 2 and idn.prior is not None:
-        # The recipe ran without a parameter history: repeat its last pass with one (same
-        # basis, prior and settings, so the same estimate) for the convergence plot.
-        hist, hidx = _history_of_last_pass(idn, u, y, order, dt)
-    K, K_source, kinfo = choose_predictor(model, u, y, res)
-    info = {"recipe": "plid.multipass.identify", "start": idn.start, "stabilised": stab,
-            "basis": getattr(idn.basis, "name", ""), "R": np.asarray(idn.R).tolist(),
-            "predictor": kinfo, **{k: v for k, v in idn.info.items() if k != "passes"},
+        # The recipe ran without a parameter history: repeat the winner's last PLID pass
+        # with one (same basis, prior and settings, so the same estimate) for the plot.
+        hist, hidx = _history_of_last_pass(idn, u, y, res.model.nstates, dt)
+    info = {"recipe": "plid.multipass.identify_reduced", "start": idn.start,
+            "stabilised": stab, "basis": getattr(idn.basis, "name", ""),
+            "R": np.asarray(idn.R).tolist(), "predictor": kinfo,
+            **{k: v for k, v in idn.info.items() if k not in ("passes", "predictor")},
             "passes": idn.info.get("passes", [])}
-    method = (f"PLID ({res_hist.form} form, {idn.start} start, {len(info['passes'])} "
-              f"pass(es)){', stabilised' if stab['applied'] else ''}")
+    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
     return Identified(model, K, K_source, time.perf_counter() - t0, method,
-                      res_hist.innovations, hist, hidx, info)
+                      res.innovations, hist, hidx, info)
 
 
 def _history_of_last_pass(idn, u, y, order, dt):
@@ -346,49 +348,16 @@ def _history_of_last_pass(idn, u, y, order, dt):
     return r.theta_history, r.history_index
 
 
-def choose_predictor(model, u, y, res=None,
-                     ratios=(10.0, 1.0, 0.1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6)):
-    """One-step predictor gain for ``model``, chosen on the identification record.
+def choose_predictor(model, u, y, res=None):
+    """One-step predictor gain for ``model`` chosen on the identification record
+    (:func:`plid.metrics.choose_predictor`), with the estimator's own gain among the
+    candidates when ``res`` (its :class:`plid.estimator.PLIDResult`) belongs to ``model``."""
+    from plid.metrics import choose_predictor as choose
 
-    Candidates: the estimator's own steady-state gain (when its predictor ``A - K C`` is
-    stable) and steady-state Kalman gains with output noise ``R = diag(RMS(y_j)^2)`` and
-    state noise ``Q = a (B diag(RMS(u_j)^2) B^T + 1e-3 tr/n I)`` for each ratio ``a``
-    (only the ratio of Q to R matters to K). With no state noise (the recipe's refinement
-    pass uses Q = 0) the estimator's own gain is often not a usable predictor, and the
-    model's own error acts as noise of a level not known beforehand; so the candidate with
-    the best one-step ratio on the *identification* record is kept (validation data are
-    not used).
-    """
-    from plid.metrics import prediction_ratio_db, predictor_gain
-
-    A, B, C = (np.asarray(M, dtype=float) for M in (model.A, model.B, model.C))
-    n = A.shape[0]
-    skip = u.shape[0] // 8  # past any candidate predictor's start-up from x0 = 0
-    su2 = np.mean(np.asarray(u) ** 2, axis=0)
-    sy2 = np.mean(np.asarray(y) ** 2, axis=0)
-    Qin = B @ np.diag(su2) @ B.T
-    Qin = Qin + 1e-3 * (np.trace(Qin) / n) * np.eye(n)
-    R = np.diag(np.maximum(sy2, 1e-300))
-    cands = []
-    if res is not None and res.K is not None and np.all(np.isfinite(res.K)):
-        if np.max(np.abs(np.linalg.eigvals(A - res.K @ C))) < 1:
-            cands.append(("estimator", res.K))
-    for a in ratios:
-        try:
-            cands.append((f"kalman Q/R ratio {a:g}", predictor_gain(model, a * Qin, R)))
-        except Exception:  # no stabilising solution for this ratio: skip the candidate
-            continue
-    if not cands:
-        raise RuntimeError("no stable one-step predictor for the identified model")
-    scores = []
-    for label, K in cands:
-        with np.errstate(all="ignore"):
-            r = prediction_ratio_db(model, u, y, K=K, skip=skip)["overall"]
-        scores.append(r if np.isfinite(r) else -np.inf)
-    best = int(np.argmax(scores))
-    return cands[best][1], cands[best][0], {
-        "chosen": cands[best][0],
-        "identification_ratio_db": {lab: sc for (lab, _), sc in zip(cands, scores)}}
+    cands = {}
+    if res is not None and getattr(res, "K", None) is not None:
+        cands["estimator"] = res.K
+    return choose(model, u, y, cands)
 
 
 # --------------------------------------------------------------------------- evaluation
@@ -448,10 +417,6 @@ def prediction_burn_in(model, K, n_samples: int) -> int:
     return int(min(max(k, 10 * A.shape[0]), n_samples // 4))
 
 
-def _db_pooled(y, e):
-    return float(10 * np.log10(np.sum(y**2) / np.sum(e**2)))
-
-
 def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings: DemoSettings,
              name: str, kind: str) -> dict:
     """All metrics of one model (validation prediction, FRF errors, poles, simulation fit)."""
@@ -469,8 +434,6 @@ def _evaluate(fit, truth, rid, rval, h1_est, settings, name, kind):
     uval = val.u[:, cols]
     skip = prediction_burn_in(model, fit.K, val.n_samples)
     spe = prediction_ratio_db(model, uval, val.y, K=fit.K, skip=skip)
-    yhat = one_step_predict(model, uval, val.y, K=fit.K)
-    pooled = _db_pooled(val.y[skip:], (val.y - yhat)[skip:])
     sim = simulation_fit(model, uval, rval.experiment.y_clean, skip=skip)
     from plid.frf import FRF
 
@@ -492,7 +455,7 @@ def _evaluate(fit, truth, rid, rval, h1_est, settings, name, kind):
         "input_names": [val.input_names[c] for c in cols], "output_names": list(val.output_names),
         "signal_to_prediction_error_db": spe["overall"],
         "signal_to_prediction_error_db_per_output": spe["per_channel"],
-        "signal_to_prediction_error_db_pooled": pooled,
+        "signal_to_prediction_error_db_mean_normalised": spe["mean_normalised"],
         "prediction_skip_samples": skip,
         "predictor_gain": fit.K_source,
         "frf_max_error_db": fe_true["max_db"], "frf_rms_error_db": fe_true["rms_db"],
@@ -752,11 +715,13 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
         cols = list(rid.channels)
         order = settings.mimo_order if name == "mimo" else settings.simo_order
         d = rid.data
+        say(f"      {name}: {order} states, {len(cols)} in x {d.n_outputs} out; candidates:")
         fits[name] = identify_model(d.u[:, cols], d.y, order, d.dt,
-                                    block_rows=settings.block_rows)
+                                    block_rows=settings.block_rows,
+                                    log=lambda msg: say(f"        {msg}"))
         h1s[name] = h1_estimate(rid, settings.h1_nperseg)
-        say(f"      {name}: {order} states, {len(cols)} in x {d.n_outputs} out, "
-            f"{fits[name].seconds:.1f} s")
+        say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
+            f"({fits[name].seconds:.1f} s)")
 
     t0 = time.perf_counter()
     say("[4/5] evaluation against the true plant, H1 and validation data ...")
@@ -866,6 +831,9 @@ def experiment_summary(records: dict, settings: DemoSettings) -> list:
                 "dac_clipped": e.clipping["dac"], "adc_clipped": e.clipping["adc"],
                 "conditioner_steps": rec.gain_steps,
                 "adc_full_scale_v": rec.adc_full_scale,
+                # converter resolution from the LSB the experiment used: 2 FS / 2^bits
+                "adc_bits": [int(round(np.log2(2 * fs / q)))
+                             for fs, q in zip(rec.adc_full_scale, np.atleast_1d(lsb))],
                 "output_rms_v": y_rms.tolist(),
                 "output_rms_fraction_of_range": (y_rms / np.asarray(rec.adc_full_scale)).tolist(),
                 "sensor_snr_db": (20 * np.log10(y_rms / noise)).tolist(),
@@ -914,20 +882,23 @@ def report_markdown(s: dict) -> str:
                  f"{', '.join(f'{v:.1f}' for v in r['sensor_snr_db'])} | "
                  f"{', '.join(f'{v:.1f}' for v in r['quantisation_snr_db'])} |")
     L += ["", "## Identified models", "",
-          "One-step signal-to-prediction-error ratio on the validation record: `overall` is "
-          "`-10 log10(mean_j MS(e_j)/MS(y_j))` (dominated by the worst output, "
-          "plid.metrics), `pooled` is total sensor power over total prediction-error power "
-          "(the thesis's 'sensor RMS / prediction error RMS'). FRF errors are against the "
+          "One-step signal-to-prediction-error ratio (SPE) on the validation record, as the "
+          "thesis defines it: the RMS of the sensor signals over the RMS of the one-step "
+          "prediction error, over all sensors and samples (`10 log10(sum y^2 / sum e^2)`, "
+          "volts at the A/D; `plid.metrics`). Beside it, per output, and the mean of the "
+          "normalised error powers (`-10 log10(mean_j MS(e_j)/MS(y_j))`, dominated by the "
+          "weakest output: in a SIMO record the two accelerometers away from the driven "
+          "vertex are limited by sensor noise to 38-50 dB). FRF errors are against the "
           f"true plant over {st['frf_band'][0]:g}-{st['frf_band'][1]:g} Hz.", "",
-          "| model | kind | states | in x out | SPE overall [dB] | SPE per output [dB] | "
-          "SPE pooled [dB] | FRF max [dB] | FRF RMS [dB] | H1 vs true RMS [dB] | "
+          "| model | kind | states | in x out | SPE [dB] | SPE per output [dB] | "
+          "SPE mean-normalised [dB] | FRF max [dB] | FRF RMS [dB] | H1 vs true RMS [dB] | "
           "modes matched (in band) | seconds |",
           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for m in s["models"]:
         L.append(f"| {m['name']} | {m['kind']} | {m['states']} | {m['inputs']} x "
                  f"{m['outputs']} | {_f(m['signal_to_prediction_error_db'])} | "
                  f"{', '.join(_f(v, '.1f') for v in m['signal_to_prediction_error_db_per_output'])}"
-                 f" | {_f(m['signal_to_prediction_error_db_pooled'])} | "
+                 f" | {_f(m['signal_to_prediction_error_db_mean_normalised'])} | "
                  f"{_f(m['frf_max_error_db'])} | {_f(m['frf_rms_error_db'])} | "
                  f"{_f(m['h1_error_vs_true']['rms_db'])} | "
                  f"{m['poles_in_band_matched']} / {m['poles_in_band_true']} | "
