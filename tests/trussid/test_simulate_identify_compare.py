@@ -130,6 +130,34 @@ def test_identify_finds_the_modes_and_reports_the_prediction_ratio(work, identif
     assert identified["signal_to_prediction_error_db"] > 20.0
 
 
+def test_identify_via_higher_orders_keeps_the_best_predicting_candidate(work, simulated):
+    out = work / "model_via.npz"
+    res = run("identify", work / "data.npz", "--order", 4, "--out", out, "--via", "8",
+              "--json")
+    assert res.returncode == 0, res.stderr
+    summary = json.loads(res.stdout)
+    assert summary["via"] == [8]
+    labels = [c["label"] for c in summary["candidates"]]
+    assert labels[0].startswith("direct 4") and any(lab.startswith("via 8") for lab in labels)
+    scored = [c for c in summary["candidates"] if c["identification_ratio_db"] is not None]
+    assert summary["chosen"] == max(scored, key=lambda c: c["identification_ratio_db"])["label"]
+    model, meta = load_model(out)
+    assert model.nstates == 4
+    data = read_data(work / "data.npz")
+    r = prediction_ratio_db(model, data.u, data.y, K=meta["K"],
+                            skip=summary["prediction_skip_samples"])
+    assert summary["signal_to_prediction_error_db"] == pytest.approx(r["overall"], rel=1e-9)
+
+
+@pytest.mark.parametrize("via, match", [("5", "multiples of the 2 outputs"),
+                                        ("2", "must exceed --order 4"),
+                                        ("six", "comma-separated orders")])
+def test_identify_refuses_bad_via_orders(work, simulated, tmp_path, via, match):
+    out = tmp_path / "m.npz"
+    res = run("identify", work / "data.npz", "--order", 4, "--out", out, "--via", via)
+    assert_clean_failure(res, "identify", out, match=match)
+
+
 def test_compare_with_the_plant_writes_plots_and_metrics(work, identified):
     out = work / "cmp_plant"
     res = run("compare", work / "model.npz", work / "plant.npz", "--out", out,

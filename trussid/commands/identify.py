@@ -50,6 +50,29 @@ def prediction_burn_in(n_samples: int, order: int) -> int:
     return int(min(10 * order, n_samples // 10))
 
 
+def via_arg(text, order: int, p: int, start: str):
+    """``--via``: None, ``auto`` (:func:`plid.multipass.default_via`) or a comma list."""
+    from plid.errors import DataError
+    from plid.multipass import default_via
+
+    if text is None:
+        return None
+    if start == "plain":
+        raise DataError("--via works with --start subspace or scratch, not plain")
+    if text.strip().lower() == "auto":
+        return default_via(order, p)
+    try:
+        orders = tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise DataError(f"--via {text!r}: give 'auto' or comma-separated orders, "
+                        "e.g. 60,72") from None
+    bad = [h for h in orders if h <= order or h % p]
+    if not orders or bad:
+        raise DataError(f"--via {text!r}: orders must exceed --order {order} and be "
+                        f"multiples of the {p} outputs")
+    return orders
+
+
 def pole_table(sys_) -> list[dict]:
     """Frequency [Hz] and damping of each pole (one per complex pair) of ``sys_``."""
     from plid.metrics import modal_parameters
@@ -91,6 +114,13 @@ def add_parser(subparsers):
                    help="state-noise variance, scaled units, --start plain only (default 1e-6)")
     p.add_argument("--passes", type=int, default=1, metavar="P",
                    help="batch passes over the data, --start plain only (default 1)")
+    p.add_argument("--via", default=None, metavar="ORDERS",
+                   help="also identify at these higher orders (comma separated, or 'auto' "
+                   "for 2 and 2.4 times N), reduce each to N by input-weighted balanced "
+                   "truncation, refine by PLID, and keep the candidate with the best "
+                   "one-step prediction on the data (plid.multipass.identify_reduced; "
+                   "what trussid demo uses: for a structure with more significant modes "
+                   "than N/2). --start subspace or scratch only")
     p.add_argument("--json", action="store_true",
                    help="print poles and the prediction ratio as JSON")
     p.set_defaults(func=run)
@@ -118,6 +148,7 @@ def run(args) -> int:
                          f"{p} outputs")
     start = getattr(args, "start", "plain")
     form = args.form or ("sqrt" if start == "plain" else "direct")
+    via = via_arg(getattr(args, "via", None), n, p, start)
     progress = None if sys.stderr.isatty() else False
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
@@ -128,6 +159,14 @@ def run(args) -> int:
                        progress=progress)
             res = est.fit(data.u, data.y)
             K = res.K
+        elif via is not None:
+            from plid.multipass import identify_reduced
+
+            ident = identify_reduced(data.u, data.y, n, data.dt, via=via, start=start,
+                                     form=form, progress=progress,
+                                     log=lambda msg: print(f"  {msg}", file=sys.stderr))
+            res, K = ident.result, ident.K
+            R_used = [float(r) for r in np.atleast_1d(ident.R)]
         else:
             from plid.multipass import identify
 
@@ -141,7 +180,8 @@ def run(args) -> int:
             f"PLID ({form} form) diverged on {data.n_samples} samples: the estimate is "
             "not finite; try --form sqrt, a larger --Q or --R, or another --order")
     notes = [str(w.message) for w in caught if issubclass(w.category, PLIDWarning)]
-    model = res.model
+    # identify_reduced's winner may be a reduction of its (higher-order) PLID pass
+    model = res.model if start == "plain" else ident.model
     if K is None:
         K = predictor_gain(model, res.Q + model.B @ res.N @ model.B.T, res.R)
     skip = prediction_burn_in(data.n_samples, n)
@@ -156,12 +196,19 @@ def run(args) -> int:
         "passes": args.passes if start == "plain" else len(ident.info["passes"]),
         "Q": args.Q if start == "plain" else [p["Q"] for p in ident.info["passes"]],
         "R": R_used,
-        "seconds": seconds, "K_source": res.K_source,
+        "seconds": seconds,
+        "K_source": (ident.info.get("predictor") or {}).get("chosen") if via is not None
+        else res.K_source,
         "signal_to_prediction_error_db": ratio["overall"],
         "signal_to_prediction_error_db_per_output": ratio["per_channel"],
+        "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
         "prediction_skip_samples": skip, "unstable_poles": unstable,
         "poles": pole_table(model), "warnings": notes,
     }
+    if via is not None:
+        summary["via"] = list(ident.info["via"])
+        summary["chosen"] = ident.info["chosen"]
+        summary["candidates"] = ident.info["candidates"]
     for note in notes:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
@@ -169,7 +216,7 @@ def run(args) -> int:
         return 0
     print(f"identified an order-{n} model ({m} input(s), {p} output(s)) from "
           f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s ({form} form, "
-          f"{start} start)")
+          f"{start} start{'; kept ' + ident.info['chosen'] if via is not None else ''})")
     print(f"wrote {out}")
     per = ", ".join(f"{name} {v:.2f}" for name, v in zip(data.output_names, ratio["per_channel"]))
     print(f"one-step signal-to-prediction-error ratio: {ratio['overall']:.2f} dB ({per}; "
