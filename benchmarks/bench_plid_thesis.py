@@ -162,12 +162,15 @@ def run_testbed(seed=21, band=None, log=print):
     out = {"case": case.name, "input_rms_V": level, "band": band, "clipped": ex.clipped_total,
            "output_rms_V": np.sqrt(np.mean(y ** 2, 0)).tolist(),
            "quantisation_bound_db": floor.tolist(),
-           "quantisation_bound_overall_db": float(-10 * np.log10(np.mean(10 ** (-floor / 10)))),
+           # thesis's ratio: all sensors pooled (plid.metrics "overall")
+           "quantisation_bound_overall_db": float(10 * np.log10(np.sum(ms) / (3 * lsb ** 2 / 12))),
+           "quantisation_bound_mean_normalised_db": float(
+               -10 * np.log10(np.mean(10 ** (-floor / 10)))),
            "models": {}}
     log(f"  {case.name}: input {level:.3g} V RMS, band {band}, output RMS "
         f"{out['output_rms_V']}, clipped {ex.clipped_total}, quantisation bound "
         f"{out['quantisation_bound_db']} dB")
-    from plid.metrics import default_noise_covariances, predictor_gain
+    from plid.metrics import choose_predictor
 
     for i in (20, 40, 60, 80):
         t0 = time.perf_counter()
@@ -176,26 +179,34 @@ def run_testbed(seed=21, band=None, log=print):
         m = fit.zero_d
         stable = bool(np.max(np.abs(np.linalg.eigvals(np.asarray(m.A)))) < 1)
         try:
-            Qd, Rd = default_noise_covariances(m, u, y)
-            pr = prediction_ratio_db(m, val.data.u, val.data.y, K=predictor_gain(m, Qd, Rd),
-                                     skip=300)["overall"]
+            # the same predictor choice as identify_reduced's candidates get
+            K = choose_predictor(m, u, y)[0] if stable else None
+            pr = prediction_ratio_db(m, val.data.u, val.data.y, K=K, skip=300)["overall"]
         except Exception:
             pr = None
         out["models"][f"N4SID D=0 i={i}"] = {"stable": stable, "one_step_db_val": pr,
                                              "seconds": sec}
         log(f"  N4SID D=0 i={i}: stable {stable}, one-step {pr} dB ({sec:.1f}s)")
-    for start in ("subspace", "scratch"):
+    from plid.multipass import identify_reduced
+
+    for start in ("subspace", "scratch", "reduced"):
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ident = identify(u, y, 30, dt, start=start)
+            if start == "reduced":
+                ident = identify_reduced(u, y, 30, dt)
+            else:
+                ident = identify(u, y, 30, dt, start=start)
         sec = time.perf_counter() - t0
         stable = bool(np.max(np.abs(np.linalg.eigvals(np.asarray(ident.model.A)))) < 1)
         prv = prediction_ratio_db(ident.model, val.data.u, val.data.y, K=ident.K, skip=300)
         pr = prv["overall"]
         pr_id = prediction_ratio_db(ident.model, u, y, K=ident.K, skip=300)["overall"]
         out["models"][f"PLID {start}"] = {"stable": stable, "one_step_db_val": pr,
+                                          "one_step_db_val_mean_normalised":
+                                              prv["mean_normalised"],
                                           "one_step_db_val_per_channel": prv["per_channel"],
+                                          "chosen": ident.info.get("chosen"),
                                           "one_step_db_id": pr_id, "seconds": sec,
                                           "prior_block_rows": ident.info.get("subspace", {}).get("block_rows")}
         log(f"  PLID {start}: stable {stable}, one-step {pr:.2f} dB validation "
