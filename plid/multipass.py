@@ -296,9 +296,14 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
             log(f"{label}: {seconds:.1f} s")
 
     t0 = time.perf_counter()
-    base = identify(u, y, order, dt, **kw)
-    _add(f"direct {order}", base.model, base, base.result, base.basis, base.R, base.prior,
-         time.perf_counter() - t0)
+    try:
+        base = identify(u, y, order, dt, **kw)
+    except IdentificationError as exc:  # e.g. the direct form diverged: other candidates
+        cands.append({"label": f"direct {order}", "model": None, "error": str(exc),
+                      "seconds": time.perf_counter() - t0})
+    else:
+        _add(f"direct {order}", base.model, base, base.result, base.basis, base.R,
+             base.prior, time.perf_counter() - t0)
     fs = 1.0 / dt
     for h in via:
         t0 = time.perf_counter()
@@ -363,8 +368,14 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
                     best, best_score, best_K, best_kinfo = c, score, K, kinfo
         table.append(row)
     if best is None:
-        # No stable candidate: return the plain fit (the caller may stabilise it).
-        best, best_K = cands[0], cands[0]["idn"].K
+        usable = [c for c in cands if c.get("model") is not None]
+        if not usable:
+            raise IdentificationError(
+                "every candidate failed: " + "; ".join(f"{c['label']}: {c.get('error', '')}"
+                                                      for c in cands))
+        # No candidate with a stable predictor: return the first fit (the caller may
+        # stabilise it).
+        best, best_K = usable[0], usable[0]["idn"].K
     info = dict(best["idn"].info)
     if "passes" in best:
         info["passes"] = best["passes"]

@@ -185,3 +185,29 @@ def test_identify_reduced_refuses_via_orders_that_do_not_reduce(simo):
         identify_reduced(u, y, 6, 1 / FS, via=(4,))
     with pytest.raises(IdentificationError, match="multiples"):
         identify_reduced(u, y, 6, 1 / FS, via=(9,))
+
+
+def test_identify_reduced_survives_a_failed_candidate_and_names_total_failure(simo,
+                                                                              monkeypatch):
+    import plid.multipass as mp
+
+    u, y = data(simo, 2000, snr_db=60, seed=5)
+    real = mp.identify
+
+    def direct_fails(u_, y_, order, dt, **kw):
+        if order == 6:
+            raise IdentificationError("PLID diverged in its first pass (estimate not finite)")
+        return real(u_, y_, order, dt, **kw)
+
+    monkeypatch.setattr(mp, "identify", direct_fails)
+    idn = mp.identify_reduced(u, y, 6, 1 / FS, via=(8,))
+    rows = {r["label"]: r for r in idn.info["candidates"]}
+    assert "diverged" in rows["direct 6"]["error"]
+    assert idn.info["chosen"].startswith("via 8") and idn.model.nstates == 6
+
+    def all_fail(*a, **k):
+        raise IdentificationError("PLID diverged in its first pass (estimate not finite)")
+
+    monkeypatch.setattr(mp, "identify", all_fail)
+    with pytest.raises(IdentificationError, match="every candidate failed: direct 6"):
+        mp.identify_reduced(u, y, 6, 1 / FS, via=(8,))
