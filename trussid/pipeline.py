@@ -903,6 +903,24 @@ def report_markdown(s: dict) -> str:
                  f"{_f(m['h1_error_vs_true']['rms_db'])} | "
                  f"{m['poles_in_band_matched']} / {m['poles_in_band_true']} | "
                  f"{m['seconds']:.1f} |")
+    L += ["", "## How each model was identified", "",
+          "`plid.multipass.identify_reduced`: PLID at the model's order and at higher "
+          "orders reduced to it (input-weighted balanced truncation, then one PLID pass); "
+          "the candidate with the best one-step ratio on the *identification* record is "
+          "kept (marked). Candidates with poles outside the unit circle compete with those "
+          "poles reflected in (`stabilised`).", ""]
+    for m in s["models"]:
+        ident = m.get("identification") or {}
+        rows = ident.get("candidates") or []
+        L += [f"**{m['name']}**: {m.get('method', '')}", "",
+              "| candidate | one-step, identification record [dB] | seconds |",
+              "| --- | --- | --- |"]
+        for r in rows:
+            mark = " (kept)" if r.get("label") == ident.get("chosen") else ""
+            score = r.get("identification_ratio_db")
+            txt = _f(score) if score is not None else (r.get("error") or "unstable")
+            L.append(f"| {r.get('label', '')}{mark} | {txt} | {r.get('seconds', 0):.1f} |")
+        L.append("")
     L += ["", "## Figures", ""]
     for m in s["models"]:
         n = m["name"]

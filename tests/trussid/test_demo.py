@@ -131,6 +131,11 @@ def test_report_markdown_links_every_figure_and_states_the_figures(report):
         assert f"]({name})" in text, name
     for m in summary["models"]:
         assert f"{m['signal_to_prediction_error_db']:.2f}" in text
+        # how it was identified: every candidate, the kept one marked
+        ident = m["identification"]
+        assert f"| {ident['chosen']} (kept) |" in text
+        for c in ident["candidates"]:
+            assert f"| {c['label']}" in text
 
 
 def test_prediction_ratio_recomputes_from_the_written_model_and_data(report):
