@@ -287,7 +287,7 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
     kw = dict(start=start, block_rows=block_rows, form=form,
               prior_theta_var=prior_theta_var, progress=progress)
     t_all = time.perf_counter()
-    cands = []   # (label, model, Identification-like pieces, seconds)
+    cands = []   # dicts: label, model, the Identification pieces, seconds (or error)
 
     def _add(label, model, idn, result, basis, R, prior, seconds):
         cands.append({"label": label, "model": model, "idn": idn, "result": result,
@@ -310,7 +310,9 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
         try:
             high = identify(u, y, h, dt, **kw)
             red = balanced_truncation(_stable(high.model), order, u=u).model
-            red = refit_input_matrix(red, u, y)
+            # Weighted truncation does not guarantee stability (unlike the plain one), and
+            # the output-error refit needs it.
+            red = refit_input_matrix(_stable(red), u, y)
         except IdentificationError as exc:  # e.g. more unstable states than ``order``
             cands.append({"label": f"via {h}", "model": None, "error": str(exc),
                           "seconds": time.perf_counter() - t0})
