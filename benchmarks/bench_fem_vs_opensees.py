@@ -11,8 +11,8 @@ the smaller of each) and every tool, the lowest 20 modes are computed ``--repeat
 each run in a fresh child process, and the best run is reported. Phases timed
 (``time.perf_counter``):
 
-- trussid: *setup* = the spec arrays -> :class:`fem.Model`; *assembly* =
-  :func:`fem.assembly.assemble`; *modes* = :func:`fem.modal.solve_modes` (20 modes).
+- trussid: *setup* = the spec arrays -> :class:`trussid.fem.Model`; *assembly* =
+  :func:`trussid.fem.assembly.assemble`; *modes* = :func:`trussid.fem.modal.solve_modes` (20 modes).
 - OpenSeesPy: *setup* = the ``node``/``fix``/``geomTransf``/``element`` calls; *modes* =
   ``ops.eigen`` (20 modes), which forms K and M itself, so OpenSees' assembly is inside its
   modes time and cannot be timed apart from the Python side.
@@ -79,8 +79,8 @@ def _rss_mb(field: str = "VmRSS") -> float:
 
 
 def worker_trussid(case: str, n_modes: int, method: str) -> dict:
-    from fem.assembly import assemble
-    from fem.modal import solve_modes
+    from trussid.fem.assembly import assemble
+    from trussid.fem.modal import solve_modes
     import scipy.sparse.linalg  # noqa: F401  (import cost is not part of the measurement)
 
     from fem_models import to_trussid
@@ -197,7 +197,7 @@ def machine_info() -> dict:
         for line in fh:
             if line.startswith("MemTotal:"):
                 mem = f"{int(line.split()[1]) / 1024**2:.1f} GiB"
-    import fem
+    from trussid import fem
 
     fem_dir = Path(fem.__file__).resolve().parent
     git = subprocess.run(["git", "-C", str(fem_dir), "log", "-1", "--format=%h", "--", "."],

@@ -39,7 +39,7 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="append a markdown row to this file")
     args = ap.parse_args()
 
-    from fem.testbed_plant import testbed_plant
+    from trussid.testbed.plant import testbed_plant
 
     first = time.perf_counter()
     plant = testbed_plant()                        # includes imports' first-use costs

@@ -21,18 +21,18 @@ the noise-free validation output, higher is better); seconds (wall clock).
 Methods:
 
 - ``N4SID`` (the ``nfoursid`` package). The block-row search uses
-  :func:`plid.subspace.n4sid`, which is nfoursid's algorithm with a thin SVD in place of
+  :func:`trussid.plid.subspace.n4sid`, which is nfoursid's algorithm with a thin SVD in place of
   nfoursid's full ``N x N`` SVD (identical models; the real package's model at the chosen
   block rows is computed too and the FRF difference reported). Block rows 5 ... 80; the
   best per measure *by the truth* is reported (an oracle choice that favours N4SID).
   The real ``nfoursid`` (``NFourSID.subspace_identification`` +
   ``system_identification(rank=12)``) is timed once per case at the best block rows.
-- ``PLID default``: :func:`plid.multipass.identify` with its defaults, i.e. what
+- ``PLID default``: :func:`trussid.plid.multipass.identify` with its defaults, i.e. what
   ``trussid identify`` runs: a subspace (N4SID, D = 0) PRIOR, block rows chosen from the
   data alone, then one direct PLID pass.
 - ``PLID scratch``: ``identify(start="scratch")``: no prior, four passes.
 
-``speed`` (acceptance 7): samples per second of one :class:`plid.estimator.PLID` pass
+``speed`` (acceptance 7): samples per second of one :class:`trussid.plid.estimator.PLID` pass
 (``fit``) over 3000 samples of simulated 60 dB data, (states, inputs, outputs) =
 (12,1,3), (30,1,3), (30,3,3), direct and square-root forms, the engine's default shift
 basis and the rotation basis ``identify`` uses. Wall clock (``time.perf_counter``) and
@@ -60,9 +60,9 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from bench_plid_thesis import measure  # noqa: E402
 from plid_cases import Case, _freqs, _modes, _unit_rms_outputs, record  # noqa: E402
-from plid.metrics import frf_error  # noqa: E402
-from plid.multipass import identify  # noqa: E402
-from plid.subspace import n4sid  # noqa: E402
+from trussid.plid.metrics import frf_error  # noqa: E402
+from trussid.plid.multipass import identify  # noqa: E402
+from trussid.plid.subspace import n4sid  # noqa: E402
 
 FS = 1600.0
 N_VAL = 4000
@@ -105,7 +105,7 @@ def real_nfoursid(u, y, n, block_rows, dt):
     """The ``nfoursid`` package itself (full SVD), its model as a control.StateSpace."""
     from nfoursid.nfoursid import NFourSID
 
-    from plid.subspace import _frame
+    from trussid.plid.subspace import _frame
 
     df, ucols, ycols = _frame(u, y)
     nf = NFourSID(df, output_columns=ycols, input_columns=ucols, num_block_rows=block_rows)
@@ -212,8 +212,8 @@ def accuracy_tables(results) -> str:
 
 
 def speed(n_samples=3000, repeats=3, log=print):
-    from plid.bases import basis_for, model_frequencies
-    from plid.estimator import PLID
+    from trussid.plid.bases import basis_for, model_frequencies
+    from trussid.plid.estimator import PLID
 
     out = []
     for n, m, p in ((12, 1, 3), (30, 1, 3), (30, 3, 3)):

@@ -12,11 +12,11 @@ at 1600 Hz, white unit-RMS input; separate 4000-sample validation record (other 
 
 Methods, same data in the same run:
 
-- ``N4SID``: nfoursid's algorithm (thin SVD, see :mod:`plid.subspace`) with its D term, at
+- ``N4SID``: nfoursid's algorithm (thin SVD, see :mod:`trussid.plid.subspace`) with its D term, at
   block rows 20, 30, 40, 60 and 80 (those giving enough rows); the best by the true FRF error is
   reported (an oracle choice: it favours the comparator).
 - ``N4SID D=0``: the same state sequence, least squares without D.
-- ``PLID subspace``: :func:`plid.multipass.identify` with ``start="subspace"`` (prior from
+- ``PLID subspace``: :func:`trussid.plid.multipass.identify` with ``start="subspace"`` (prior from
   N4SID with D=0, block rows chosen from the data alone; rotation basis; one direct pass,
   Q = 0, prior variance 1e-4, R estimated from the data).
 - ``PLID scratch``: ``start="scratch"`` (no prior; rotation basis at output-spectrum
@@ -44,9 +44,9 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 
 from plid_cases import case_a, case_b, case_testbed_like, record  # noqa: E402
-from plid.metrics import compare_poles, frf_error, prediction_ratio_db, simulation_fit  # noqa: E402
-from plid.multipass import identify  # noqa: E402
-from plid.subspace import n4sid  # noqa: E402
+from trussid.plid.metrics import compare_poles, frf_error, prediction_ratio_db, simulation_fit  # noqa: E402
+from trussid.plid.multipass import identify  # noqa: E402
+from trussid.plid.subspace import n4sid  # noqa: E402
 
 BAND = (30.0, 790.0)
 N_ID, N_VAL = 10000, 4000
@@ -120,14 +120,14 @@ def run_case(case, noise, orders, seed=11, methods=("n4sid", "subspace", "scratc
 
 
 def testbed_case():
-    """The default testbed plant (``fem.testbed_plant``): channel 1 command volts to the
+    """The default testbed plant (``trussid.testbed.plant``): channel 1 command volts to the
     three accelerometers (SIMO), with the input RMS set so that the largest output RMS is a
     quarter of the +-10 V converter range (input RMS at most 2.5 V)."""
     import control
 
-    from fem.testbed_plant import testbed_plant
-    from plid.experiment import simulate
-    from plid.metrics import modal_parameters
+    from trussid.testbed.plant import testbed_plant
+    from trussid.plid.experiment import simulate
+    from trussid.plid.metrics import modal_parameters
     from plid_cases import Case
 
     tp = testbed_plant()
@@ -145,7 +145,7 @@ def testbed_case():
 def run_testbed(seed=21, band=None, log=print):
     """Acceptance 2: 30-state SIMO models of the testbed plant from 12-bit data: stable?
     one-step prediction on a separate 12-bit validation record."""
-    from plid.experiment import run_experiment
+    from trussid.plid.experiment import run_experiment
 
     case, level = testbed_case()
     kw = dict(dac_bits=12, adc_bits=12, dac_full_scale=10.0, adc_full_scale=10.0)
@@ -170,7 +170,7 @@ def run_testbed(seed=21, band=None, log=print):
     log(f"  {case.name}: input {level:.3g} V RMS, band {band}, output RMS "
         f"{out['output_rms_V']}, clipped {ex.clipped_total}, quantisation bound "
         f"{out['quantisation_bound_db']} dB")
-    from plid.metrics import choose_predictor
+    from trussid.plid.metrics import choose_predictor
 
     for i in (20, 40, 60, 80):
         t0 = time.perf_counter()
@@ -187,7 +187,7 @@ def run_testbed(seed=21, band=None, log=print):
         out["models"][f"N4SID D=0 i={i}"] = {"stable": stable, "one_step_db_val": pr,
                                              "seconds": sec}
         log(f"  N4SID D=0 i={i}: stable {stable}, one-step {pr} dB ({sec:.1f}s)")
-    from plid.multipass import identify_reduced
+    from trussid.plid.multipass import identify_reduced
 
     for start in ("subspace", "scratch", "reduced"):
         t0 = time.perf_counter()
@@ -219,8 +219,8 @@ def speed(log=print):
     """Samples/s of one direct and one square-root pass, rotation basis vs shift basis."""
     import control
 
-    from plid.bases import band_frequencies, basis_for
-    from plid.estimator import PLID
+    from trussid.plid.bases import band_frequencies, basis_for
+    from trussid.plid.estimator import PLID
 
     rng = np.random.default_rng(5)
     out = {}

@@ -2,10 +2,10 @@
 
 Each (model, VTK backend) pair runs in a fresh subprocess, so the first PNG includes what a
 ``trussid render`` call pays once: creating the OpenGL context and compiling shaders.
-Backends side by side: OSMesa (what :mod:`fem.render` selects; Mesa llvmpipe, no X, no GPU)
+Backends side by side: OSMesa (what :mod:`trussid.fem.render` selects; Mesa llvmpipe, no X, no GPU)
 and EGL (the same llvmpipe rasteriser through Mesa's surfaceless EGL; VTK's own choice on
 this machine after it fails to reach an X server). Models: the default testbed when
-``fem.testbed`` provides it, the four-legged table deck ``examples/decks/frame.bdf``, and a
+``trussid.testbed.model`` provides it, the four-legged table deck ``examples/decks/frame.bdf``, and a
 6 x 6 x 6 cubic lattice (``benchmarks/fem_models.py``) for scaling.
 
 Usage::
@@ -39,18 +39,18 @@ GIF_FRAMES = 24
 def load(name: str):
     """(model, modes, decorations) for a benchmark case."""
     sys.path.insert(0, str(ROOT))
-    from fem.modal import solve_modes
+    from trussid.fem.modal import solve_modes
 
     if name == "testbed":
-        from fem.render import testbed_decorations
-        from fem.testbed import build_testbed
+        from trussid.testbed.render import testbed_decorations
+        from trussid.testbed.model import build_testbed
 
-        from fem.testbed import solve_testbed_modes
+        from trussid.testbed.model import solve_testbed_modes
 
         tbm = build_testbed()
         return tbm.model, solve_testbed_modes(tbm, 12), testbed_decorations(tbm)
     elif name == "frame.bdf":
-        from fem.nastran import read_bdf
+        from trussid.fem.nastran import read_bdf
 
         model, _ = read_bdf(ROOT / "examples" / "decks" / "frame.bdf")
         decorations = ()
@@ -66,7 +66,7 @@ def load(name: str):
 
 
 def one(name: str) -> dict:
-    from fem import render
+    from trussid.fem import render
 
     model, modes, decorations = load(name)
     first = 7 if name == "testbed" else 1  # the testbed's modes 1-6 are the suspension
@@ -121,7 +121,7 @@ def main() -> None:
     try:
         import importlib.util
 
-        if importlib.util.find_spec("fem.testbed") is not None:
+        if importlib.util.find_spec("trussid.testbed.model") is not None:
             cases.insert(0, "testbed")
     except ImportError:
         pass

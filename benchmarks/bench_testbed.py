@@ -6,10 +6,10 @@ wall-thickness designs (build + 30 lowest modes each).
 Three ways to get a design's 30 lowest modes are timed side by side in one run:
 
 - ``rebuild``: what a user without the sweep API would do: ``build_testbed(tb.with_walls(w))``,
-  ``assemble`` and the dense subset eigensolver (:func:`fem.testbed.solve_testbed_modes`);
-- ``rebuild (fem.modal)``: the same with the general :func:`fem.modal.solve_modes`;
-- ``sweep``: the model built once, :func:`fem.testbed.wall_basis`, then per design only
-  :func:`fem.testbed.wall_modes` (strut terms of K and M re-formed from precomputed data on
+  ``assemble`` and the dense subset eigensolver (:func:`trussid.testbed.model.solve_testbed_modes`);
+- ``rebuild (fem.modal)``: the same with the general :func:`trussid.fem.modal.solve_modes`;
+- ``sweep``: the model built once, :func:`trussid.testbed.model.wall_basis`, then per design only
+  :func:`trussid.testbed.model.wall_modes` (strut terms of K and M re-formed from precomputed data on
   a fixed sparse pattern, dense ``scipy.linalg.eigh(..., subset_by_index=[0, 29])``).
 
 One core: the BLAS/LAPACK thread pools are limited to one thread by setting
@@ -56,10 +56,10 @@ def main(argv=None) -> int:
     p.add_argument("--out", default=None, help="also write the results as Markdown here")
     args = p.parse_args(argv)
 
-    from fem.assembly import assemble
-    from fem.modal import solve_modes
-    from fem.testbed import build_testbed, solve_testbed_modes, wall_basis, wall_modes
-    from geometry.testbed import Testbed
+    from trussid.fem.assembly import assemble
+    from trussid.fem.modal import solve_modes
+    from trussid.testbed.model import build_testbed, solve_testbed_modes, wall_basis, wall_modes
+    from trussid.geometry.spec import Testbed
 
     tb = Testbed()
     build_testbed(tb)  # warm-up: imports, the UDF solid (memoised), first BLAS calls
@@ -157,7 +157,7 @@ def main(argv=None) -> int:
     text = "\n".join(lines) + "\n"
     print(text)
     if args.out:
-        from trussid.files import atomic_path
+        from trussid._util.files import atomic_path
 
         with atomic_path(args.out) as tmp:
             tmp.write_text(text)

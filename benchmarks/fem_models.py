@@ -2,7 +2,7 @@
 
 Each generator returns a :class:`FrameSpec`: plain arrays (nodes, element connectivity,
 orientation vectors, one tube section per element group, one material, clamped nodes). The
-same spec becomes a trussid :class:`fem.Model` (:func:`to_trussid`) and an OpenSeesPy
+same spec becomes a trussid :class:`trussid.fem.Model` (:func:`to_trussid`) and an OpenSeesPy
 domain (:func:`build_opensees`), so both tools solve the very same structure.
 
 Structures (issue 2, acceptance item 9):
@@ -38,9 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.materials import ALUMINIUM, Material
-from fem.model import Model
-from fem.sections import Section
+from trussid.fem.materials import ALUMINIUM, Material
+from trussid.fem.model import Model
+from trussid.fem.sections import Section
 
 #: Benchmark sizes named in the issue: case name -> (spec name, approximate free DOFs).
 SIZES = {
@@ -230,7 +230,7 @@ def spec_from_name(name: str) -> FrameSpec:
 
 # ---------------------------------------------------------------------------------- trussid
 def to_trussid(spec: FrameSpec) -> Model:
-    """The spec as a trussid :class:`fem.Model` (Euler-Bernoulli, consistent mass)."""
+    """The spec as a trussid :class:`trussid.fem.Model` (Euler-Bernoulli, consistent mass)."""
     model = Model(beam_theory="euler-bernoulli", mass="consistent", name=spec.name)
     model.add_nodes(spec.node_ids, spec.xyz)
     for g, section in enumerate(spec.sections):

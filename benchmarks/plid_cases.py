@@ -25,7 +25,7 @@ import control
 import numpy as np
 import scipy.signal
 
-from plid.experiment import run_experiment
+from trussid.plid.experiment import run_experiment
 
 FS = 1600.0
 

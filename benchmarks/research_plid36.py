@@ -33,11 +33,11 @@ import scipy.linalg
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from plid_cases import case_b, record                       # noqa: E402
 from bench_plid_thesis import measure, N_ID, N_VAL           # noqa: E402
-from plid.multipass import identify, multipass, Pass, _noise_estimate   # noqa: E402
-from plid.subspace import n4sid, refit_input_matrix          # noqa: E402
-from plid.bases import basis_for, model_frequencies          # noqa: E402
-from plid.experiment import simulate                         # noqa: E402
-from plid.frf import h1                                      # noqa: E402
+from trussid.plid.multipass import identify, multipass, Pass, _noise_estimate   # noqa: E402
+from trussid.plid.subspace import n4sid, refit_input_matrix          # noqa: E402
+from trussid.plid.bases import basis_for, model_frequencies          # noqa: E402
+from trussid.plid.experiment import simulate                         # noqa: E402
+from trussid.plid.frf import h1                                      # noqa: E402
 
 ORDER = 36
 
@@ -113,7 +113,7 @@ def identify36(u, y, dt, order=ORDER, var_a=1e-4, var_b=1e-2, obs_radius=0.9, fo
     # ill-conditioned conversion (the rotation basis needed cond(T) ~ 1e10 here and put poles
     # outside the unit circle by round-off).
     import scipy.signal
-    from plid.canonical import ObserverBasis
+    from trussid.plid.canonical import ObserverBasis
     sy = np.sqrt(np.mean(y ** 2, axis=0))
     Apr, Cpr = np.asarray(pr.A, float), np.asarray(pr.C, float) / sy[:, None]
     lamp = np.linalg.eigvals(Apr)
@@ -137,7 +137,7 @@ def identify36(u, y, dt, order=ORDER, var_a=1e-4, var_b=1e-2, obs_radius=0.9, fo
     if not stable:
         # every pass put a pole just outside the unit circle (round-off of the conversion):
         # reflect it in (plid.stabilise, as identify_reduced does) and compare those
-        from plid.stabilise import stabilise
+        from trussid.plid.stability import stabilise
         for r in results:
             r["model"] = stabilise(r["model"]).model
             r["stabilised"] = True

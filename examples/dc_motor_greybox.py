@@ -17,8 +17,8 @@ import argparse
 
 import numpy as np
 
-from plid.dcmotor import first_order_from_physical, identify_dc_motor, physical_model
-from plid.greybox import simulate
+from trussid.plid.dcmotor import first_order_from_physical, identify_dc_motor, physical_model
+from trussid.plid.greybox import simulate
 
 J, R, B, K = 9.85e-3, 6.29, 2.52e-3, 1.57e-2
 
@@ -62,7 +62,7 @@ def main() -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from trussid.files import atomic_path
+        from trussid._util.files import atomic_path
 
         fit = simulate(physical_model(both.representative), t, u)[:, 0]
         fig, ax = plt.subplots(figsize=(8, 4))

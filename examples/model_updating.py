@@ -61,7 +61,7 @@ def main(argv=None) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
-    from trussid.errors import UserError
+    from trussid._util.errors import UserError
 
     try:
         return _run(args, n_samples)
@@ -73,11 +73,11 @@ def main(argv=None) -> int:
 def _run(args, n_samples) -> int:
     import matplotlib.pyplot as plt
 
-    from fem.labels import label_testbed_modes
-    from fem.testbed import build_testbed, solve_testbed_modes
-    from geometry.testbed import INCH, Testbed
-    from plid.experiment import run_experiment
-    from trussid.files import atomic_path
+    from trussid.testbed.labels import label_testbed_modes
+    from trussid.testbed.model import build_testbed, solve_testbed_modes
+    from trussid.geometry.spec import INCH, Testbed
+    from trussid.plid.experiment import run_experiment
+    from trussid._util.files import atomic_path
     from trussid.updating import bending_experiment_plant, modes_from_data, strut_sensors, update_walls
 
     t0 = time.perf_counter()

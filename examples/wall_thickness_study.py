@@ -4,7 +4,7 @@ Sweeps one strut's wall thickness at a time (the others at their nominal values)
 ``--low`` to ``--high`` times nominal, plots the lowest modes' frequencies against the
 thickness (one panel per strut) and prints the analytic sensitivities ``df/dt`` at the
 nominal design with each mode's label. The model is built once; every design of the
-sweep only re-forms the strut terms of K and M (:func:`fem.testbed.wall_basis`).
+sweep only re-forms the strut terms of K and M (:func:`trussid.testbed.model.wall_basis`).
 
 Usage::
 
@@ -47,13 +47,13 @@ def main(argv=None) -> int:
     import matplotlib.pyplot as plt
     from tqdm import tqdm
 
-    from fem.labels import label_testbed_modes
-    from fem.sensitivity import wall_sensitivities
-    from fem.testbed import build_testbed, solve_testbed_modes, wall_basis, wall_modes
-    from geometry.params_toml import load_testbed
-    from geometry.testbed import INCH, Testbed
-    from trussid.errors import UserError
-    from trussid.files import atomic_path
+    from trussid.testbed.labels import label_testbed_modes
+    from trussid.testbed.sensitivity import wall_sensitivities
+    from trussid.testbed.model import build_testbed, solve_testbed_modes, wall_basis, wall_modes
+    from trussid.geometry.params_toml import load_testbed
+    from trussid.geometry.spec import INCH, Testbed
+    from trussid._util.errors import UserError
+    from trussid._util.files import atomic_path
 
     try:
         tb = load_testbed(args.params) if args.params else Testbed()

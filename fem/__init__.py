@@ -1,15 +1,15 @@
 """Finite elements for 3-D frames: model, element matrices, assembly, modes, plants, I/O.
 
-The model-building names (``Model``, ``Section``, ``Material``...) load at once; the rest
-(``assemble``, ``solve_modes``, ``read_bdf``, ``build_testbed``, ``testbed_plant``,
-``render_mode``...) load on first use.
+Generic: nothing here knows of the thesis testbed (that is :mod:`trussid.testbed`). The
+model-building names (``Model``, ``Section``, ``Material``...) load at once; the rest
+(``assemble``, ``solve_modes``, ``read_bdf``, ``render_mode``...) load on first use.
 """
 
-from fem.errors import ModelError
-from fem.materials import ALUMINIUM, STEEL, Material
-from fem.model import Beams, Model, PointMasses, RigidBody, Springs, parse_dofs
-from fem.sections import Section
-from trussid.lazy import lazy_exports
+from trussid._util.lazy import lazy_exports
+from trussid.fem.errors import ModelError
+from trussid.fem.materials import ALUMINIUM, STEEL, Material
+from trussid.fem.model import Beams, Model, PointMasses, RigidBody, Springs, parse_dofs
+from trussid.fem.sections import Section
 
 _LAZY = {
     "System": "assembly", "assemble": "assembly",
@@ -19,11 +19,7 @@ _LAZY = {
     "Wafer": "actuators", "strain_actuator_loads": "actuators",
     "Sensor": "sensors", "sensor_matrix": "sensors",
     "modal_plant": "plant", "residual_flexibility": "plant",
-    "LabChain": "lab", "lab_plant": "lab",
-    "TestbedModel": "testbed", "build_testbed": "testbed", "solve_testbed_modes": "testbed",
-    "wall_basis": "testbed", "wall_modes": "testbed",
-    "label_testbed_modes": "labels", "testbed_sensitivities": "sensitivity",
-    "TestbedPlant": "testbed_plant", "testbed_plant": "testbed_plant",
+    "Decoration": "render", "decorations_from_solids": "render", "mode_scene": "render",
     "render_mode": "render", "render_mode_gif": "render", "render_mode_grid": "render",
 }
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)

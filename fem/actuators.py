@@ -25,8 +25,8 @@ from typing import Literal
 
 import numpy as np
 
-from fem.elements import local_axes
-from fem.errors import ModelError
+from trussid.fem.elements import local_axes
+from trussid.fem.errors import ModelError
 
 #: Vacuum permittivity [F/m].
 EPSILON_0 = 8.8541878128e-12

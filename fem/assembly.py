@@ -3,7 +3,7 @@
 Every element kind contributes a stack of small dense matrices plus the global DOF index of
 each row; one COO -> CSR conversion sums them (no Python loop over elements). The full
 matrices are then reduced to the independent DOFs, ``K = T^T K_full T``, by
-:func:`fem.constraints.build_transformation` (supports by elimination, rigid bodies by DOF
+:func:`trussid.fem.constraints.build_transformation` (supports by elimination, rigid bodies by DOF
 transformation).
 """
 
@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from fem.constraints import build_transformation, dof_label, rigid_mass
-from fem.elements import check_beam_properties, frame_matrices, local_axes
-from fem.errors import ModelError
-from fem.model import DOF_NAMES
+from trussid.fem.constraints import build_transformation, dof_label, rigid_mass
+from trussid.fem.elements import check_beam_properties, frame_matrices, local_axes
+from trussid.fem.errors import ModelError
+from trussid.fem.model import DOF_NAMES
 
 
 @dataclass
@@ -188,7 +188,7 @@ def _zero(diag: np.ndarray, dofs: np.ndarray, rel: float = 1e-12) -> np.ndarray:
 
 
 def assemble(model, autospc: bool = False) -> System:
-    """Assemble and constrain a :class:`fem.Model`.
+    """Assemble and constrain a :class:`trussid.fem.Model`.
 
     Parameters
     ----------

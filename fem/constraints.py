@@ -16,8 +16,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from fem.errors import ModelError
-from fem.model import DOF_NAMES
+from trussid.fem.errors import ModelError
+from trussid.fem.model import DOF_NAMES
 
 
 def skew(r: np.ndarray) -> np.ndarray:

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fem.errors import ModelError
+from trussid.fem.errors import ModelError
 
 #: Local DOF indices of the x-y bending plane (v, rz at A; v, rz at B) ...
 _XY = np.array([1, 5, 7, 11])

@@ -1,6 +1,6 @@
 """Errors for finite-element input: each names the offending node, element, card or value."""
 
-from trussid.errors import UserError
+from trussid._util.errors import UserError
 
 
 class ModelError(UserError):

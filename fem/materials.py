@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fem.errors import ModelError
+from trussid.fem.errors import ModelError
 
 
 @dataclass(frozen=True)

@@ -19,10 +19,10 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from fem.assembly import System, assemble
-from fem.constraints import rigid_body_modes
-from fem.errors import ModelError
-from trussid.threads import blas_threads
+from trussid.fem.assembly import System, assemble
+from trussid.fem.constraints import rigid_body_modes
+from trussid.fem.errors import ModelError
+from trussid._util.threads import blas_threads
 
 #: OpenBLAS threads used by the eigen and static solutions. The BLAS calls inside
 #: SuperLU and ARPACK are small (supernodes of tens of columns, level-2 updates), so
@@ -332,7 +332,7 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
         "auto": dense up to :data:`DENSE_MAX_DOF` reduced DOFs or for more than a third
         of the modes, else shift-invert Lanczos.
     autospc : bool
-        Passed to :func:`fem.assembly.assemble` when a model is given.
+        Passed to :func:`trussid.fem.assembly.assemble` when a model is given.
     sigma : float, optional
         Shift [rad^2/s^2] (both methods work on ``K - sigma M``); default 0 when the model
         has supports and K factorises without a tiny pivot, else a small negative value

@@ -17,9 +17,9 @@ from typing import Iterable, Literal
 
 import numpy as np
 
-from fem.errors import ModelError
-from fem.materials import Material
-from fem.sections import Section
+from trussid.fem.errors import ModelError
+from trussid.fem.materials import Material
+from trussid.fem.sections import Section
 
 DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
 
@@ -58,7 +58,7 @@ class Beams:
         Orientation vector in global axes: together with the axis it fixes the local x-y
         plane (NASTRAN's v vector). Must not be parallel to the element.
     A, Iy, Iz, J, Asy, Asz : (n,) float
-        Section properties (see :class:`fem.sections.Section`) [m^2, m^4].
+        Section properties (see :class:`trussid.fem.sections.Section`) [m^2, m^4].
     E, G, rho : (n,) float
         Material [Pa, Pa, kg/m^3].
     nsm : (n,) float

@@ -1,6 +1,6 @@
 """NASTRAN bulk data in and out, through pyNastran.
 
-:func:`read_bdf` maps a bulk-data deck onto a :class:`fem.Model` and reports, in a
+:func:`read_bdf` maps a bulk-data deck onto a :class:`trussid.fem.Model` and reports, in a
 :class:`BdfInfo`, every choice that changes the answer (mass formulation, WTMASS, beam
 theory, SPC set, eigenvalue request, AUTOSPC). :func:`write_bdf` writes a model back as a
 deck that NASTRAN can run and that :func:`read_bdf` re-reads to the same model.
@@ -20,7 +20,7 @@ Conventions that matter
   ``Iy = I2``. Shear areas are ``K1 A`` (along y) and ``K2 A`` (along z).
 * Shear flexibility follows NASTRAN: PBAR without K1/K2 has none (infinite shear area);
   PBEAM has K1 = K2 = 1.0 by default (0.0 means none); PBARL/PBEAML compute shear
-  factors from the shape (here: the Cowper factors of :mod:`fem.sections`, whose torsion
+  factors from the shape (here: the Cowper factors of :mod:`trussid.fem.sections`, whose torsion
   constants are used too). The model is Timoshenko when any CBAR/CBEAM has a finite shear
   area, else Euler-Bernoulli.
 * CONM2 inertia: the deck gives I11, I21, I22, I31, I32, I33 with the products of inertia as
@@ -42,9 +42,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.errors import ModelError
-from fem.model import Model
-from fem.sections import Section
+from trussid.fem.errors import ModelError
+from trussid.fem.model import Model
+from trussid.fem.sections import Section
 
 #: Bulk-data cards :func:`read_bdf` translates.
 SUPPORTED_CARDS = frozenset({
@@ -65,7 +65,7 @@ OUTPUT_PARAMS = frozenset({
     "SNORM",
 })
 
-#: PBARL/PBEAML shapes with a matching :class:`fem.sections.Section` constructor.
+#: PBARL/PBEAML shapes with a matching :class:`trussid.fem.sections.Section` constructor.
 SECTION_TYPES = ("ROD", "TUBE", "BAR", "BOX")
 
 
@@ -141,7 +141,7 @@ class BdfInfo:
 
 # ======================================================================= reading
 def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[Model, BdfInfo]:
-    """Read a NASTRAN bulk-data deck into a :class:`fem.Model`.
+    """Read a NASTRAN bulk-data deck into a :class:`trussid.fem.Model`.
 
     Parameters
     ----------
@@ -858,7 +858,7 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     from pyNastran.bdf.bdf import BDF
     from pyNastran.bdf.case_control_deck import CaseControlDeck
 
-    from trussid.files import atomic_path
+    from trussid._util.files import atomic_path
 
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     ids, xyz = model.node_ids, model.xyz

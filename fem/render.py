@@ -23,7 +23,7 @@ Pieces, each usable alone:
 - :func:`mode_scene` builds the deformable geometry of a mode (no rendering): tests read
   the colours (``"displacement / max"``) and the deflections off its meshes.
 - :func:`render_mode`, :func:`render_mode_gif`, :func:`render_mode_grid` draw it.
-- :class:`Decoration`, :func:`decorations_from_solids` and :func:`testbed_decorations`
+- :class:`Decoration` and :func:`decorations_from_solids`
   attach solids to nodes; a model builder can hand any list of
   ``Decoration(mesh, colour, node)`` to the render functions.
 """
@@ -40,9 +40,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from fem.model import Model
-from trussid.errors import UserError
-from trussid.files import atomic_path
+from trussid.fem.model import Model
+from trussid._util.errors import UserError
+from trussid._util.files import atomic_path
 
 #: Default drawn amplitude: the largest displacement is this fraction of the diagonal of the
 #: model's bounding box.
@@ -95,27 +95,24 @@ def _as_decoration(item) -> Decoration:
     return Decoration(*item)  # (mesh, colour, node[, opacity[, name]])
 
 
-#: Colours of named parts (a word of the solid's name); ``None``: coloured by displacement.
-PART_COLOURS = {"wafer": "#c8a23c", "adapter": None, "udf": None, "base": None}
 #: Colour of parts that do not move (attached to no node).
 FIXED_PART_COLOUR = "#8a8a8a"
 
 
 def decorations_from_solids(solids, attach, *, colours=None, skip=("tube",)) -> list[Decoration]:
-    """Decorations from named solids, e.g. :func:`geometry.solids.testbed_solids`.
+    """Decorations from named solids, e.g. the testbed's (:mod:`trussid.testbed.render`).
 
     Parameters
     ----------
     solids : iterable
-        Objects with ``name`` and ``mesh`` (``geometry.solids.Solid``) or ``(name, mesh)``
+        Objects with ``name`` and ``mesh`` attributes or ``(name, mesh)``
         pairs; meshes in global coordinates [m].
     attach : mapping or callable
         Solid name -> id of the node whose rigid motion carries it, or ``None`` for a part
         that does not move. A mapping must name every solid that is not skipped.
     colours : mapping, optional
-        Word of the name -> colour (``None``: by displacement); default
-        :data:`PART_COLOURS` (PZT wafers in their own colour). Parts attached to no node
-        and without a colour are grey.
+        Word of the name -> colour (``None``: by displacement); default: every part by
+        displacement. Parts attached to no node and without a colour are grey.
     skip : sequence of str
         Solids whose name contains one of these words are left out (strut tubes: the
         beams are already drawn as tubes of their real radius).
@@ -124,7 +121,7 @@ def decorations_from_solids(solids, attach, *, colours=None, skip=("tube",)) -> 
     -------
     list of Decoration
     """
-    colours = PART_COLOURS if colours is None else colours
+    colours = {} if colours is None else colours
     out = []
     for solid in solids:
         name, mesh = (solid.name, solid.mesh) if hasattr(solid, "mesh") else solid
@@ -142,38 +139,6 @@ def decorations_from_solids(solids, attach, *, colours=None, skip=("tube",)) -> 
             colour = FIXED_PART_COLOUR
         out.append(Decoration(mesh, colour, None if node is None else int(node), name=name))
     return out
-
-
-def testbed_decorations(tbm, sections: int = 48) -> list[Decoration]:
-    """The testbed's solids (adapters, PZT wafers, UDF, base) attached to its FE nodes.
-
-    Each adapter block and its wafers ride on the strut node nearest the adapter's middle,
-    the UDF on its rigid body's master node, the base on its master node when suspended
-    (fixed when clamped). Strut tubes are not added: the beams are drawn as tubes of their
-    real radius.
-
-    Parameters
-    ----------
-    tbm : fem.testbed.TestbedModel
-    sections : int
-        Sides of round parts (a picture needs far fewer than mass properties do).
-    """
-    from geometry.solids import testbed_solids
-
-    mp, xyz = tbm.map, tbm.model.xyz
-    attach: dict[str, int | None] = {"udf": int(mp.udf_master),
-                                      "base": None if mp.base_master is None else int(mp.base_master)}
-    for i in range(6):
-        nodes = np.asarray(mp.strut_nodes[i])
-        a, b = (int(np.flatnonzero(nodes == n)[0]) for n in mp.adapter_nodes[i])
-        candidates = nodes[a:b + 1]
-        p = xyz[tbm.model.index_of(candidates)]
-        middle = 0.5 * (p[0] + p[-1])
-        node = int(candidates[np.argmin(np.linalg.norm(p - middle, axis=1))])
-        attach[f"strut {i} adapter"] = node
-        for j in range(16):
-            attach[f"strut {i} wafer {j}"] = node
-    return decorations_from_solids(testbed_solids(tbm.testbed, sections=sections), attach)
 
 
 # --------------------------------------------------------------------------- numerics

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fem.errors import ModelError
+from trussid.fem.errors import ModelError
 
 
 @dataclass(frozen=True)

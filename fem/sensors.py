@@ -7,7 +7,7 @@ from typing import Literal
 
 import numpy as np
 
-from fem.errors import ModelError
+from trussid.fem.errors import ModelError
 
 QUANTITIES = ("displacement", "velocity", "acceleration")
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from fem.assembly import System, assemble
-from fem.errors import ModelError
-from fem.modal import BLAS_THREADS, blas_threads, factor_stiffness
+from trussid.fem.assembly import System, assemble
+from trussid.fem.errors import ModelError
+from trussid.fem.modal import BLAS_THREADS, blas_threads, factor_stiffness
 
 
 def solve_static(model_or_system, f_full, *, autospc: bool = False) -> np.ndarray:

@@ -1,17 +1,19 @@
-"""Parametric testbed geometry and solids (trimesh). Knows nothing of finite elements.
+"""The testbed's parametric description and its solids (trimesh). Knows nothing of FE.
 
-Names load on first use, so parameter sweeps that only need ``Testbed`` and
-``testbed_layout`` never import trimesh.
+:class:`Testbed` is the validated, provenance-tagged parameter set of the thesis testbed
+(structure, transducers, electronics, acquisition, damping); :mod:`.layout` turns it into
+node positions, :mod:`.solids` into solids and mass properties. Names load on first use,
+so parameter sweeps that only need ``Testbed`` and ``testbed_layout`` never import trimesh.
 """
 
-from geometry.errors import ParameterError
-from trussid.lazy import lazy_exports
+from trussid._util.lazy import lazy_exports
+from trussid.geometry.errors import ParameterError
 
 _LAZY = {
-    "Testbed": "testbed", "StrutParams": "testbed", "AdapterParams": "testbed", "PztParams": "testbed",
-    "UdfParams": "testbed", "BaseParams": "testbed", "AccelerometerParams": "testbed",
-    "ElectricsParams": "testbed", "FilterParams": "testbed", "DaqParams": "testbed",
-    "DampingParams": "testbed", "INCH": "testbed", "POUND": "testbed", "G0": "testbed",
+    "Testbed": "spec", "StrutParams": "spec", "AdapterParams": "spec", "PztParams": "spec",
+    "UdfParams": "spec", "BaseParams": "spec", "AccelerometerParams": "spec",
+    "ElectricsParams": "spec", "FilterParams": "spec", "DaqParams": "spec",
+    "DampingParams": "spec", "INCH": "spec", "POUND": "spec", "G0": "spec",
     "Layout": "layout", "testbed_layout": "layout",
     "load_testbed": "params_toml", "save_testbed": "params_toml", "dumps_testbed": "params_toml",
     "Solid": "solids", "MassProperties": "solids", "mass_properties": "solids",

@@ -1,6 +1,6 @@
 """The error raised for a bad testbed parameter or parameter file."""
 
-from trussid.errors import UserError
+from trussid._util.errors import UserError
 
 
 class ParameterError(UserError):

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from geometry.errors import ParameterError
+from trussid.geometry.errors import ParameterError
 
 __all__ = [
     "STEEL_DENSITY",

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geometry.testbed import Testbed
+from trussid.geometry.spec import Testbed
 
 #: Strut ``i`` starts at base point ``STRUT_BASE[i]``.
 STRUT_BASE = np.array([0, 1, 1, 2, 2, 0])

@@ -23,9 +23,9 @@ import tomllib
 
 import tomli_w
 
-from geometry.errors import ParameterError
-from geometry.testbed import SECTIONS, Testbed
-from trussid.files import atomic_path
+from trussid.geometry.errors import ParameterError
+from trussid.geometry.spec import SECTIONS, Testbed
+from trussid._util.files import atomic_path
 
 _HEADER = """\
 # trussid testbed parameters. SI units throughout (m, kg, s, Pa, N, V, F, Hz, rad).

@@ -21,9 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from geometry.errors import ParameterError
-from geometry.layout import Layout, testbed_layout
-from geometry.testbed import Testbed
+from trussid.geometry.errors import ParameterError
+from trussid.geometry.layout import Layout, testbed_layout
+from trussid.geometry.spec import Testbed
 
 #: Default number of sides of round parts; enough for 1e-3 mass properties (module docstring).
 SECTIONS = 256

@@ -1,24 +1,26 @@
 """Identification from input/output data: PLID, experiments, FRF estimates, metrics, grey-box.
 
-Works on numpy arrays and ``control.StateSpace``; never imports ``fem`` or ``geometry``.
-Names load on first use.
+Works on numpy arrays and ``control.StateSpace``; never imports :mod:`trussid.fem`,
+:mod:`trussid.geometry` or :mod:`trussid.testbed`. Names load on first use.
 """
 
-from plid.errors import DataError, IdentificationError
-from trussid.lazy import lazy_exports
+from trussid._util.lazy import lazy_exports
+from trussid.plid.errors import DataError, IdentificationError
 
 _LAZY = {
     "PLID": "estimator", "PLIDResult": "estimator",
     "identify": "multipass", "identify_reduced": "multipass", "Identification": "multipass",
     "ObserverBasis": "canonical", "rotation_basis": "bases",
     "n4sid": "subspace", "order_table": "order",
-    "stabilise": "stabilise", "balanced_truncation": "reduce",
+    "stabilise": "stability", "balanced_truncation": "reduce",
     "IOData": "datafile", "read_data": "datafile", "write_data": "datafile",
     "save_model": "modelfile", "load_model": "modelfile",
-    "excitation": "experiment", "run_experiment": "experiment",
-    "h1": "frf", "h2": "frf", "stepped_sine": "frf",
+    "excitation": "experiment", "run_experiment": "experiment", "simulate": "experiment",
+    "h1": "frf", "h2": "frf", "stepped_sine": "frf", "FRF": "frf",
+    "frequency_response": "frf",
     "prediction_ratio_db": "metrics", "frf_error": "metrics", "compare_poles": "metrics",
-    "simulation_fit": "metrics",
+    "simulation_fit": "metrics", "one_step_predict": "metrics", "predictor_gain": "metrics",
+    "modal_parameters": "metrics", "choose_predictor": "metrics",
     "fit_parameters": "greybox", "fit_greybox": "greybox", "Constraint": "greybox",
     "identify_dc_motor": "dcmotor",
 }

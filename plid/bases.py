@@ -1,7 +1,7 @@
 """Well-conditioned observer bases for PLID at high order, and exact conversion into them.
 
 PLID identifies ``A = F + Abar C`` for a fixed observable pair ``(F, C)``
-(:class:`plid.canonical.ObserverBasis`). The thesis's block shift makes the conversion of a
+(:class:`trussid.plid.canonical.ObserverBasis`). The thesis's block shift makes the conversion of a
 lightly damped 24-state plant ill-conditioned (observability condition 2e10,
 ``docs/plid.md``). The *rotation* bases here replace each shift chain by 2x2 rotations
 scaled by a radius ``r < 1``::
@@ -34,7 +34,7 @@ and ``Toep`` block lower triangular with blocks ``C_b F^(j-1-i) Abar``. ``O_F`` 
 column rank, so ``T = O_F^+ (I - Toep) O_A``; the rows of ``(I - Toep) O_A`` outside the
 range of ``O_F`` must vanish, which is linear in ``Abar`` and determines it
 (``method="observability"``). ``method="sylvester"`` (the engine's
-:func:`plid.canonical.from_statespace`) solves ``T A - F T = Abar C`` instead; both are
+:func:`trussid.plid.canonical.from_statespace`) solves ``T A - F T = Abar C`` instead; both are
 exact and are checked against each other in the tests.
 """
 
@@ -44,8 +44,8 @@ import numpy as np
 import scipy.linalg
 import scipy.signal
 
-from plid.canonical import ObserverBasis, from_statespace, join_theta
-from plid.errors import IdentificationError
+from trussid.plid.canonical import ObserverBasis, from_statespace, join_theta
+from trussid.plid.errors import IdentificationError
 
 __all__ = ["rotation_basis", "as_selector", "band_frequencies", "data_frequencies", "model_frequencies",
            "to_basis", "conversion_condition", "basis_for"]
@@ -125,7 +125,7 @@ def as_selector(basis: ObserverBasis) -> ObserverBasis:
     ``T = I`` with row ``s_i`` set to ``C_i``, ``F' = T F T^-1``, ``C' = C T^-1 = e_{s_i}``.
     PLID in ``(F', C')`` is the same estimator (``A' = T A T^-1``, ``Abar' = T Abar``), but
     the engine's per-sample loop turns ``C x`` and ``P C^T`` into index gathers for a
-    selector ``C`` (``plid.recursion_common.Problem.sel``), which is what this is for.
+    selector ``C`` (``trussid.plid.recursion_common.Problem.sel``), which is what this is for.
     ``T`` is unit triangular up to a permutation; its condition number is about the
     number of blocks per output.
     """

@@ -24,7 +24,7 @@ import control
 import numpy as np
 import scipy.linalg
 
-from plid.errors import IdentificationError
+from trussid.plid.errors import IdentificationError
 
 __all__ = [
     "ObserverBasis",

@@ -18,7 +18,7 @@ NPZ / MAT
     ``y_clean`` (N x p, the noise-free outputs of a simulated experiment). ``inputs=`` /
     ``outputs=`` then select channels by name.
 
-Every problem is a :class:`plid.errors.DataError` naming the file and the offending column
+Every problem is a :class:`trussid.plid.errors.DataError` naming the file and the offending column
 or sample.
 """
 
@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from plid.errors import DataError
-from trussid.files import atomic_path
+from trussid.plid.errors import DataError
+from trussid._util.files import atomic_path
 
 #: Relative jitter of the time column tolerated before it is called non-uniform (times
 #: printed with few decimals, e.g. 1/3 ms, are not exactly uniform).

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-from plid.errors import DataError
-from plid.greybox import GreyboxReport, _as_2d, _check_time, fit_greybox
+from trussid.plid.errors import DataError
+from trussid.plid.greybox import GreyboxReport, _as_2d, _check_time, fit_greybox
 
 __all__ = [
     "DCMotorResult",
@@ -254,7 +254,7 @@ def identify_dc_motor(
     t, u, y : arrays
         Uniform sample times [s], armature voltage [V], angular speed [rad/s].
     J : float
-        Total rotating inertia [kg m^2] (e.g. from :mod:`geometry.flywheel`).
+        Total rotating inertia [kg m^2] (e.g. from :mod:`trussid.geometry.flywheel`).
     R : float, optional
         Armature resistance [ohm], when measured separately. Without it, b, R and k are
         not all determined and the result says so.

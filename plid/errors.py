@@ -1,10 +1,10 @@
-"""Errors the ``plid`` package raises for mistakes in what the user gave.
+"""Errors the ``trussid.plid`` package raises for mistakes in what the user gave.
 
-Both subclass :class:`trussid.errors.UserError`, so the command line turns them into a
+Both subclass :class:`trussid._util.errors.UserError`, so the command line turns them into a
 one-line message. Messages name the offending item (column, sample, parameter, order).
 """
 
-from trussid.errors import UserError
+from trussid._util.errors import UserError
 
 
 class DataError(UserError):

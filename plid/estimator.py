@@ -2,7 +2,7 @@
 
 Typical use::
 
-    from plid.estimator import PLID
+    from trussid.plid.estimator import PLID
     res = PLID(order=12, dt=1 / 1600, R=1e-6).fit(u, y)      # u (N, m), y (N, p)
     res.model        # identified discrete control.StateSpace, original units, D = 0
     res.K            # steady-state one-step predictor gain
@@ -47,12 +47,12 @@ import numpy as np
 import scipy.linalg
 from tqdm.auto import tqdm
 
-from trussid.threads import blas_threads as _limit_blas
-from plid.canonical import ObserverBasis, check_order, from_statespace, split_theta
-from plid.errors import DataError, IdentificationError
-from plid.recursion_common import Problem
-from plid.recursion_direct import direct_covariance, direct_init, direct_step
-from plid.recursion_sqrt import sqrt_covariance, sqrt_init, sqrt_step
+from trussid._util.threads import blas_threads as _limit_blas
+from trussid.plid.canonical import ObserverBasis, check_order, from_statespace, split_theta
+from trussid.plid.errors import DataError, IdentificationError
+from trussid.plid.recursion_common import Problem
+from trussid.plid.recursion_direct import direct_covariance, direct_init, direct_step
+from trussid.plid.recursion_sqrt import sqrt_covariance, sqrt_init, sqrt_step
 
 __all__ = ["PLID", "PLIDResult", "PLIDWarning"]
 

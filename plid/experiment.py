@@ -26,8 +26,8 @@ import control
 import numpy as np
 import scipy.signal
 
-from plid.datafile import IOData
-from plid.errors import DataError
+from trussid.plid.datafile import IOData
+from trussid.plid.errors import DataError
 
 EXCITATIONS = ("white", "prbs", "chirp", "multisine")
 

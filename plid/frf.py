@@ -13,7 +13,7 @@ import control
 import numpy as np
 import scipy.signal
 
-from plid.errors import DataError
+from trussid.plid.errors import DataError
 
 
 @dataclass

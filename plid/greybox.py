@@ -39,7 +39,7 @@ import scipy.signal
 import scipy.stats
 from scipy.stats import qmc
 
-from plid.errors import DataError
+from trussid.plid.errors import DataError
 
 __all__ = [
     "Combination",

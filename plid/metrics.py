@@ -35,9 +35,9 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from plid.errors import DataError
-from plid.experiment import simulate
-from plid.frf import FRF, frequency_response
+from trussid.plid.errors import DataError
+from trussid.plid.experiment import simulate
+from trussid.plid.frf import FRF, frequency_response
 
 
 def _check_sizes(sys, u, y=None):

@@ -16,8 +16,8 @@ from pathlib import Path
 import control
 import numpy as np
 
-from plid.errors import DataError
-from trussid.files import atomic_path
+from trussid.plid.errors import DataError
+from trussid._util.files import atomic_path
 
 FORMAT_VERSION = 1
 

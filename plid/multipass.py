@@ -1,6 +1,6 @@
 """Multi-pass batch PLID and the complete identification recipe ``identify``.
 
-A *pass* is one :class:`plid.estimator.PLID` run over the whole record. Later passes start
+A *pass* is one :class:`trussid.plid.estimator.PLID` run over the whole record. Later passes start
 from the previous pass's model (converted exactly into the same basis) with a re-inflated
 parameter covariance, and with their own state noise ``Q`` and parameter drift
 ``Q_theta``, so a schedule can shrink them pass by pass (``docs/plid.md``).
@@ -9,8 +9,8 @@ parameter covariance, and with their own state noise ``Q`` and parameter drift
 ``benchmarks/results/plid_thesis.md``):
 
 - ``start="subspace"`` (default): a quick N4SID estimate with D = 0
-  (:func:`plid.subspace.subspace_prior`) is the prior; the observer basis is a rotation
-  basis at the prior's pole frequencies (:mod:`plid.bases`); one PLID pass with ``Q = 0``
+  (:func:`trussid.plid.subspace.subspace_prior`) is the prior; the observer basis is a rotation
+  basis at the prior's pole frequencies (:mod:`trussid.plid.bases`); one PLID pass with ``Q = 0``
   and a tight parameter prior refines it. At 42 states it beat the best N4SID by 2.7-4x
   in FRF error and 11-18 dB in simulation; at 24 states it won on simulation (+5 dB)
   but not on FRF dB error.
@@ -29,10 +29,10 @@ from dataclasses import dataclass, field
 import control
 import numpy as np
 
-from plid.bases import basis_for, data_frequencies, model_frequencies
-from plid.canonical import ObserverBasis
-from plid.errors import IdentificationError
-from plid.estimator import PLID, PLIDResult, PLIDWarning
+from trussid.plid.bases import basis_for, data_frequencies, model_frequencies
+from trussid.plid.canonical import ObserverBasis
+from trussid.plid.errors import IdentificationError
+from trussid.plid.estimator import PLID, PLIDResult, PLIDWarning
 
 __all__ = ["Pass", "multipass", "identify", "identify_reduced", "default_via", "Identification",
            "SCRATCH_SCHEDULE"]
@@ -40,7 +40,7 @@ __all__ = ["Pass", "multipass", "identify", "identify_reduced", "default_via", "
 
 @dataclass(frozen=True)
 class Pass:
-    """Settings of one pass (scaled units, see :class:`plid.estimator.PLID`)."""
+    """Settings of one pass (scaled units, see :class:`trussid.plid.estimator.PLID`)."""
 
     Q: float = 0.0
     Q_theta: float = 0.0
@@ -118,7 +118,7 @@ class Identification:
 def _noise_estimate(model, u, y, floor=1e-10):
     """Output-noise variance per channel in scaled units: the simulation error of a prior
     model on the data (an over-estimate by the prior's own model error)."""
-    from plid.experiment import simulate
+    from trussid.plid.experiment import simulate
 
     e = y - simulate(model, u)
     return np.maximum(np.mean(e ** 2, axis=0) / np.mean(y ** 2, axis=0), floor)
@@ -159,12 +159,12 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     p = y.shape[1]
     fs = 1.0 / dt
     if order % p:
-        from plid.canonical import check_order
+        from trussid.plid.canonical import check_order
         check_order(order, p)
     info = {}
     t0 = time.perf_counter()
     if start == "subspace":
-        from plid.subspace import subspace_prior
+        from trussid.plid.subspace import subspace_prior
 
         prior, pinfo = subspace_prior(u, y, order, dt, block_rows=block_rows)
         info["subspace"] = pinfo
@@ -195,7 +195,7 @@ def _predictor(res: PLIDResult, u, y, R):
     """One-step predictor gain of the identified model: the recursion's own gain is the
     steady state of ``Q = 0`` passes (no correction at all), so the predictor assumes a
     small state noise instead: 1 % input noise through ``B`` and the estimated ``R``."""
-    from plid.metrics import default_noise_covariances, predictor_gain
+    from trussid.plid.metrics import default_noise_covariances, predictor_gain
 
     model = res.model
     Qd, _ = default_noise_covariances(model, u, y)
@@ -209,7 +209,7 @@ def _predictor(res: PLIDResult, u, y, R):
 
 def _stable(model):
     """``model`` with any pole outside the unit circle reflected in (plid.stabilise)."""
-    from plid.stabilise import stabilise
+    from trussid.plid.stability import stabilise
 
     return stabilise(model).model
 
@@ -233,14 +233,14 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
     1. :func:`identify` at ``order`` itself;
     2. for each order ``h`` in ``via``: :func:`identify` at ``h``, then balanced truncation
        weighted by the spectrum of the identification input
-       (:func:`plid.reduce.balanced_truncation` with ``u``: a band-limited excitation
+       (:func:`trussid.plid.reduce.balanced_truncation` with ``u``: a band-limited excitation
        leaves the higher-order fit with noise modes outside the band, which an unweighted
        truncation would keep) and ``B`` refitted by output error
-       (:func:`plid.subspace.refit_input_matrix`);
+       (:func:`trussid.plid.subspace.refit_input_matrix`);
     3. that reduced model refined by one PLID pass (``Q = 0``, the :func:`identify`
        refinement) in a rotation basis at its pole frequencies.
 
-    Each stable candidate gets its one-step predictor (:func:`plid.metrics.choose_predictor`)
+    Each stable candidate gets its one-step predictor (:func:`trussid.plid.metrics.choose_predictor`)
     and the one with the best one-step ratio on the *identification* record is returned
     (all candidates have the same number of parameters, so the in-sample ratio compares
     them fairly; no validation data is used). Measured in
@@ -270,10 +270,10 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
         identification one-step ratio [dB], seconds), ``info["chosen"]`` the winner's
         label and ``info["predictor"]`` how its predictor was chosen.
     """
-    from plid.bases import basis_for, model_frequencies
-    from plid.metrics import choose_predictor
-    from plid.reduce import balanced_truncation
-    from plid.subspace import refit_input_matrix
+    from trussid.plid.bases import basis_for, model_frequencies
+    from trussid.plid.metrics import choose_predictor
+    from trussid.plid.reduce import balanced_truncation
+    from trussid.plid.subspace import refit_input_matrix
 
     u = np.atleast_2d(np.asarray(u, dtype=float).T).T
     y = np.atleast_2d(np.asarray(y, dtype=float).T).T

@@ -1,13 +1,13 @@
 """Order-selection help: prediction error and frequency-response change against order.
 
 For each candidate order the data are identified (by default with
-:func:`plid.multipass.identify`; ``method="subspace"`` uses the quick N4SID prior alone)
+:func:`trussid.plid.multipass.identify`; ``method="subspace"`` uses the quick N4SID prior alone)
 and two numbers are tabulated:
 
 - the one-step signal-to-prediction-error ratio [dB] on validation data (the last
   ``holdout`` fraction of the record when no separate validation data are given: the
   model is identified on the rest and its predictor runs through the whole record, scored
-  on the tail only), see :func:`plid.metrics.prediction_ratio_db`;
+  on the tail only), see :func:`trussid.plid.metrics.prediction_ratio_db`;
 - the frequency-response change from the previous order: RMS over the band and over
   every channel of ``20 log10 |H_n / H_prev|`` [dB].
 
@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from plid.canonical import check_order
-from plid.errors import DataError
-from plid.frf import frequency_response
-from plid.metrics import (default_noise_covariances, one_step_predict, prediction_ratio_db,
+from trussid.plid.canonical import check_order
+from trussid.plid.errors import DataError
+from trussid.plid.frf import frequency_response
+from trussid.plid.metrics import (default_noise_covariances, one_step_predict, prediction_ratio_db,
                           predictor_gain)
 
 __all__ = ["OrderRow", "order_table", "format_table", "plot_orders"]
@@ -69,13 +69,13 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
     band : (lo, hi) Hz, optional
         Band of the FRF change; default (1 %, 49 %) of fs.
     method : {"plid", "subspace"}
-        ``"plid"``: :func:`plid.multipass.identify` (subspace start); ``"subspace"``: the
+        ``"plid"``: :func:`trussid.plid.multipass.identify` (subspace start); ``"subspace"``: the
         N4SID prior only (quicker).
     block_rows : int or list, optional
-        N4SID block rows (default: :func:`plid.subspace.subspace_prior` tries several).
+        N4SID block rows (default: :func:`trussid.plid.subspace.subspace_prior` tries several).
     """
-    from plid.multipass import identify
-    from plid.subspace import subspace_prior
+    from trussid.plid.multipass import identify
+    from trussid.plid.subspace import subspace_prior
 
     u = np.atleast_2d(np.asarray(u, dtype=float).T).T
     y = np.atleast_2d(np.asarray(y, dtype=float).T).T
@@ -148,7 +148,7 @@ def plot_orders(rows, path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from trussid.files import atomic_path
+    from trussid._util.files import atomic_path
 
     n = [r.order for r in rows]
     fig, ax = plt.subplots(2, 1, figsize=(6, 5), sharex=True)

@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plid.canonical import ObserverBasis
-from plid.errors import IdentificationError
+from trussid.plid.canonical import ObserverBasis
+from trussid.plid.errors import IdentificationError
 
 __all__ = ["Problem", "psd_factor"]
 

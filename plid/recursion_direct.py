@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg.blas import dgemm
 
-from plid.recursion_common import Problem
+from trussid.plid.recursion_common import Problem
 
 __all__ = ["DirectState", "direct_init", "direct_step", "direct_covariance"]
 

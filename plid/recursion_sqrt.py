@@ -1,6 +1,6 @@
 """PLID recursion in square-root form: the covariance is carried as ``P = L L^T``, never formed.
 
-Same model and moments as :mod:`plid.recursion_direct` (see ``docs/plid.md``); only the
+Same model and moments as :mod:`trussid.plid.recursion_direct` (see ``docs/plid.md``); only the
 arithmetic differs.
 
 - ``L`` is lower triangular with ``z = [theta; x]`` (parameters first), stored in Fortran
@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg.blas import dtrmm
 
-from plid.recursion_common import Problem, psd_factor
+from trussid.plid.recursion_common import Problem, psd_factor
 
 __all__ = ["SqrtState", "sqrt_init", "sqrt_step", "sqrt_covariance"]
 

@@ -20,7 +20,7 @@ import control
 import numpy as np
 import scipy.linalg
 
-from plid.errors import IdentificationError
+from trussid.plid.errors import IdentificationError
 
 __all__ = ["ReductionResult", "hankel_singular_values", "balanced_truncation", "state_covariance"]
 

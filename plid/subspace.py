@@ -20,7 +20,7 @@ import control
 import numpy as np
 import scipy.signal
 
-from plid.errors import DataError, IdentificationError
+from trussid.plid.errors import DataError, IdentificationError
 
 __all__ = ["SubspaceFit", "n4sid", "refit_input_matrix", "subspace_prior"]
 
@@ -154,7 +154,7 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True)
 
     Runs :func:`n4sid` for each candidate block-row count (default 20, 30, 40, 60 and 80,
     at least ``n / p + 1``), takes the D = 0 model, unstable poles reflected
-    (:func:`plid.stabilise.stabilise`), optionally :func:`refit_input_matrix`, and keeps
+    (:func:`trussid.plid.stability.stabilise`), optionally :func:`refit_input_matrix`, and keeps
     the candidate with the smallest output error on the data themselves (no truth used).
 
     Returns
@@ -163,8 +163,8 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True)
     info : dict
         ``{"block_rows": chosen, "candidates": {block_rows: output-error dB}}``.
     """
-    from plid.experiment import simulate
-    from plid.stabilise import stabilise
+    from trussid.plid.experiment import simulate
+    from trussid.plid.stability import stabilise
 
     u = np.atleast_2d(np.asarray(u, dtype=float).T).T
     y = np.atleast_2d(np.asarray(y, dtype=float).T).T

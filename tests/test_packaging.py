@@ -13,7 +13,7 @@ from importlib.metadata import packages_distributions
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("geometry", "fem", "plid", "trussid")
+PACKAGES = ("geometry", "fem", "plid", "trussid")  # source folders (trussid.* when installed)
 
 
 def _imported_top_levels():

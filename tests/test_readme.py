@@ -11,8 +11,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_readme_python_example_runs_as_written(tmp_path, monkeypatch):
     block = re.search(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
-    from fem import testbed_plant
-    from plid.experiment import run_experiment
+    from trussid.testbed import testbed_plant
+    from trussid.plid.experiment import run_experiment
 
     # "u (N x m), y (N x p): measured data at 1600 Hz": channel 1 of the testbed plant
     p = testbed_plant().discrete

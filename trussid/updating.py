@@ -1,7 +1,7 @@
 """FE model updating: the six strut wall thicknesses (and modal damping) from identified modes.
 
-Composition layer over :mod:`fem` (the testbed model, its wall basis and analytic wall
-sensitivities), :mod:`geometry` (the testbed parameters) and :mod:`plid` (the grey-box
+Composition layer over :mod:`trussid.fem` (the testbed model, its wall basis and analytic wall
+sensitivities), :mod:`trussid.geometry` (the testbed parameters) and :mod:`trussid.plid` (the grey-box
 least-squares machinery and the identified models)::
 
     measured modes (f, zeta, shapes at sensors)  ---pairing--->  model modes at walls t
@@ -31,9 +31,9 @@ a global search):
 
 1. *Global*, on a Ritz-reduced model (the lowest modes at the nominal walls and at all walls
    scaled by 0.85 and 1.15 as a basis, carried
-   as a :class:`fem.testbed.WallBasis` so that :func:`fem.testbed.wall_modes` and
-   :func:`fem.sensitivity.eigenvalue_sensitivities` apply unchanged; frequency error about
-   3e-7 relative for walls within +-15 %): :func:`plid.greybox.fit_parameters` with its
+   as a :class:`trussid.testbed.model.WallBasis` so that :func:`trussid.testbed.model.wall_modes` and
+   :func:`trussid.testbed.sensitivity.eigenvalue_sensitivities` apply unchanged; frequency error about
+   3e-7 relative for walls within +-15 %): :func:`trussid.plid.greybox.fit_parameters` with its
    seeded multi-start over the prior box ``nominal * (1 +- prior_range)``, then pairwise
    wall exchanges as further starts (:func:`_global_fit`): each arrangement of walls over
    the equivalent struts is its own local minimum. Exchanges that fit as well as the best
@@ -48,7 +48,7 @@ covariance or the scatter over sub-records, :func:`modes_from_data`), the residu
 of sigma, and the walls' covariance is ``(J^T J)^-1`` in ``ln t`` (known-sigma, normal
 quantile), inflated by the Birge ratio ``sqrt(chi2 / dof)`` when the fit is worse than the
 stated sigmas explain. Without them, residuals are relative frequency errors and the
-intervals are :mod:`plid.greybox`'s (from the residual scatter).
+intervals are :mod:`trussid.plid.greybox`'s (from the residual scatter).
 
 Measured on the bending test below (16000 samples, 40 dB): PLID's covariance gives
 frequency sigmas of about 1e-4 Hz, yet each identified pole sits about 0.005 Hz from the
@@ -82,7 +82,7 @@ import scipy.linalg as la
 import scipy.optimize
 import scipy.stats
 
-from trussid.errors import UserError
+from trussid._util.errors import UserError
 
 __all__ = [
     "UpdateError",
@@ -100,7 +100,7 @@ __all__ = [
     "WALL_NAMES",
 ]
 
-#: Parameter names of the six walls (strut numbering of :mod:`fem.testbed`, 0..5).
+#: Parameter names of the six walls (strut numbering of :mod:`trussid.testbed.model`, 0..5).
 WALL_NAMES = tuple(f"wall{i}" for i in range(6))
 #: Default physical bounds on each wall, as multiples of its nominal value.
 DEFAULT_BOUNDS = (0.5, 1.5)
@@ -180,7 +180,7 @@ class UpdateReport:
     nominal_hz : (k,) float
         Paired model frequencies at the nominal walls (NaN unused).
     labels : list of str
-        Labels of the paired model modes (:func:`fem.labels.label_testbed_modes`), "" unused.
+        Labels of the paired model modes (:func:`trussid.testbed.labels.label_testbed_modes`), "" unused.
     mac : (k,) float or None
         MAC of each pair when shapes were given.
     chi2, dof, birge : float, int, float
@@ -293,13 +293,13 @@ class UpdateReport:
 
 
 def reduced_wall_basis(basis, n_vectors: int = 40, designs=(1.0, 0.85, 1.15)):
-    """A Ritz-reduced copy of a :class:`fem.testbed.WallBasis`.
+    """A Ritz-reduced copy of a :class:`trussid.testbed.model.WallBasis`.
 
     The reduced DOFs are the amplitudes of ``V``: the lowest ``n_vectors`` modes of the
     model at each of ``designs`` (all walls scaled by the factor), orthonormalised. Every
     matrix of the basis is projected, ``V^T B V``, and stored densely (the pattern is all
-    ``(r, c)``), so the public :func:`fem.testbed.wall_modes` and
-    :func:`fem.sensitivity.eigenvalue_sensitivities` work on it unchanged. The basis stays
+    ``(r, c)``), so the public :func:`trussid.testbed.model.wall_modes` and
+    :func:`trussid.testbed.sensitivity.eigenvalue_sensitivities` work on it unchanged. The basis stays
     affine in the tube properties, hence exact in how the walls enter; its only error is
     the Ritz error of the fixed subspace. Modes at the scaled designs are included because
     a strut's bending shape changes with its wall (its share of the adapter mass and
@@ -312,7 +312,7 @@ def reduced_wall_basis(basis, n_vectors: int = 40, designs=(1.0, 0.85, 1.15)):
     V : (n, r) float
         The projection (reduced shapes ``q`` expand to ``V q``).
     """
-    from fem.testbed import wall_matrices
+    from trussid.testbed.model import wall_matrices
 
     k = min(int(n_vectors), basis.n)
     cols = []
@@ -353,8 +353,8 @@ class _ModelModes:
             self._dense = tuple(np.asarray(b).reshape(6, r, r) for b in (basis.KA, basis.KI, basis.MA, basis.MI))
 
     def _sensitivities(self, w, lam, X):
-        from fem.sensitivity import eigenvalue_sensitivities
-        from fem.testbed import tube_property_derivatives
+        from trussid.testbed.sensitivity import eigenvalue_sensitivities
+        from trussid.testbed.model import tube_property_derivatives
 
         if self._dense is None:
             return eigenvalue_sensitivities(self.basis, w, lam, X)
@@ -364,7 +364,7 @@ class _ModelModes:
         return d.T
 
     def __call__(self, walls):
-        from fem.testbed import wall_modes
+        from trussid.testbed.model import wall_modes
 
         w = np.asarray(walls, float)
         key = w.tobytes()
@@ -381,10 +381,10 @@ class _ModelModes:
 def model_modes(tbm, walls, n_modes: int = 40):
     """Frequencies [Hz] and ``d f / d t`` [Hz/m] of a testbed model at ``walls`` (full model).
 
-    A thin convenience over :func:`fem.testbed.wall_modes` and
-    :func:`fem.sensitivity.eigenvalue_sensitivities`.
+    A thin convenience over :func:`trussid.testbed.model.wall_modes` and
+    :func:`trussid.testbed.sensitivity.eigenvalue_sensitivities`.
     """
-    from fem.testbed import wall_basis
+    from trussid.testbed.model import wall_basis
 
     f, dfdt, _ = _ModelModes(wall_basis(tbm), n_modes, None)(walls)
     return f, dfdt
@@ -505,7 +505,7 @@ def modes_of_model(sys, band=None, *, max_damping: float = 0.2, min_damping: flo
         Drop modes damped less than this (default: unstable poles, which no structure has).
     theta_cov : (n (p + m), n (p + m)) array, optional
         Posterior covariance of a PLID model's ``theta = [vec(Abar); vec(B)]``
-        (:class:`plid.estimator.PLIDResult`, where ``A = F + Abar C`` with ``F``, ``C``
+        (:class:`trussid.plid.estimator.PLIDResult`, where ``A = F + Abar C`` with ``F``, ``C``
         fixed): gives first-order standard deviations of frequency and damping. With
         right/left eigenvectors ``v``, ``w`` of ``A``, ``d z = w^H dAbar C v / (w^H v)``,
         then ``s = ln z / dt``, ``f = |s| / 2 pi``, ``zeta = -Re s / |s|``.
@@ -575,7 +575,7 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
                     identify_kwargs=None):
     """Identify a model with PLID and extract its strongest modes, with uncertainties.
 
-    The record is identified with :func:`plid.multipass.identify`; its ``n_modes``
+    The record is identified with :func:`trussid.plid.multipass.identify`; its ``n_modes``
     strongest modes in ``band`` are the estimates. Their standard deviations come from
 
     - ``uncertainty="plid"``: PLID's posterior parameter covariance, propagated to each
@@ -600,7 +600,7 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
     n_segments : int
     max_damping : float
     identify_kwargs : dict, optional
-        Passed to :func:`plid.multipass.identify` (default here ``form="sqrt"``).
+        Passed to :func:`trussid.plid.multipass.identify` (default here ``form="sqrt"``).
 
     Returns
     -------
@@ -611,8 +611,8 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
     """
     import warnings
 
-    from plid.estimator import PLIDWarning
-    from plid.multipass import identify
+    from trussid.plid.estimator import PLIDWarning
+    from trussid.plid.multipass import identify
 
     if uncertainty not in ("plid", "segments", "none"):
         raise UpdateError(f"uncertainty must be 'plid', 'segments' or 'none', got {uncertainty!r}")
@@ -681,7 +681,7 @@ def strut_sensors(tbm, quantity: str = "acceleration", sensitivity: float = 1.0)
     local ``y`` (horizontal, normal to its bipod plane: the plane the anti-phase wafers on
     the ``+-y`` faces bend). Massless (a non-contact probe, or an accelerometer light
     enough to neglect): the model is unchanged. Output names ``strut0`` ... ``strut5``."""
-    from fem.sensors import Sensor
+    from trussid.fem.sensors import Sensor
 
     mp = tbm.map
     mid = int(np.argmin(np.abs(mp.strut_s - 0.5 * mp.strut_s[-1])))
@@ -692,7 +692,7 @@ def strut_sensors(tbm, quantity: str = "acceleration", sensitivity: float = 1.0)
 def bending_experiment_plant(tb=None, *, tbm=None, damping=None, n_modes: int | None = None):
     """The identification experiment used for updating: wafers in bending, sensors on struts.
 
-    The lab plant (:func:`fem.testbed_plant.testbed_plant`) drives the struts in extension
+    The lab plant (:func:`trussid.testbed.plant.testbed_plant`) drives the struts in extension
     and senses at the UDF: the strut bending modes, which carry the wall information, are
     nearly invisible in it. This experiment drives all six struts' wafer pairs in
     anti-phase (``arrangement="bending"``) from one D/A channel, through the lab's
@@ -717,10 +717,10 @@ def bending_experiment_plant(tb=None, *, tbm=None, damping=None, n_modes: int | 
     modes : fem.modal.Modes
         The structure's modes (all computed).
     """
-    from fem.lab import lab_plant
-    from fem.plant import modal_plant
-    from fem.testbed import build_testbed, solve_testbed_modes
-    from fem.testbed_plant import channel_loads, lab_chain_of
+    from trussid.testbed.chain import lab_plant
+    from trussid.fem.plant import modal_plant
+    from trussid.testbed.model import build_testbed, solve_testbed_modes
+    from trussid.testbed.plant import channel_loads, lab_chain_of
 
     tbm = build_testbed(tb) if tbm is None else tbm
     tb = tbm.testbed
@@ -804,12 +804,12 @@ def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence, know
     pairwise exchange of the current estimate is therefore tried as a start, and the best
     fit kept, until no exchange improves the fit.
 
-    Returns the best :class:`plid.greybox.GreyboxReport`, the accepted swaps, and the
+    Returns the best :class:`trussid.plid.greybox.GreyboxReport`, the accepted swaps, and the
     exchanges whose refitted cost is statistically as good as the best (likelihood-ratio
     threshold; with unknown sigma, the residual variance of the best fit): an arrangement
     the data cannot decide.
     """
-    from plid.greybox import fit_parameters
+    from trussid.plid.greybox import fit_parameters
 
     bnds = {n: (a, b) for n, a, b in zip(WALL_NAMES, lo, hi)}
     best = fit_parameters(residual, initial, bounds=bnds, jac=jac, n_starts=n_starts, seed=seed,
@@ -907,7 +907,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     labels : bool
         Label the paired modes (builds the model at the updated walls: ~1 s).
     threads : int or None
-        BLAS threads during the fits (:func:`trussid.threads.blas_threads`; None leaves
+        BLAS threads during the fits (:func:`trussid._util.threads.blas_threads`; None leaves
         the setting). One by default: the fits are thousands of small eigen-solutions,
         which threads only slow down (measured on the loaded 2-core machine: the
         exact-frequency test took 21 s with two threads, 3 s with one).
@@ -923,11 +923,11 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         without sensors, fewer modes than can determine the walls, no measured mode
         reachable by the model.
     """
-    from fem.sensors import sensor_matrix
-    from fem.testbed import build_testbed, wall_basis, wall_modes
-    from geometry.testbed import Testbed
-    from plid.greybox import fit_parameters
-    from trussid.threads import blas_threads
+    from trussid.fem.sensors import sensor_matrix
+    from trussid.testbed.model import build_testbed, wall_basis, wall_modes
+    from trussid.geometry.spec import Testbed
+    from trussid.plid.greybox import fit_parameters
+    from trussid._util.threads import blas_threads
 
     f_all = _vector("measured_freqs_hz", measured_freqs_hz, np.size(measured_freqs_hz))
     k_all = f_all.size
@@ -1115,8 +1115,8 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
             mac_all[idx_used] = mac[np.arange(k), j]
         lab = [""] * k_all
         if labels:
-            from fem.labels import label_testbed_modes
-            from fem.testbed import solve_testbed_modes
+            from trussid.testbed.labels import label_testbed_modes
+            from trussid.testbed.model import solve_testbed_modes
 
             tbm_u = build_testbed(tb.with_walls(tuple(float(x) for x in walls)),
                                   elements_per_segment=tbm.elements_per_segment)

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fem.assembly import assemble
-from fem.modal import solve_modes
+from trussid.fem.assembly import assemble
+from trussid.fem.modal import solve_modes
 
 ROOT = Path(__file__).resolve().parents[2]
 

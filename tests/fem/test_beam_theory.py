@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from fem import ALUMINIUM, Model, Section
-from fem.modal import solve_modes
+from trussid.fem import ALUMINIUM, Model, Section
+from trussid.fem.modal import solve_modes
 
 L_BEAM = 2.5  # m; slender: length / radius of gyration ~ 180
 TUBE = Section.tube(0.02, 0.001, name="thin tube")  # t / r = 0.05

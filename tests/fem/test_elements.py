@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from fem import ModelError
-from fem.constraints import rigid_body_modes
-from fem.elements import frame_matrices, local_axes
+from trussid.fem import ModelError
+from trussid.fem.constraints import rigid_body_modes
+from trussid.fem.elements import frame_matrices, local_axes
 
 E, G, RHO = 70e9, 26e9, 2700.0
 A, IY, IZ, J, ASY, ASZ = 3.0e-4, 2.0e-8, 5.0e-8, 4.5e-8, 2.5e-4, 1.5e-4

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from fem import ALUMINIUM, STEEL, Model, Section
-from fem.assembly import assemble
-from fem.modal import solve_modes
+from trussid.fem import ALUMINIUM, STEEL, Model, Section
+from trussid.fem.assembly import assemble
+from trussid.fem.modal import solve_modes
 
 TUBE = Section.tube(0.012, 0.0015, name="strut")
 BOX = Section.box(0.03, 0.02, 0.002, name="box")
@@ -61,7 +61,7 @@ def test_free_free_frame_has_exactly_six_rigid_body_modes(method):
 def test_rigid_body_modes_are_rigid_motions_and_flexible_modes_are_not():
     m = frame_3d()
     modes = solve_modes(m, 8)
-    from fem.modal import _is_rigid  # the classifier, checked here against the definition
+    from trussid.fem.modal import _is_rigid  # the classifier, checked here against the definition
 
     u = modes.shapes_full
     assert _is_rigid(m.xyz, u[:, :6]).all() and not _is_rigid(m.xyz, u[:, 6:]).any()
@@ -191,7 +191,7 @@ def test_spd_factor_solves_and_reports_pivots_in_dof_order(grouped):
     last; every pivot is positive and at most its diagonal entry."""
     import scipy.sparse as sp
 
-    from fem.modal import SPDFactor
+    from trussid.fem.modal import SPDFactor
 
     B = sp.random(80, 80, density=0.05, random_state=3)
     A = (B @ B.T + sp.diags(np.linspace(1.0, 9.0, 80))).tocsr()

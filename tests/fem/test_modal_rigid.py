@@ -9,9 +9,9 @@ zeros.
 import numpy as np
 import pytest
 
-from fem import ALUMINIUM, Model, Section
-from fem.assembly import assemble
-from fem.modal import eigenvalue_scale, rigid_null_dimension, solve_modes
+from trussid.fem import ALUMINIUM, Model, Section
+from trussid.fem.assembly import assemble
+from trussid.fem.modal import eigenvalue_scale, rigid_null_dimension, solve_modes
 
 
 def stiff_beam(n=20, length=0.2, springs=None):

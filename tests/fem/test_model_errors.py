@@ -6,11 +6,11 @@
 import numpy as np
 import pytest
 
-from fem import ALUMINIUM, Material, Model, ModelError, Section
-from fem.assembly import assemble
-from fem.modal import solve_modes
-from fem.static import solve_static
-from trussid.errors import UserError
+from trussid.fem import ALUMINIUM, Material, Model, ModelError, Section
+from trussid.fem.assembly import assemble
+from trussid.fem.modal import solve_modes
+from trussid.fem.static import solve_static
+from trussid._util.errors import UserError
 
 TUBE = Section.tube(0.01, 0.001, name="strut tube")
 GOOD_SECTION = {"A": 1e-4, "Iy": 1e-9, "Iz": 2e-9, "J": 3e-9, "Asy": 5e-5, "Asz": 5e-5}

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fem import Model, ModelError, Section
-from fem.materials import Material
-from fem.modal import solve_modes
-from fem.nastran import read_bdf, write_bdf
+from trussid.fem import Model, ModelError, Section
+from trussid.fem.materials import Material
+from trussid.fem.modal import solve_modes
+from trussid.fem.nastran import read_bdf, write_bdf
 
 FRAME = Path(__file__).resolve().parents[2] / "examples" / "decks" / "frame.bdf"
 BETA_L = (1.8751040687119611, 4.694091132974174)  # cantilever eigenvalues beta_n L

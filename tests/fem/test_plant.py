@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 import scipy.linalg as la
 
-from fem import ALUMINIUM, Model, ModelError, Section
-from fem.actuators import Wafer, strain_actuator_loads
-from fem.assembly import assemble
-from fem.lab import LabChain, lab_plant
-from fem.modal import solve_modes
-from fem.plant import modal_plant, residual_flexibility
-from fem.sensors import Sensor, sensor_matrix
-from fem.static import solve_static
+from trussid.fem import ALUMINIUM, Model, ModelError, Section
+from trussid.fem.actuators import Wafer, strain_actuator_loads
+from trussid.fem.assembly import assemble
+from trussid.testbed.chain import LabChain, lab_plant
+from trussid.fem.modal import solve_modes
+from trussid.fem.plant import modal_plant, residual_flexibility
+from trussid.fem.sensors import Sensor, sensor_matrix
+from trussid.fem.static import solve_static
 
 INCH = 0.0254
 WAFER = Wafer(width=1.0 * INCH, length=2.0 * INCH, thickness=0.02 * INCH,

@@ -21,10 +21,10 @@ import pytest
 
 pv = pytest.importorskip("pyvista")
 
-from fem import render  # noqa: E402
-from fem.materials import ALUMINIUM  # noqa: E402
-from fem.model import Model  # noqa: E402
-from fem.sections import Section  # noqa: E402
+from trussid.fem import render  # noqa: E402
+from trussid.fem.materials import ALUMINIUM  # noqa: E402
+from trussid.fem.model import Model  # noqa: E402
+from trussid.fem.sections import Section  # noqa: E402
 from trussid.cli import main as cli_main  # noqa: E402
 
 DATA = Path(__file__).parent / "data"
@@ -266,7 +266,7 @@ def test_grid_shows_the_first_modes_side_by_side(tri, tmp_path):
 def test_rendering_needs_no_x_server_and_uses_osmesa(tmp_path):
     script = textwrap.dedent("""
         import numpy as np, pyvista as pv
-        from fem import render
+        from trussid.fem import render
         with render.offscreen_backend():
             p = pv.Plotter(off_screen=True, window_size=(64, 48))
             p.add_mesh(pv.Sphere())
@@ -368,7 +368,7 @@ def clamped_struts(lengths, n_el=8):
 
 
 def test_fe_strut_bending_mode_shows_that_strut_deflected_most():
-    from fem.modal import solve_modes
+    from trussid.fem.modal import solve_modes
 
     lengths = [0.9, 0.6, 0.75]
     model, sec = clamped_struts(lengths)
@@ -399,17 +399,19 @@ def test_fe_strut_bending_mode_shows_that_strut_deflected_most():
 def testbed():
     """The default testbed's model, its first 18 modes (6 suspension, 12 strut bending),
     their labels and its solids as decorations."""
-    testbed_mod = pytest.importorskip("fem.testbed")
+    testbed_mod = pytest.importorskip("trussid.testbed.model")
 
     tbm = testbed_mod.build_testbed()
     modes = testbed_mod.solve_testbed_modes(tbm, 18)
     try:
-        from fem.labels import label_testbed_modes
+        from trussid.testbed.labels import label_testbed_modes
 
         labels = label_testbed_modes(tbm, modes).labels
     except ImportError:
         labels = None
-    return tbm, modes, labels, render.testbed_decorations(tbm)
+    from trussid.testbed.render import testbed_decorations
+
+    return tbm, modes, labels, testbed_decorations(tbm)
 
 
 def test_testbed_png_has_the_requested_size_and_differs_from_the_undeformed(testbed, tmp_path):
@@ -431,6 +433,8 @@ def test_testbed_png_has_the_requested_size_and_differs_from_the_undeformed(test
 
 
 def test_testbed_solids_are_attached_to_their_nodes_and_wafers_have_their_own_colour(testbed):
+    from trussid.testbed.render import PART_COLOURS
+
     tbm, _, _, decorations = testbed
     by_name = {d.name: d for d in decorations}
     mp = tbm.map
@@ -446,7 +450,7 @@ def test_testbed_solids_are_attached_to_their_nodes_and_wafers_have_their_own_co
         assert lo <= int(np.flatnonzero(mp.strut_nodes[i] == adapter.node)[0]) <= hi
         wafers = [d for name, d in by_name.items() if name.startswith(f"strut {i} wafer")]
         assert len(wafers) == tbm.testbed.pzt.wafers_per_strut
-        assert all(w.color == render.PART_COLOURS["wafer"] and w.node == adapter.node for w in wafers)
+        assert all(w.color == PART_COLOURS["wafer"] and w.node == adapter.node for w in wafers)
 
 
 def test_a_solid_without_a_node_is_named_in_the_error():
@@ -621,7 +625,7 @@ def test_cli_unknown_extension_is_a_one_line_error(deck, tmp_path, capsys, name)
 
 
 def test_cli_draws_a_loaded_testbed_with_its_solids_and_labels(testbed):
-    from trussid.commands.render import _decorations_and_labels
+    from trussid.cli.commands.render import _decorations_and_labels
 
     tbm, modes, labels, decorations = testbed
     for loaded in (SimpleNamespace(model=tbm.model, info=tbm), tbm):
@@ -634,8 +638,8 @@ def test_cli_draws_a_loaded_testbed_with_its_solids_and_labels(testbed):
 
 
 def test_cli_renders_the_default_testbed_without_a_model_argument(tmp_path, capsys):
-    from trussid.commands.modes import load_model
-    from trussid.errors import UserError
+    from trussid.cli.commands.modes import load_model
+    from trussid._util.errors import UserError
 
     try:
         load_model(None)

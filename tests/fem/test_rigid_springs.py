@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from fem import ALUMINIUM, Model, Section
-from fem.assembly import assemble
-from fem.modal import solve_modes
+from trussid.fem import ALUMINIUM, Model, Section
+from trussid.fem.assembly import assemble
+from trussid.fem.modal import solve_modes
 
 
 def analytic_mass_about(m, c, I_cg):

@@ -7,8 +7,8 @@ the tolerance is round-off: 1e-10 relative.
 import numpy as np
 import pytest
 
-from fem import ALUMINIUM, Model, ModelError, Section
-from fem.static import solve_static
+from trussid.fem import ALUMINIUM, Model, ModelError, Section
+from trussid.fem.static import solve_static
 
 SEC = Section.general(A=3.1e-4, Iy=2.2e-8, Iz=5.3e-8, J=6.0e-8, Asy=1.9e-4, Asz=2.4e-4, name="bar")
 AXIS = np.array([0.6, -0.48, 0.64])  # unit, skew

@@ -4,8 +4,8 @@ import math
 
 import pytest
 
-from geometry.errors import ParameterError
-from geometry.flywheel import (
+from trussid.geometry.errors import ParameterError
+from trussid.geometry.flywheel import (
     Flywheel,
     flywheel_inertia,
     flywheel_inertia_closed_form,

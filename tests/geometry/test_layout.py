@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from geometry.layout import testbed_layout
-from geometry.testbed import Testbed
+from trussid.geometry.layout import testbed_layout
+from trussid.geometry.spec import Testbed
 
 IN = 0.0254  # the thesis's unit, written out independently of geometry.testbed.INCH
 

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from geometry.errors import ParameterError
-from geometry.params_toml import dumps_testbed, load_testbed, save_testbed, testbed_from_dict
-from geometry.testbed import Testbed
+from trussid.geometry.errors import ParameterError
+from trussid.geometry.params_toml import dumps_testbed, load_testbed, save_testbed, testbed_from_dict
+from trussid.geometry.spec import Testbed
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "testbed.toml"
 

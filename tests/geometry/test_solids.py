@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from geometry.errors import ParameterError
-from geometry.layout import testbed_layout
-from geometry.solids import (bored_block_mesh, base_rigid_body, mass_properties, strut_solids,
+from trussid.geometry.errors import ParameterError
+from trussid.geometry.layout import testbed_layout
+from trussid.geometry.solids import (bored_block_mesh, base_rigid_body, mass_properties, strut_solids,
                              testbed_solids, udf_frame_mesh_local, udf_rigid_body, udf_solid)
-from geometry.testbed import Testbed
+from trussid.geometry.spec import Testbed
 
 IN = 0.0254
 LB = 0.45359237

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from plid.bases import (band_frequencies, basis_for, conversion_condition, data_frequencies,
+from trussid.plid.bases import (band_frequencies, basis_for, conversion_condition, data_frequencies,
                         model_frequencies, rotation_basis, to_basis)
-from plid.canonical import to_matrices
-from plid.errors import IdentificationError
-from plid.frf import frequency_response
+from trussid.plid.canonical import to_matrices
+from trussid.plid.errors import IdentificationError
+from trussid.plid.frf import frequency_response
 
 FS = 1600.0
 
@@ -101,7 +101,7 @@ def test_rotation_basis_is_far_better_conditioned_than_the_shift_form():
     # 24 states, 3 outputs, 0.25 % damping: the regime of docs/plid.md "Beyond 12 states"
     f = np.geomspace(45, 360, 12)
     plant = modal_plant(f, 0.0025, 1, 3, seed=6)
-    from plid.canonical import ObserverBasis, from_statespace
+    from trussid.plid.canonical import ObserverBasis, from_statespace
 
     _, Ts = from_statespace(plant, ObserverBasis.shift(24, 3))
     cond_rot = conversion_condition(plant, basis_for(24, 3, FS, model_frequencies(plant, 12, FS)))
@@ -149,7 +149,7 @@ def test_conversion_refuses_a_feedthrough_term():
 
 
 def test_selector_coordinates_give_the_same_model_and_a_selector_C():
-    from plid.bases import as_selector
+    from trussid.plid.bases import as_selector
 
     plant = modal_plant([60, 140, 230, 330, 420, 510], 0.01, 1, 3, seed=12)
     basis = basis_for(12, 3, FS, band_frequencies(6, (40, 600)))

@@ -4,10 +4,10 @@ import control
 import numpy as np
 import pytest
 
-from plid.arx import arx_observer_form
-from plid.canonical import (ObserverBasis, check_order, from_statespace, join_theta,
+from tests.plid.arx import arx_observer_form
+from trussid.plid.canonical import (ObserverBasis, check_order, from_statespace, join_theta,
                             split_theta, to_statespace)
-from plid.errors import IdentificationError
+from trussid.plid.errors import IdentificationError
 
 
 def _freqresp(sys, w):

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from plid.datafile import IOData, check_enough_samples, read_data, with_channels, write_data
-from plid.errors import DataError
+from trussid.plid.datafile import IOData, check_enough_samples, read_data, with_channels, write_data
+from trussid.plid.errors import DataError
 
 
 @pytest.fixture

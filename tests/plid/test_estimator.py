@@ -4,10 +4,10 @@ import control
 import numpy as np
 import pytest
 
-from plid.arx import arx_observer_form
-from plid.canonical import ObserverBasis, from_statespace
-from plid.errors import DataError, IdentificationError
-from plid.estimator import PLID
+from tests.plid.arx import arx_observer_form
+from trussid.plid.canonical import ObserverBasis, from_statespace
+from trussid.plid.errors import DataError, IdentificationError
+from trussid.plid.estimator import PLID
 
 
 def _rel(a, b):
@@ -215,7 +215,7 @@ def test_bad_options_are_refused(kwargs, match):
 
 
 def test_blas_threads_are_limited_during_the_recursion_and_restored():
-    from trussid.threads import blas_thread_counts, blas_threads
+    from trussid._util.threads import blas_thread_counts, blas_threads
 
     before = blas_thread_counts()
     if not before:

@@ -4,8 +4,8 @@ import control
 import numpy as np
 import pytest
 
-from plid.errors import DataError
-from plid.experiment import EXCITATIONS, excitation, lsb, quantize, run_experiment, simulate
+from trussid.plid.errors import DataError
+from trussid.plid.experiment import EXCITATIONS, excitation, lsb, quantize, run_experiment, simulate
 
 FS = 1000.0
 

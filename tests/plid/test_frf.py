@@ -4,9 +4,9 @@ import control
 import numpy as np
 import pytest
 
-from plid.errors import DataError
-from plid.experiment import run_experiment, simulate
-from plid.frf import frequency_response, h1, h2, stepped_sine
+from trussid.plid.errors import DataError
+from trussid.plid.experiment import run_experiment, simulate
+from trussid.plid.frf import frequency_response, h1, h2, stepped_sine
 
 FS = 1000.0
 

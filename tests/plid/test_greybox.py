@@ -14,8 +14,8 @@ import scipy.linalg
 import scipy.signal
 import scipy.stats
 
-from plid.errors import DataError
-from plid.greybox import Constraint, fit_greybox, fit_parameters, simulate
+from trussid.plid.errors import DataError
+from trussid.plid.greybox import Constraint, fit_greybox, fit_parameters, simulate
 
 
 @pytest.fixture

@@ -4,10 +4,10 @@ import control
 import numpy as np
 import pytest
 
-from plid.errors import DataError
-from plid.experiment import run_experiment, simulate
-from plid.frf import FRF, frequency_response
-from plid.metrics import (compare_poles, frf_error, modal_parameters, one_step_predict,
+from trussid.plid.errors import DataError
+from trussid.plid.experiment import run_experiment, simulate
+from trussid.plid.frf import FRF, frequency_response
+from trussid.plid.metrics import (compare_poles, frf_error, modal_parameters, one_step_predict,
                           prediction_ratio_db, predictor_gain, simulation_fit)
 
 FS = 1000.0

@@ -4,8 +4,8 @@ import control
 import numpy as np
 import pytest
 
-from plid.errors import DataError
-from plid.modelfile import FORMAT_VERSION, is_model_file, load_model, save_model
+from trussid.plid.errors import DataError
+from trussid.plid.modelfile import FORMAT_VERSION, is_model_file, load_model, save_model
 
 
 @pytest.fixture

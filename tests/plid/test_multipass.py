@@ -6,11 +6,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from plid.errors import IdentificationError
-from plid.frf import frequency_response
-from plid.metrics import frf_error
-from plid.multipass import Pass, identify, multipass
-from plid.subspace import n4sid, refit_input_matrix
+from trussid.plid.errors import IdentificationError
+from trussid.plid.frf import frequency_response
+from trussid.plid.metrics import frf_error
+from trussid.plid.multipass import Pass, identify, multipass
+from trussid.plid.subspace import n4sid, refit_input_matrix
 
 FS = 1600.0
 
@@ -77,7 +77,7 @@ def test_scratch_multipass_converges_on_noiseless_data(simo):
 
 def test_a_pass_started_at_the_truth_with_a_tight_prior_stays_there(simo):
     u, y = data(simo, 600, seed=5)
-    from plid.bases import basis_for, model_frequencies
+    from trussid.plid.bases import basis_for, model_frequencies
 
     basis = basis_for(6, 2, FS, model_frequencies(simo, 3, FS))
     res, hist = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-8)] * 2, basis=basis,
@@ -110,7 +110,7 @@ def test_too_short_a_record_for_a_subspace_prior_says_to_start_from_scratch(simo
 def test_thesis_scale_simo_subspace_start_beats_n4sid_in_simulation(full):
     """Case (a) of issue 6 (reduced: 6 modes, 4000 samples): 1 in 3 out, modes at 0.25 %,
     acceleration outputs with zero feed-through, 60 dB; noise-free validation record."""
-    from plid.metrics import simulation_fit
+    from trussid.plid.metrics import simulation_fit
 
     n_modes, n_samples = (12, 10000) if full else (6, 4000)
     rng = np.random.default_rng(21)
@@ -145,7 +145,7 @@ def test_thesis_scale_simo_subspace_start_beats_n4sid_in_simulation(full):
 
 
 def test_default_via_orders_are_multiples_of_the_outputs_above_the_order():
-    from plid.multipass import default_via
+    from trussid.plid.multipass import default_via
 
     assert default_via(30, 3) == (60, 72)
     assert default_via(36, 3) == (72, 87)
@@ -156,8 +156,8 @@ def test_identify_reduced_returns_the_candidate_with_the_best_identification_pre
     # More modes (6) than the model holds (4 states): every candidate is an approximation,
     # and the recipe must return the one whose one-step prediction on the identification
     # record is best, with that predictor, and never look at other data.
-    from plid.metrics import prediction_ratio_db
-    from plid.multipass import identify_reduced
+    from trussid.plid.metrics import prediction_ratio_db
+    from trussid.plid.multipass import identify_reduced
 
     plant = modal_plant([70.0, 150.0, 260.0, 380.0, 520.0, 690.0], 0.01, 1, 2, seed=3)
     u, y = data(plant, 3000, snr_db=50, seed=4)
@@ -178,7 +178,7 @@ def test_identify_reduced_returns_the_candidate_with_the_best_identification_pre
 
 
 def test_identify_reduced_refuses_via_orders_that_do_not_reduce(simo):
-    from plid.multipass import identify_reduced
+    from trussid.plid.multipass import identify_reduced
 
     u, y = data(simo, 500)
     with pytest.raises(IdentificationError, match="via orders"):
@@ -189,7 +189,7 @@ def test_identify_reduced_refuses_via_orders_that_do_not_reduce(simo):
 
 def test_identify_reduced_survives_a_failed_candidate_and_names_total_failure(simo,
                                                                               monkeypatch):
-    import plid.multipass as mp
+    import trussid.plid.multipass as mp
 
     u, y = data(simo, 2000, snr_db=60, seed=5)
     real = mp.identify

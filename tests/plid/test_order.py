@@ -4,8 +4,8 @@ import control
 import numpy as np
 import pytest
 
-from plid.errors import IdentificationError
-from plid.order import format_table, order_table, plot_orders
+from trussid.plid.errors import IdentificationError
+from trussid.plid.order import format_table, order_table, plot_orders
 
 FS = 1600.0
 

@@ -5,11 +5,11 @@ import warnings
 import numpy as np
 import pytest
 
-from plid.canonical import ObserverBasis
-from plid.estimator import PLID, PLIDWarning
-from plid.recursion_common import Problem
-from plid.recursion_direct import direct_init, direct_step
-from plid.recursion_sqrt import sqrt_covariance, sqrt_init, sqrt_step
+from trussid.plid.canonical import ObserverBasis
+from trussid.plid.estimator import PLID, PLIDWarning
+from trussid.plid.recursion_common import Problem
+from trussid.plid.recursion_direct import direct_init, direct_step
+from trussid.plid.recursion_sqrt import sqrt_covariance, sqrt_init, sqrt_step
 
 
 def _one_step_monte_carlo(pb, z0, P0, u, y, rng, n_draws):

@@ -4,8 +4,8 @@ import control
 import numpy as np
 import pytest
 
-from plid.errors import IdentificationError
-from plid.reduce import balanced_truncation, hankel_singular_values
+from trussid.plid.errors import IdentificationError
+from trussid.plid.reduce import balanced_truncation, hankel_singular_values
 
 Z = np.exp(1j * np.linspace(0, np.pi, 600))
 
@@ -76,7 +76,7 @@ def test_state_covariance_under_white_input_tends_to_the_controllability_gramian
     # state driven by unit white noise. Sampling spread of a 200000-sample estimate of a
     # 0.02-damped state's variance: correlation time ~ 1/(2 pi zeta f dt) ~ 40 samples,
     # relative std ~ sqrt(2 * 40 / 2e5) = 2 %; allow 10 % of the largest entry.
-    from plid.reduce import state_covariance
+    from trussid.plid.reduce import state_covariance
 
     A, B = np.asarray(stable_plant.A), np.asarray(stable_plant.B)
     u = rng.standard_normal((200_000, B.shape[1]))
@@ -97,7 +97,7 @@ def test_input_weighting_keeps_the_mode_the_input_excites(modal_plant, rng):
     # weighted by the input it keeps 100 Hz, the mode that carries the response.
     import scipy.signal
 
-    from plid.metrics import modal_parameters
+    from trussid.plid.metrics import modal_parameters
 
     plant = modal_plant([100.0, 600.0], [0.01, 0.01], 1, 1, 1600, rng)
     A, B, C = (np.asarray(M) for M in (plant.A, plant.B, plant.C))

@@ -1,0 +1,38 @@
+"""The public API: every exported name resolves, and importing a package stays light."""
+
+import importlib
+import subprocess
+import sys
+
+import pytest
+
+PUBLIC = ["trussid.fem", "trussid.plid", "trussid.geometry", "trussid.testbed", "trussid.campaign"]
+
+
+@pytest.mark.parametrize("package", PUBLIC)
+def test_every_exported_name_resolves(package):
+    module = importlib.import_module(package)
+    for name in module.__all__:
+        assert getattr(module, name) is not None
+    assert set(module.__all__) <= set(dir(module))
+    with pytest.raises(AttributeError, match="no attribute 'no_such_name'"):
+        getattr(module, "no_such_name")
+
+
+def test_importing_the_packages_loads_no_heavy_dependency():
+    code = ("import sys, trussid.fem, trussid.geometry, trussid.plid, trussid.testbed, trussid.cli; "
+            "print(sorted(m for m in ('control', 'trimesh', 'vtk', 'pyvista', 'pyNastran', 'matplotlib') "
+            "if m in sys.modules))")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert res.stdout.strip() == "[]"
+
+
+@pytest.mark.parametrize("package", PUBLIC)
+def test_no_submodule_is_named_like_an_export(package):
+    """A submodule named like a function it exports would shadow the function once imported."""
+    module = importlib.import_module(package)
+    path = module.__path__[0]
+    import pkgutil
+
+    submodules = {m.name for m in pkgutil.iter_modules([path])}
+    assert submodules.isdisjoint(module.__all__)

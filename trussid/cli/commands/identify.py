@@ -1,0 +1,229 @@
+"""``trussid identify DATA --order N --out MODEL.npz``: PLID on a data file.
+
+Reads CSV/NPZ/MAT data (:mod:`trussid.plid.datafile`), runs :class:`trussid.plid.estimator.PLID` in batch,
+writes the identified discrete model with its one-step predictor gain K
+(:mod:`trussid.plid.modelfile`) and reports the identified poles and the one-step
+signal-to-prediction-error ratio of the final model on the same data (after a burn-in, see
+:func:`prediction_burn_in`; definitions in :mod:`trussid.plid.metrics`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+import warnings
+
+import numpy as np
+
+# plid (and through it python-control and scipy.signal) is imported inside the functions:
+# it takes seconds, and `trussid --help` imports every command module.
+
+
+def json_safe(obj):
+    """Replace non-finite floats (which JSON cannot hold) by None, recursively."""
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.ndarray):
+        return json_safe(obj.tolist())
+    return obj
+
+
+def names_arg(values):
+    """``--inputs a b`` and ``--inputs a,b`` both give ['a', 'b']."""
+    if values is None:
+        return None
+    out = [s.strip() for v in values for s in v.split(",") if s.strip()]
+    return out or None
+
+
+def prediction_burn_in(n_samples: int, order: int) -> int:
+    """Samples left out of the prediction ratio while the predictor forgets x0 = 0:
+    10 states' worth of samples per state (10 n), at most a tenth of the record."""
+    return int(min(10 * order, n_samples // 10))
+
+
+def via_arg(text, order: int, p: int, start: str):
+    """``--via``: None, ``auto`` (:func:`trussid.plid.multipass.default_via`) or a comma list."""
+    from trussid.plid.errors import DataError
+    from trussid.plid.multipass import default_via
+
+    if text is None:
+        return None
+    if start == "plain":
+        raise DataError("--via works with --start subspace or scratch, not plain")
+    if text.strip().lower() == "auto":
+        return default_via(order, p)
+    try:
+        orders = tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise DataError(f"--via {text!r}: give 'auto' or comma-separated orders, "
+                        "e.g. 60,72") from None
+    bad = [h for h in orders if h <= order or h % p]
+    if not orders or bad:
+        raise DataError(f"--via {text!r}: orders must exceed --order {order} and be "
+                        f"multiples of the {p} outputs")
+    return orders
+
+
+def pole_table(sys_) -> list[dict]:
+    """Frequency [Hz] and damping of each pole (one per complex pair) of ``sys_``."""
+    from trussid.plid.metrics import modal_parameters
+
+    f, z, _ = modal_parameters(sys_)
+    return [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(f, z)]
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "identify", help="identify a state-space model from input/output data with PLID",
+        description="Identify a discrete state-space model of order N from a data file "
+        "(CSV with u*/y* columns and optional time column t, or NPZ/MAT with u, y, fs) by "
+        "PLID, and write it as a model file with its one-step predictor gain. Noise "
+        "covariances are in units of the data scaled to unit RMS per channel.")
+    p.add_argument("data", metavar="DATA", help="data file: .csv, .npz or .mat")
+    p.add_argument("--order", type=int, required=True, metavar="N",
+                   help="model order (number of states; a multiple of the number of outputs)")
+    p.add_argument("--out", required=True, metavar="MODEL.npz", help="output model file")
+    p.add_argument("--fs", type=float, metavar="HZ",
+                   help="sampling frequency, if the file has neither fs nor a time column")
+    p.add_argument("--inputs", nargs="+", metavar="NAME",
+                   help="input columns/channels to use (names; space or comma separated)")
+    p.add_argument("--outputs", nargs="+", metavar="NAME",
+                   help="output columns/channels to use")
+    p.add_argument("--start", choices=("subspace", "scratch", "plain"), default="subspace",
+                   help="subspace (default): a quick N4SID estimate (D = 0) refined by one "
+                   "PLID pass in a rotation observer basis (won the thesis-scale benchmarks, "
+                   "benchmarks/results/plid_thesis.md); scratch: no prior, rotation basis "
+                   "at the output-spectrum peaks, four passes with shrinking state noise; "
+                   "plain: one PLID run in the shift basis with --Q and --passes")
+    p.add_argument("--form", choices=("sqrt", "direct"), default=None,
+                   help="PLID recursion: square-root or direct covariance form (default: "
+                   "direct for --start subspace/scratch, as benchmarked; sqrt for plain)")
+    p.add_argument("--R", type=float, default=None, metavar="VAR",
+                   help="output-noise variance, scaled units (default: estimated from the "
+                   "subspace estimate's residual; 1e-4, i.e. 40 dB SNR, otherwise)")
+    p.add_argument("--Q", type=float, default=1e-6, metavar="VAR",
+                   help="state-noise variance, scaled units, --start plain only (default 1e-6)")
+    p.add_argument("--passes", type=int, default=1, metavar="P",
+                   help="batch passes over the data, --start plain only (default 1)")
+    p.add_argument("--via", default=None, metavar="ORDERS",
+                   help="also identify at these higher orders (comma separated, or 'auto' "
+                   "for 2 and 2.4 times N), reduce each to N by input-weighted balanced "
+                   "truncation, refine by PLID, and keep the candidate with the best "
+                   "one-step prediction on the data (plid.multipass.identify_reduced; "
+                   "what trussid demo uses: for a structure with more significant modes "
+                   "than N/2). --start subspace or scratch only")
+    p.add_argument("--json", action="store_true",
+                   help="print poles and the prediction ratio as JSON")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args) -> int:
+    from trussid.plid.canonical import check_order
+    from trussid.plid.datafile import check_enough_samples, read_data
+    from trussid.plid.errors import DataError, IdentificationError
+    from trussid.plid.estimator import PLID, PLIDWarning
+    from trussid.plid.metrics import prediction_ratio_db, predictor_gain
+    from trussid.plid.modelfile import save_model
+
+    out = str(args.out)
+    if not out.lower().endswith(".npz"):
+        raise DataError(f"--out {out}: model files are .npz")
+    if args.order < 1:
+        raise IdentificationError(f"--order must be a positive integer, got {args.order}")
+    data = read_data(args.data, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
+                     fs=args.fs)
+    n, m, p = args.order, data.n_inputs, data.n_outputs
+    check_order(n, p)
+    check_enough_samples(data, n * (m + p), f"an order-{n} model with {m} inputs and "
+                         f"{p} outputs")
+    start = getattr(args, "start", "plain")
+    form = args.form or ("sqrt" if start == "plain" else "direct")
+    via = via_arg(getattr(args, "via", None), n, p, start)
+    progress = None if sys.stderr.isatty() else False
+    t0 = time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PLIDWarning)
+        if start == "plain":
+            R_used = 1e-4 if args.R is None else args.R
+            est = PLID(n, form=form, dt=data.dt, Q=args.Q, R=R_used, passes=args.passes,
+                       progress=progress)
+            res = est.fit(data.u, data.y)
+            K = res.K
+        elif via is not None:
+            from trussid.plid.multipass import identify_reduced
+
+            ident = identify_reduced(data.u, data.y, n, data.dt, via=via, start=start,
+                                     form=form, progress=progress,
+                                     log=lambda msg: print(f"  {msg}", file=sys.stderr))
+            res, K = ident.result, ident.K
+            R_used = [float(r) for r in np.atleast_1d(ident.R)]
+        else:
+            from trussid.plid.multipass import identify
+
+            ident = identify(data.u, data.y, n, data.dt, start=start, R=args.R, form=form,
+                             progress=progress)
+            res, K = ident.result, ident.K
+            R_used = [float(r) for r in np.atleast_1d(ident.R)]
+    seconds = time.perf_counter() - t0
+    if not res.finite:
+        raise IdentificationError(
+            f"PLID ({form} form) diverged on {data.n_samples} samples: the estimate is "
+            "not finite; try --form sqrt, a larger --Q or --R, or another --order")
+    notes = [str(w.message) for w in caught if issubclass(w.category, PLIDWarning)]
+    # identify_reduced's winner may be a reduction of its (higher-order) PLID pass
+    model = res.model if start == "plain" else ident.model
+    if K is None:
+        K = predictor_gain(model, res.Q + model.B @ res.N @ model.B.T, res.R)
+    skip = prediction_burn_in(data.n_samples, n)
+    ratio = prediction_ratio_db(model, data.u, data.y, K=K, skip=skip)
+    poles_z = np.linalg.eigvals(model.A)
+    unstable = int(np.sum(np.abs(poles_z) >= 1))
+    save_model(out, model, K=K, input_names=data.input_names, output_names=data.output_names)
+    summary = {
+        "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
+        "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
+        "start": start, "form": form,
+        "passes": args.passes if start == "plain" else len(ident.info["passes"]),
+        "Q": args.Q if start == "plain" else [p["Q"] for p in ident.info["passes"]],
+        "R": R_used,
+        "seconds": seconds,
+        "K_source": (ident.info.get("predictor") or {}).get("chosen") if via is not None
+        else res.K_source,
+        "signal_to_prediction_error_db": ratio["overall"],
+        "signal_to_prediction_error_db_per_output": ratio["per_channel"],
+        "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
+        "prediction_skip_samples": skip, "unstable_poles": unstable,
+        "poles": pole_table(model), "warnings": notes,
+    }
+    if via is not None:
+        summary["via"] = list(ident.info["via"])
+        summary["chosen"] = ident.info["chosen"]
+        summary["candidates"] = ident.info["candidates"]
+    for note in notes:
+        print(f"trussid identify: warning: {note}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(json_safe(summary), indent=2))
+        return 0
+    print(f"identified an order-{n} model ({m} input(s), {p} output(s)) from "
+          f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s ({form} form, "
+          f"{start} start{'; kept ' + ident.info['chosen'] if via is not None else ''})")
+    print(f"wrote {out}")
+    per = ", ".join(f"{name} {v:.2f}" for name, v in zip(data.output_names, ratio["per_channel"]))
+    print(f"one-step signal-to-prediction-error ratio: {ratio['overall']:.2f} dB ({per}; "
+          f"first {skip} samples left out)")
+    if unstable:
+        print(f"note: {unstable} pole(s) on or outside the unit circle")
+    print("poles (frequency [Hz], damping):")
+    for row in summary["poles"]:
+        print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")
+    return 0

@@ -1,0 +1,152 @@
+"""``trussid plant [MODEL] --out PLANT.npz``: the control-ready plant of a testbed.
+
+The plant runs from the D/A command volts of each actuator channel, through the smoothing
+filter, the power amplifier and the PZT actuators, to the accelerometer volts, discretised
+by zero-order hold at the sample rate. PLANT.npz holds the discrete plant (``A, B, C, D, dt``
+and names, as every model file) and the continuous one beside it (``c_A`` ...).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from trussid._util.errors import UserError
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "plant", help="build the testbed's state-space plant (PZT volts in, accelerometer volts out)",
+        description="Build the control-ready plant of a testbed: modes by finite elements, PZT "
+        "strain actuators (3 channels, each driving the two struts that share a top vertex), "
+        "accelerometers at the UDF corners, the lab's smoothing filter, amplifier and converters, "
+        "discretised by zero-order hold. MODEL is a testbed parameter file (.toml) or omitted for "
+        "the default testbed.")
+    p.add_argument("model", nargs="?", metavar="MODEL", help="testbed parameter file (.toml)")
+    p.add_argument("--out", required=True, metavar="PLANT.npz", help="output model file (.npz)")
+    p.add_argument("--fs", type=float, default=None, metavar="HZ", help="sample rate (default: the testbed's, 1600 Hz)")
+    p.add_argument("--modes", type=int, default=None, metavar="N", help="modes kept (default: all below the Nyquist frequency)")
+    p.add_argument("--damping", type=float, default=None, metavar="Z",
+                   help="modal damping ratio (default: the testbed's, 0.0025)")
+    p.add_argument("--plot", default=None, metavar="BODE.png", help="also write a Bode plot")
+    p.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
+    p.set_defaults(func=run)
+
+
+def _testbed(path):
+    from trussid.geometry.params_toml import load_testbed
+    from trussid.geometry.spec import Testbed
+
+    if path is None:
+        return Testbed(), "default testbed"
+    p = Path(path)
+    if p.suffix.lower() != ".toml":
+        raise UserError(f"{p}: a plant needs the testbed's actuators and sensors; give a testbed "
+                        f"parameter file (.toml) or no MODEL for the default testbed")
+    return load_testbed(p), str(p)
+
+
+def summary(plant) -> dict:
+    """Poles (frequency, damping), channel gains and electrical facts of a TestbedPlant."""
+    import control
+
+    poles = np.linalg.eigvals(plant.continuous.A)
+    poles = poles[np.imag(poles) >= 0]
+    wn = np.abs(poles)
+    zeta = np.where(wn > 0, -np.real(poles) / np.where(wn > 0, wn, 1), 1.0)
+    order = np.argsort(wn)
+    f = np.linspace(1.0, 0.5 * plant.chain.sample_rate, 4000)
+    H = plant.discrete(np.exp(2j * np.pi * f / plant.chain.sample_rate))  # (p, m, nf)
+    peak = np.abs(H).max(axis=2)
+    return {
+        "inputs": list(plant.discrete.input_labels),
+        "outputs": list(plant.discrete.output_labels),
+        "states": int(plant.discrete.nstates),
+        "sample_rate_hz": plant.chain.sample_rate,
+        "modes_kept": len(plant.modes.frequencies_hz),
+        "mode_frequencies_hz": [float(x) for x in plant.modes.frequencies_hz],
+        "poles": [{"frequency_hz": float(wn[i] / (2 * np.pi)), "damping": float(zeta[i])} for i in order],
+        "peak_gain_v_per_v": peak.tolist(),
+        "actuator_capacitance_f": plant.capacitance,
+        "actuator_capacitance_thesis_f": plant.tbm.testbed.electrics.actuator_capacitance,
+        "strictly_proper": bool(np.all(plant.discrete.D == 0)),
+        "stable": bool(np.all(np.abs(control.poles(plant.discrete)) < 1)),
+    }
+
+
+def bode_plot(plant, out) -> None:
+    """Magnitude and phase of every channel of the discrete plant, written atomically."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from trussid._util.files import atomic_path
+
+    fs = plant.chain.sample_rate
+    f = np.geomspace(1.0, 0.5 * fs, 3000)
+    H = plant.discrete(np.exp(2j * np.pi * f / fs))
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
+    names_in, names_out = plant.discrete.input_labels, plant.discrete.output_labels
+    for i, yo in enumerate(names_out):
+        for j, ui in enumerate(names_in):
+            ax1.semilogx(f, 20 * np.log10(np.abs(H[i, j])), lw=0.9, label=f"{ui} -> {yo}")
+            ax2.semilogx(f, np.degrees(np.unwrap(np.angle(H[i, j]))), lw=0.9)
+    ax1.set_ylabel("magnitude [dB, V/V]")
+    ax2.set_ylabel("phase [deg]")
+    ax2.set_xlabel("frequency [Hz]")
+    ax1.set_title(f"Testbed plant: D/A volts to accelerometer volts, ZOH at {fs:g} Hz")
+    ax1.legend(fontsize=7, ncol=3)
+    for ax in (ax1, ax2):
+        ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    with atomic_path(out) as tmp:
+        fig.savefig(tmp, dpi=120)
+    plt.close(fig)
+
+
+def run(args) -> int:
+    from trussid.testbed.plant import testbed_plant
+    from trussid.plid.modelfile import save_model
+
+    out = Path(args.out)
+    if out.suffix.lower() != ".npz":
+        raise UserError(f"--out {args.out}: the plant is written as a model file (.npz)")
+    if args.plot is not None and Path(args.plot).suffix.lower() != ".png":
+        raise UserError(f"--plot {args.plot}: the Bode plot is written as PNG")
+    if args.modes is not None and args.modes < 1:
+        raise UserError(f"--modes must be at least 1, got {args.modes}")
+    if args.damping is not None and not (0 <= args.damping < 1):
+        raise UserError(f"--damping must be in [0, 1), got {args.damping}")
+    if args.fs is not None and not args.fs > 0:
+        raise UserError(f"--fs must be positive, got {args.fs}")
+    tb, source = _testbed(args.model)
+    plant = testbed_plant(tb, n_modes=args.modes, damping=args.damping, sample_rate=args.fs)
+    save_model(out, plant.discrete, continuous=plant.continuous,
+               extra={"mode_frequencies_hz": plant.modes.frequencies_hz})
+    if args.plot:
+        bode_plot(plant, args.plot)
+    s = summary(plant)
+    s["model"] = source
+    s["out"] = str(out)
+    if args.json:
+        print(json.dumps(s, indent=2))
+        return 0
+    print(f"plant of the {source}: {len(s['inputs'])} inputs ({', '.join(s['inputs'])}), "
+          f"{len(s['outputs'])} outputs ({', '.join(s['outputs'])}), {s['states']} states, "
+          f"ZOH at {s['sample_rate_hz']:g} Hz")
+    print(f"modes kept: {s['modes_kept']} (up to {s['mode_frequencies_hz'][-1]:.1f} Hz)")
+    print(f"actuator capacitance from the wafer data: {s['actuator_capacitance_f'] * 1e6:.4f} uF "
+          f"(thesis: {s['actuator_capacitance_thesis_f'] * 1e6:.3f} uF)")
+    print(f"strictly proper: {s['strictly_proper']}; stable: {s['stable']}")
+    print("\n   pole  frequency [Hz]   damping [%]")
+    for k, pl in enumerate(s["poles"], 1):
+        print(f"  {k:5d}  {pl['frequency_hz']:14.2f}  {100 * pl['damping']:12.3f}")
+    print("\npeak gain over 1 Hz .. Nyquist [V/V] (rows: outputs, columns: inputs)")
+    print("          " + "".join(f"{n:>12s}" for n in s["inputs"]))
+    for name, row in zip(s["outputs"], s["peak_gain_v_per_v"]):
+        print(f"  {name:8s}" + "".join(f"{g:12.4g}" for g in row))
+    print(f"\nwrote {out}" + (f" and {args.plot}" if args.plot else ""))
+    return 0

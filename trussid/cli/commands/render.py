@@ -1,0 +1,140 @@
+"""``trussid render [MODEL] --mode K --out FILE.png|FILE.gif``: draw mode shapes offscreen.
+
+MODEL is read exactly as ``trussid modes`` reads it (:func:`trussid.cli.commands.modes.load_model`).
+A ``.png`` gets a still of mode K (or, with ``--grid N``, modes 1..N side by side), a
+``.gif`` one period of mode K's vibration. No display or GPU is needed (:mod:`trussid.fem.render`).
+When the loaded model carries ``decorations`` (solids such as adapters and wafers, see
+:class:`trussid.fem.render.Decoration`), they are drawn too.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from trussid._util.errors import UserError
+
+SUFFIXES = (".png", ".gif")
+
+
+def _size(text: str) -> tuple[int, int]:
+    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
+    if not m:
+        raise UserError(f"--size {text!r}: expected WIDTHxHEIGHT in pixels, e.g. 1024x768")
+    return int(m.group(1)), int(m.group(2))
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "render", help="draw a mode shape to a PNG or an animated GIF (offscreen)",
+        description="Render mode shapes of MODEL (a NASTRAN bulk-data deck, a testbed parameter "
+        "file (.toml), or the default testbed when omitted) without a display: the structure as "
+        "solids, deformed by the mode and coloured by displacement magnitude over a faint "
+        "undeformed ghost. FILE.png: a still of mode K, or with --grid N the first N modes; "
+        "FILE.gif: one period of mode K's vibration.")
+    p.add_argument("model", nargs="?", metavar="MODEL", help="bulk-data deck or testbed .toml file")
+    p.add_argument("--mode", type=int, default=1, metavar="K", help="mode number, 1 = lowest (default 1)")
+    p.add_argument("--out", required=True, metavar="FILE", help="output image: .png or .gif")
+    p.add_argument("--grid", type=int, default=None, metavar="N",
+                   help="PNG only: show modes 1..N side by side instead of mode K")
+    p.add_argument("--size", default=None, metavar="WxH",
+                   help="image size in pixels (default 1024x768; GIF 800x600; grid 420x340 per mode)")
+    p.add_argument("--scale", type=float, default=None, metavar="S",
+                   help="multiply the mass-normalised mode shape by S for drawing "
+                   "(default: largest displacement = --amplitude x model size)")
+    p.add_argument("--amplitude", type=float, default=None, metavar="A",
+                   help="largest drawn displacement as a fraction of the bounding-box diagonal (default 0.08)")
+    p.add_argument("--frames", type=int, default=24, metavar="F", help="GIF frames per period (default 24)")
+    p.add_argument("--view", default="iso", choices=("iso", "xz", "xy", "yz"),
+                   help="camera direction (default iso; z is up)")
+    p.set_defaults(func=run)
+
+
+def _testbed_of(loaded):
+    """The :class:`trussid.testbed.model.TestbedModel` behind a loaded model, if it is a testbed."""
+    for candidate in (loaded, getattr(loaded, "info", None), getattr(loaded, "testbed", None)):
+        if hasattr(candidate, "map") and hasattr(candidate, "testbed") and hasattr(candidate, "model"):
+            return candidate
+    return None
+
+
+def _decorations_and_labels(loaded, modes):
+    """Solids and mode labels to draw: the loader's own when it gives them; for a testbed,
+    its solids (:func:`trussid.testbed.render.testbed_decorations`) and energy labels (:mod:`trussid.testbed.labels`)."""
+    from trussid.testbed.render import testbed_decorations
+
+    decorations = getattr(loaded, "decorations", None)
+    labels = getattr(loaded, "labels", None) or getattr(modes, "labels", None)
+    tbm = _testbed_of(loaded)
+    if tbm is not None:
+        if decorations is None:
+            decorations = testbed_decorations(tbm)
+        if labels is None:
+            from trussid.testbed.labels import label_testbed_modes
+
+            labels = label_testbed_modes(tbm, modes).labels
+    return decorations or (), labels
+
+
+def run(args) -> int:
+    from trussid.fem import render
+
+    out = Path(args.out)
+    suffix = out.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise UserError(f"--out {args.out}: unknown image type {suffix or '(no suffix)'!r}; "
+                        f"use {' or '.join(SUFFIXES)}")
+    if args.mode < 1:
+        raise UserError(f"--mode {args.mode}: mode numbers start at 1 (the lowest mode)")
+    if args.grid is not None:
+        if suffix != ".png":
+            raise UserError(f"--grid draws a still image: give a .png output, not {args.out}")
+        if args.grid < 1:
+            raise UserError(f"--grid {args.grid}: must be at least 1")
+    if suffix == ".gif" and not 2 <= args.frames <= 1000:
+        raise UserError(f"--frames {args.frames}: must be from 2 to 1000")
+    size = _size(args.size) if args.size is not None else None
+    kwargs = {}
+    if args.scale is not None:
+        kwargs["scale"] = args.scale
+    if args.amplitude is not None:
+        kwargs["amplitude"] = args.amplitude
+
+    from trussid.fem.assembly import assemble
+    from trussid.fem.modal import solve_modes
+    from trussid.cli.commands.modes import load_model
+
+    loaded = load_model(args.model)
+    wanted = args.grid if args.grid is not None else args.mode
+    system = assemble(loaded.model, autospc=loaded.autospc)
+    tbm = _testbed_of(loaded)
+    if tbm is not None:
+        # as `trussid modes` does: the testbed's own solver keeps its sub-hertz suspension
+        # modes, which solve_modes would round to zero
+        from trussid.testbed.model import solve_testbed_modes
+
+        modes = solve_testbed_modes(tbm, wanted, system=system)
+    else:
+        modes = solve_modes(system, n_modes=wanted)
+    n = len(modes.frequencies_hz)
+    if wanted > n:
+        what = f"--grid {args.grid}: only" if args.grid is not None else f"--mode {args.mode} is out of range:"
+        raise UserError(f"{what} the model has {n} modes ({system.n_dof} free DOF); "
+                        f"valid mode numbers are 1 to {n}")
+    decorations, labels = _decorations_and_labels(loaded, modes)
+    common = dict(decorations=decorations, view=args.view, labels=labels, **kwargs)
+    if args.grid is not None:
+        render.render_mode_grid(loaded.model, modes, args.grid, out,
+                                **({"window_size": size} if size else {}), **common)
+        print(f"wrote {out}: modes 1 to {args.grid} of {loaded.source}")
+        return 0
+    if suffix == ".gif":
+        render.render_mode_gif(loaded.model, modes, args.mode, out, frames=args.frames,
+                               **({"window_size": size} if size else {}), **common)
+    else:
+        render.render_mode(loaded.model, modes, args.mode, out,
+                           **({"window_size": size} if size else {}), **common)
+    f = float(modes.frequencies_hz[args.mode - 1])
+    label = f", {labels[args.mode - 1]}" if labels is not None and len(labels) >= args.mode else ""
+    print(f"wrote {out}: mode {args.mode} ({f:.6g} Hz{label}) of {loaded.source}")
+    return 0

@@ -1,0 +1,28 @@
+"""The thesis testbed as an application of :mod:`trussid.fem`: model, walls, labels, plant.
+
+- :mod:`.model` - :func:`build_testbed` (a :class:`trussid.geometry.Testbed` to an FE
+  model and the map of what is what), the wall-thickness basis and sweeps;
+- :mod:`.labels` - each mode named by where its energy sits;
+- :mod:`.sensitivity` - analytic frequency sensitivities to each strut's wall;
+- :mod:`.chain` - the lab's electronics (amplifier, filters, converters);
+- :mod:`.plant` - :func:`testbed_plant`, D/A volts in, accelerometer volts out;
+- :mod:`.render` - the testbed's solids riding on its FE nodes.
+
+Uses :mod:`trussid.fem` and :mod:`trussid.geometry`; names load on first use.
+"""
+
+from trussid._util.lazy import lazy_exports
+
+_LAZY = {
+    "TestbedMap": "model", "TestbedModel": "model", "build_testbed": "model",
+    "solve_testbed_modes": "model", "WallBasis": "model", "wall_basis": "model",
+    "wall_matrices": "model", "wall_modes": "model",
+    "ModeLabels": "labels", "label_testbed_modes": "labels",
+    "wall_sensitivities": "sensitivity", "testbed_sensitivities": "sensitivity",
+    "LabChain": "chain", "lab_plant": "chain",
+    "TestbedPlant": "plant", "testbed_plant": "plant",
+    "testbed_decorations": "render",
+}
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)
+
+__all__ = list(_LAZY)

@@ -1,0 +1,651 @@
+"""The finite-element model of the reference testbed, and fast re-assembly for wall sweeps.
+
+:func:`build_testbed` turns a :class:`trussid.geometry.spec.Testbed` into a :class:`trussid.fem.Model`
+plus a :class:`TestbedMap` that says which nodes, elements and springs are what (so the
+plant can put PZT loads on the adapter elements and sensors on the accelerometer nodes, and
+the renderer can attach solids to nodes).
+
+Model (see ``shared/docs/testbed.md``)
+--------------------------------------
+- **Struts**: 2-node frame elements along each strut (:mod:`trussid.geometry.layout` numbering and
+  local axes: element local ``y`` is the strut's ``y``, horizontal and normal to its bipod
+  plane). Grid points at both ends of the adapter; ``elements_per_segment`` elements on each
+  bare tube segment; the adapter is one element, or three when the wafers are shorter than
+  the block (block only / block + wafers / block only), so that the wafer-covered part has
+  its own end nodes for the induced-strain loads.
+- **Adapter section**: the tube, the bored block and the wafers act as one composite
+  section (perfect bond, plane sections). The Model stores one ``E``, ``G`` per element, so
+  the sums are mapped onto it with the tube's ``E_ref``, ``G_ref``::
+
+      A   = sum(E_i A_i) / E_ref        Iy = sum(E_i Iy_i) / E_ref     Iz = sum(E_i Iz_i) / E_ref
+      J   = sum(G_i J_i) / G_ref        (wafers: no torsional stiffness, W T^3/3 is negligible)
+      rho = rho_tube                    nsm = sum(rho_i A_i) - rho A  (true mass per length)
+
+  The element's torsional inertia ``rho (Iy + Iz)`` is then exact for the tube and an
+  aluminium block; what the denser wafers add beyond it, ``sum rho_i Ip_i - rho (Iy + Iz)``
+  (``Ip`` polar moment), is lumped as rotary inertia about the strut axis at the ends of
+  the wafer elements (half each). (A single density cannot carry both: the wafers' mass
+  sits farther out than their stiffness-weighted area.)
+
+  Wafers on the ``+-y`` faces (and ``+-z`` when four) add their own second moments plus the
+  parallel-axis terms ``A_w d^2`` with ``d = side / 2 + T / 2``. Bare tube elements use the
+  tube's own properties, which the same formulas give. Every stiffness and mass property
+  of a strut element is then *linear* in the tube's area ``A_t`` and second moment ``I_t``
+  (``J_t = 2 I_t``), which :func:`wall_basis` exploits.
+- **Strut ends**: clamped (``inf`` rotational stiffness), or flexures: the end node then
+  follows its attachment in translation only (a rigid link of components 1-3) and is held in
+  rotation by a spring in the strut's local frame: the given stiffness about local ``y`` and
+  ``z`` (bending), and :data:`TORSION_RIGID_FACTOR` times ``G J / L`` about the
+  axis (flexures are torsionally stiff; a penalty, since links are in global components;
+  scaled on a solid rod of the tube's diameter so that it does not depend on the walls).
+- **UDF**: one rigid body, master node at its centre of gravity, mass and inertia from
+  :func:`trussid.geometry.solids.udf_rigid_body`; slaves: the strut top ends and the three
+  accelerometer nodes, which carry the accelerometer masses as point masses.
+- **Base**: ``"clamped"``: strut base ends supported. ``"suspended"``: the plate as a rigid
+  body (:func:`trussid.geometry.solids.base_rigid_body`, master at its centre of gravity) whose
+  bungee attachment nodes hang on grounded springs (vertical and lateral stiffness per
+  cord, global axes).
+
+Node and element numbering
+--------------------------
+Strut ``i`` (0..5) owns node and beam ids ``1000 (i + 1) + j``, ``j`` along the strut from
+its base end (``j = 0``) to its top end; each strut has its own end nodes (coincident with
+its neighbour's at a base point or top vertex). UDF master ``10``, accelerometers ``11, 12,
+13``; base master ``20``, bungee nodes ``21..``. Springs: bungees ``8000 + j``, top
+flexures ``9100 + i``, base flexures ``9200 + i``. Rigid bodies: ``1`` UDF, ``2`` base,
+``3``/``4`` translation links of top/base flexure ends.
+
+Wall sweeps
+-----------
+:func:`wall_basis` assembles the model once and splits ``K`` and ``M`` (reduced DOFs) into a
+constant part plus, per strut, terms proportional to ``A_t(t_i)`` and ``I_t(t_i)``, all as
+data vectors on one sparse pattern. :func:`wall_matrices` then forms the dense reduced
+matrices for new walls with a matrix-vector product, and :func:`wall_modes` solves for the
+lowest modes with LAPACK's subset generalised eigensolver: no topology, geometry, layout or
+rigid-body work per design.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as la
+import scipy.sparse as sp
+
+from trussid.fem.assembly import System, assemble
+from trussid.fem.elements import frame_matrices, local_axes
+from trussid.fem.errors import ModelError
+from trussid.fem.model import Model
+from trussid.fem.sections import Section
+
+#: Default number of frame elements on each bare tube segment (base-adapter, adapter-top).
+#: Chosen by a mesh study (tests/fem/test_testbed.py): doubling it moves no frequency below
+#: 400 Hz by more than 0.1 %.
+ELEMENTS_PER_SEGMENT = 4
+#: Wafers shorter than the adapter by less than this fraction of its length are taken to
+#: cover it all (a lip of a few micrometres would be a needlessly stiff element).
+MIN_LIP = 0.01
+#: Torsional stiffness of a flexure, as a multiple of ``G J / L`` of a solid rod of the
+#: tube's outside diameter (a wall-independent scale).
+TORSION_RIGID_FACTOR = 1.0e3
+
+UDF_MASTER = 10
+BASE_MASTER = 20
+UDF_BODY, BASE_BODY, TOP_LINK_BODY, BASE_LINK_BODY = 1, 2, 3, 4
+
+
+@dataclass(frozen=True)
+class TestbedMap:
+    """What the nodes, elements and springs of a testbed model are (ids, not indices).
+
+    Attributes
+    ----------
+    strut_nodes : (6, n) int
+        Node ids of each strut, in order from its base end to its top end.
+    strut_elements : (6, n - 1) int
+        Beam element ids of each strut in the same order (element ``j`` joins nodes ``j``
+        and ``j + 1``).
+    strut_s : (n,) float
+        Distance of each strut node from the strut's base end [m] (same for all struts).
+    adapter_elements : (6, m) int
+        Elements of each strut's adapter block (1 or 3).
+    adapter_nodes : (6, 2) int
+        Node ids at the two ends of each adapter (base side first).
+    wafer_elements : (6, w) int
+        Elements covered by the PZT wafers (the induced-strain loads act over these).
+    wafer_nodes : (6, 2) int
+        Node ids at the two ends of the wafer-covered length.
+    strut_base_nodes, strut_top_nodes : (6,) int
+        Each strut's end nodes (``strut_nodes[:, 0]`` and ``strut_nodes[:, -1]``).
+    udf_master : int
+        Master node of the UDF rigid body (at its centre of gravity).
+    accelerometer_nodes : (3,) int
+        Accelerometer nodes (slaves of the UDF), ``k`` above strut junction ``k``.
+    accelerometer_directions : (3, 3) float
+        Unit sensing direction of each accelerometer, global axes.
+    base_master : int or None
+        Master node of the base rigid body when the base is suspended, else None.
+    bungee_nodes : (b,) int
+        Bungee attachment nodes (empty when clamped).
+    bungee_springs : (b,) int
+        Spring ids of the bungees.
+    flexure_springs : (6, 2) int
+        Spring ids of each strut's (base, top) flexure; -1 where the end is clamped.
+    channel_struts : (3, 2) int
+        The two struts driven by actuator channel ``k`` (they meet at top vertex ``k``).
+    strut_frames : (6, 3, 3) float
+        Rows: each strut's local x (base to top), y, z axes (global coordinates).
+    udf_body, base_body : int
+        Rigid-body ids (``base_body`` is -1 when clamped).
+    """
+
+    __test__ = False
+
+    strut_nodes: np.ndarray
+    strut_elements: np.ndarray
+    strut_s: np.ndarray
+    adapter_elements: np.ndarray
+    adapter_nodes: np.ndarray
+    wafer_elements: np.ndarray
+    wafer_nodes: np.ndarray
+    strut_base_nodes: np.ndarray
+    strut_top_nodes: np.ndarray
+    udf_master: int
+    accelerometer_nodes: np.ndarray
+    accelerometer_directions: np.ndarray
+    base_master: int | None
+    bungee_nodes: np.ndarray
+    bungee_springs: np.ndarray
+    flexure_springs: np.ndarray
+    channel_struts: np.ndarray
+    strut_frames: np.ndarray
+    udf_body: int
+    base_body: int
+
+    def strut_of_element(self, element_ids) -> np.ndarray:
+        """Strut number (0..5) of beam element ids (-1 for non-strut ids)."""
+        ids = np.asarray(element_ids)
+        k = ids // 1000 - 1
+        return np.where((k >= 0) & (k < 6), k, -1)
+
+
+@dataclass
+class TestbedModel:
+    """The testbed's FE model, its map, and the parameters it was built from.
+
+    Attributes
+    ----------
+    model : fem.Model
+    map : TestbedMap
+    testbed : geometry.testbed.Testbed
+    elements_per_segment : int
+    """
+
+    __test__ = False
+
+    model: Model
+    map: TestbedMap
+    testbed: object
+    elements_per_segment: int
+
+
+# ----------------------------------------------------------------------------- sections
+def tube_properties(r_out: float, t) -> tuple[np.ndarray, np.ndarray]:
+    """Area ``A_t`` [m^2] and second moment ``I_t`` [m^4] of round tubes (``J_t = 2 I_t``)."""
+    t = np.asarray(t, float)
+    ri = r_out - t
+    return math.pi * (r_out**2 - ri**2), 0.25 * math.pi * (r_out**4 - ri**4)
+
+
+def tube_property_derivatives(r_out: float, t) -> tuple[np.ndarray, np.ndarray]:
+    """``dA_t/dt`` [m] and ``dI_t/dt`` [m^3] of round tubes of wall ``t``."""
+    ri = r_out - np.asarray(t, float)
+    return 2.0 * math.pi * ri, math.pi * ri**3
+
+
+def adapter_constant_properties(tb, with_wafers: bool) -> dict:
+    """The adapter's constant (non-tube) contributions to the composite section.
+
+    Returns the sums over the block (and the wafers when ``with_wafers``) of ``E A``,
+    ``E Iy``, ``E Iz`` [N, N m^2], ``G J`` [N m^2], ``rho A`` [kg/m] and ``rho Ip``
+    [kg m] (polar mass moment per length), in the strut's local axes.
+    """
+    s, a, p = tb.struts, tb.adapter, tb.pzt
+    blk = Section.square_with_bore(a.side, s.outer_radius, name="adapter block")
+    Gb = a.youngs_modulus / (2.0 * (1.0 + a.poisson_ratio))
+    out = {
+        "EA": a.youngs_modulus * blk.A, "EIy": a.youngs_modulus * blk.Iy, "EIz": a.youngs_modulus * blk.Iz,
+        "GJ": Gb * blk.J, "rhoA": a.density * blk.A, "rhoIp": a.density * (blk.Iy + blk.Iz),
+    }
+    if with_wafers:
+        W, T = p.width, p.thickness
+        Aw = W * T
+        d = 0.5 * a.side + 0.5 * T
+        # One pair on the +-y faces: plate normal along y, width along z.
+        iz_pair = 2.0 * (W * T**3 / 12.0 + Aw * d**2)   # about z: bending with v (along y)
+        iy_pair = 2.0 * (T * W**3 / 12.0)                # about y: centroids on the y axis
+        n_pairs = p.wafers_per_strut // 2
+        Iz = iz_pair + (iy_pair if n_pairs == 2 else 0.0)
+        Iy = iy_pair + (iz_pair if n_pairs == 2 else 0.0)
+        Aws = p.wafers_per_strut * Aw
+        out["EA"] += p.youngs_modulus * Aws
+        out["EIy"] += p.youngs_modulus * Iy
+        out["EIz"] += p.youngs_modulus * Iz
+        out["rhoA"] += p.density * Aws
+        out["rhoIp"] += p.density * (Iy + Iz)
+    return out
+
+
+def _strut_section_arrays(tb, kinds: np.ndarray, wall: float) -> dict:
+    """Per-element Model arrays (A, Iy, Iz, J, E, G, rho, nsm) for one strut, and the
+    torsional mass moment per length [kg m] that the element cannot carry (``ip_missing``).
+
+    ``kinds``: 0 bare tube, 1 adapter block only, 2 adapter with wafers. See the module
+    docstring for the mapping.
+    """
+    s = tb.struts
+    E, G, rho = s.youngs_modulus, s.youngs_modulus / (2.0 * (1.0 + s.poisson_ratio)), s.density
+    At, It = (float(v) for v in tube_properties(s.outer_radius, wall))
+    parts = [{k: 0.0 for k in ("EA", "EIy", "EIz", "GJ", "rhoA", "rhoIp")},
+             adapter_constant_properties(tb, False), adapter_constant_properties(tb, True)]
+    c = {k: np.array([parts[kind][k] for kind in kinds]) for k in parts[0]}
+    A, Iy, Iz, J = At + c["EA"] / E, It + c["EIy"] / E, It + c["EIz"] / E, 2 * It + c["GJ"] / G
+    # rho = the tube's density: the tube's own mass terms stay exact (and linear in A_t, I_t);
+    # the rest of the mass per length goes to nsm, the rest of the polar moment to point
+    # inertias (ip_missing).
+    nsm = c["rhoA"] - rho * c["EA"] / E
+    ip_missing = c["rhoIp"] - rho * (c["EIy"] + c["EIz"]) / E
+    if (nsm < -1e-9 * np.maximum(c["rhoA"], 1e-300)).any():
+        raise ModelError("adapter: the block and wafers are stiffer for their mass than the tube "
+                         f"(E/rho above {E / rho:.4g} m^2/s^2); this composite section cannot be "
+                         "represented with the tube's density (adapter.density, pzt.density)")
+    n = len(kinds)
+    return {"A": A, "Iy": Iy, "Iz": Iz, "J": J, "E": np.full(n, E), "G": np.full(n, G), "rho": np.full(n, rho),
+            "nsm": np.maximum(nsm, 0.0), "ip_missing": ip_missing}
+
+
+# ----------------------------------------------------------------------------- mesh
+def strut_stations(tb, elements_per_segment: int = ELEMENTS_PER_SEGMENT) -> tuple[np.ndarray, np.ndarray]:
+    """Node positions along a strut [m] and the kind of each element.
+
+    Returns
+    -------
+    s : (n,) float
+        Distances of the nodes from the base end.
+    kinds : (n - 1,) int
+        0 bare tube, 1 adapter block only, 2 adapter with wafers.
+    """
+    if int(elements_per_segment) != elements_per_segment or elements_per_segment < 1:
+        raise ModelError(f"elements_per_segment must be a positive integer, got {elements_per_segment!r}")
+    n = int(elements_per_segment)
+    L, La, Lw = tb.struts.length, tb.adapter.length, tb.pzt.length
+    a0, a1 = 0.5 * (L - La), 0.5 * (L + La)
+    seg1 = np.linspace(0.0, a0, n + 1)
+    seg2 = np.linspace(a1, L, n + 1)
+    if La - Lw > MIN_LIP * La:
+        w0, w1 = 0.5 * (L - Lw), 0.5 * (L + Lw)
+        adapter = np.array([w0, w1])
+        akinds = [1, 2, 1]
+    else:
+        adapter = np.zeros(0)
+        akinds = [2]
+    s = np.concatenate([seg1, adapter, seg2])
+    kinds = np.array([0] * n + akinds + [0] * n)
+    return s, kinds
+
+
+def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
+                  beam_theory: str = "euler-bernoulli", mass: str = "consistent") -> TestbedModel:
+    """The FE model of testbed ``tb`` (default: the default :class:`~trussid.geometry.spec.Testbed`).
+
+    Parameters
+    ----------
+    tb : geometry.testbed.Testbed, optional
+    elements_per_segment : int
+        Frame elements on each bare tube segment.
+    beam_theory, mass : str
+        Passed to :class:`trussid.fem.Model`.
+
+    Returns
+    -------
+    TestbedModel
+    """
+    from trussid.geometry.layout import testbed_layout
+    from trussid.geometry.solids import base_rigid_body, udf_rigid_body
+    from trussid.geometry.spec import Testbed
+
+    tb = Testbed() if tb is None else tb
+    lay = testbed_layout(tb)
+    s, kinds = strut_stations(tb, elements_per_segment)
+    n_nodes, n_el = len(s), len(kinds)
+    model = Model(beam_theory=beam_theory, mass=mass, name="testbed")
+    frames = lay.strut_frames()
+
+    strut_nodes = (1000 * (np.arange(6)[:, None] + 1) + np.arange(n_nodes)[None, :]).astype(np.int64)
+    strut_elements = strut_nodes[:, :-1].copy()
+    xyz = lay.strut_start[:, None, :] + s[None, :, None] * lay.strut_axis[:, None, :]
+    model.add_nodes(strut_nodes.ravel(), xyz.reshape(-1, 3))
+    names = {0: "tube", 1: "adapter", 2: "adapter+wafers"}
+    for i in range(6):
+        props = _strut_section_arrays(tb, kinds, tb.struts.walls[i])
+        for kind in (0, 1, 2):
+            sel = np.flatnonzero(kinds == kind)
+            if not len(sel):
+                continue
+            sec = {k: props[k][sel] for k in ("A", "Iy", "Iz", "J")}
+            sec.update(Asy=np.inf, Asz=np.inf)
+            mat = {k: props[k][sel] for k in ("E", "G", "rho")}
+            model.add_beams(strut_elements[i, sel], np.column_stack([strut_nodes[i, sel], strut_nodes[i, sel + 1]]),
+                            sec, mat, orient=lay.strut_y[i], nsm=props["nsm"][sel], label=f"strut {i} {names[kind]}")
+        lumped = props["ip_missing"] * np.diff(s)  # kg m^2 per element
+        # (lumped beam mass has no rotary inertia at all: nothing to complete then)
+        el = np.flatnonzero(lumped > 0) if mass == "consistent" else np.zeros(0, int)
+        if len(el):
+            axis = lay.strut_axis[i]
+            half = 0.5 * lumped[el]
+            model.add_point_masses(np.r_[strut_nodes[i, el], strut_nodes[i, el + 1]], 0.0,
+                                   inertia=np.r_[half, half][:, None, None] * np.outer(axis, axis))
+    adapter_idx = np.flatnonzero(kinds > 0)
+    wafer_idx = np.flatnonzero(kinds == 2)
+
+    # UDF rigid body and accelerometers.
+    m_udf, cg_udf, i_udf = udf_rigid_body(tb)
+    model.add_node(UDF_MASTER, cg_udf)
+    acc_nodes = np.array([11, 12, 13])
+    model.add_nodes(acc_nodes, lay.accelerometer_points)
+    model.add_point_masses(acc_nodes, tb.accelerometers.mass)
+
+    top, base = strut_nodes[:, -1], strut_nodes[:, 0]
+    k_top, k_base = tb.struts.top_rotational_stiffness, tb.struts.base_rotational_stiffness
+    flex = np.full((6, 2), -1, dtype=np.int64)
+    G = tb.struts.youngs_modulus / (2.0 * (1.0 + tb.struts.poisson_ratio))
+    # Scaled on a solid rod of the tube's outside diameter: independent of the walls, so
+    # that wall sweeps (wall_basis) leave it unchanged.
+    k_tor = TORSION_RIGID_FACTOR * G * 0.5 * math.pi * tb.struts.outer_radius**4 / tb.struts.length
+
+    def rot_spring(k):  # stiffness in the strut frame: torsion about x, bending about y and z
+        return [0.0, 0.0, 0.0, k_tor, k, k]
+
+    udf_slaves = list(acc_nodes)
+    if math.isinf(k_top):
+        udf_slaves += list(top)
+    else:
+        model.add_rigid_body(TOP_LINK_BODY, UDF_MASTER, top, dofs="123", label="top flexure links")
+        flex[:, 1] = 9100 + np.arange(6)
+        model.add_springs(flex[:, 1], np.column_stack([top, np.full(6, UDF_MASTER)]), rot_spring(k_top), frame=frames)
+    model.add_rigid_body(UDF_BODY, UDF_MASTER, udf_slaves, mass=m_udf, cg=cg_udf, inertia=i_udf, label="UDF")
+
+    bungee_nodes = np.zeros(0, np.int64)
+    bungee_springs = np.zeros(0, np.int64)
+    base_master, base_body = None, -1
+    if tb.base.support == "suspended":
+        m_b, cg_b, i_b = base_rigid_body(tb)
+        base_master, base_body = BASE_MASTER, BASE_BODY
+        model.add_node(BASE_MASTER, cg_b)
+        bungee_nodes = 21 + np.arange(tb.base.bungee_count)
+        model.add_nodes(bungee_nodes, lay.bungee_points)
+        bungee_springs = 8000 + np.arange(tb.base.bungee_count)
+        kl, kv = tb.base.bungee_lateral_stiffness, tb.base.bungee_vertical_stiffness
+        model.add_springs(bungee_springs, bungee_nodes, [kl, kl, kv, 0.0, 0.0, 0.0])
+        base_slaves = list(bungee_nodes)
+        if math.isinf(k_base):
+            base_slaves += list(base)
+        else:
+            model.add_rigid_body(BASE_LINK_BODY, BASE_MASTER, base, dofs="123", label="base flexure links")
+            flex[:, 0] = 9200 + np.arange(6)
+            model.add_springs(flex[:, 0], np.column_stack([base, np.full(6, BASE_MASTER)]), rot_spring(k_base),
+                              frame=frames)
+        model.add_rigid_body(BASE_BODY, BASE_MASTER, base_slaves, mass=m_b, cg=cg_b, inertia=i_b, label="base")
+    else:
+        if math.isinf(k_base):
+            model.fix(base, "123456")
+        else:
+            model.fix(base, "123")
+            flex[:, 0] = 9200 + np.arange(6)
+            model.add_springs(flex[:, 0], base, rot_spring(k_base), frame=frames)
+
+    tmap = TestbedMap(
+        strut_nodes=strut_nodes, strut_elements=strut_elements, strut_s=s,
+        adapter_elements=strut_elements[:, adapter_idx], adapter_nodes=np.column_stack(
+            [strut_nodes[:, adapter_idx[0]], strut_nodes[:, adapter_idx[-1] + 1]]),
+        wafer_elements=strut_elements[:, wafer_idx], wafer_nodes=np.column_stack(
+            [strut_nodes[:, wafer_idx[0]], strut_nodes[:, wafer_idx[-1] + 1]]),
+        strut_base_nodes=base.copy(), strut_top_nodes=top.copy(), udf_master=UDF_MASTER,
+        accelerometer_nodes=acc_nodes, accelerometer_directions=np.array(lay.accelerometer_axes),
+        base_master=base_master, bungee_nodes=bungee_nodes, bungee_springs=bungee_springs,
+        flexure_springs=flex, channel_struts=np.array(lay.channel_struts), strut_frames=np.array(frames),
+        udf_body=UDF_BODY, base_body=base_body,
+    )
+    return TestbedModel(model=model, map=tmap, testbed=tb, elements_per_segment=int(elements_per_segment))
+
+
+# ----------------------------------------------------------------------------- wall sweeps
+@dataclass
+class WallBasis:
+    """Reduced ``K``, ``M`` of a testbed as affine functions of the six tube sections.
+
+    ``K(t) = K_ref + sum_i (A_t(t_i) - A_t(t_ref_i)) KA_i + (I_t(t_i) - I_t(t_ref_i)) KI_i``
+    and likewise ``M``, all stored as data on the sparse pattern ``(rows, cols)``.
+
+    Attributes
+    ----------
+    n : int
+        Number of reduced DOFs.
+    rows, cols : (nnz,) int
+        Sparse pattern shared by every matrix.
+    K_ref, M_ref : (nnz,) float
+        Data of ``K`` and ``M`` at the reference walls.
+    KA, KI, MA, MI : (6, nnz) float
+        Per strut: data of ``dK/dA_t``, ``dK/dI_t``, ``dM/dA_t``, ``dM/dI_t``.
+    walls_ref : (6,) float
+        Reference walls [m].
+    r_out : float
+        Tube outside radius [m].
+    system : fem.assembly.System
+        The system assembled at the reference walls (``T``, ``dofs``, node ids).
+    """
+
+    n: int
+    rows: np.ndarray
+    cols: np.ndarray
+    K_ref: np.ndarray
+    M_ref: np.ndarray
+    KA: np.ndarray
+    KI: np.ndarray
+    MA: np.ndarray
+    MI: np.ndarray
+    walls_ref: np.ndarray
+    r_out: float
+    system: System
+
+    def check_walls(self, walls) -> np.ndarray:
+        """Walls as a (6,) array; an error naming the strut if one is not in (0, r_out)."""
+        w = np.asarray(walls, float).reshape(-1)
+        if w.shape != (6,):
+            raise ModelError(f"walls must hold 6 thicknesses (one per strut), got {w.shape[0]}")
+        bad = ~((w > 0) & (w < self.r_out))
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ModelError(f"strut {i} wall thickness {w[i]!r} m must be in (0, {self.r_out:.5g} m)")
+        return w
+
+    def coefficients(self, walls) -> tuple[np.ndarray, np.ndarray]:
+        """``A_t(t) - A_t(t_ref)`` and ``I_t(t) - I_t(t_ref)`` per strut."""
+        w = self.check_walls(walls)
+        A, I = tube_properties(self.r_out, w)
+        A0, I0 = tube_properties(self.r_out, self.walls_ref)
+        return A - A0, I - I0
+
+    def data(self, walls) -> tuple[np.ndarray, np.ndarray]:
+        """Data vectors of ``K`` and ``M`` at ``walls`` on the shared pattern."""
+        dA, dI = self.coefficients(walls)
+        return self.K_ref + dA @ self.KA + dI @ self.KI, self.M_ref + dA @ self.MA + dI @ self.MI
+
+    def sparse(self, data: np.ndarray) -> sp.csr_matrix:
+        """A data vector as a CSR matrix."""
+        return sp.csr_matrix((data, (self.rows, self.cols)), shape=(self.n, self.n))
+
+    def dense(self, data: np.ndarray) -> np.ndarray:
+        """A data vector as a dense (n, n) array."""
+        out = np.zeros((self.n, self.n))
+        out[self.rows, self.cols] = data
+        return out
+
+
+def _reduced_data(T: sp.csr_matrix, Tt: sp.csr_matrix, blocks: np.ndarray, dofs: np.ndarray, n_full: int):
+    """``T^T B T`` of element blocks summed into full DOFs, as a COO-ish (rows, cols, data)."""
+    rows = np.broadcast_to(dofs[:, :, None], blocks.shape).ravel()
+    cols = np.broadcast_to(dofs[:, None, :], blocks.shape).ravel()
+    B = sp.csr_matrix((blocks.ravel(), (rows, cols)), shape=(n_full, n_full))
+    return (Tt @ B @ T).tocoo()
+
+
+def wall_basis(tbm: TestbedModel, system: System | None = None) -> WallBasis:
+    """Split the reduced ``K`` and ``M`` of ``tbm`` into a constant part and wall terms.
+
+    Parameters
+    ----------
+    tbm : TestbedModel
+        Built with ``beam_theory="euler-bernoulli"`` (the Timoshenko shear factor makes the
+        element matrices non-linear in the section properties) and consistent mass.
+    system : fem.assembly.System, optional
+        ``assemble(tbm.model)`` if already available.
+
+    Returns
+    -------
+    WallBasis
+    """
+    model = tbm.model
+    if model.beam_theory != "euler-bernoulli":
+        raise ModelError("wall sweeps need the Euler-Bernoulli beam theory (Timoshenko matrices are "
+                         "not linear in the section properties)")
+    if model.mass_formulation != "consistent":
+        raise ModelError("wall sweeps need the consistent mass (lumped mass leaves rotations massless, "
+                         "which the dense subset eigensolver of wall_modes does not condense)")
+    tb = tbm.testbed
+    system = assemble(model) if system is None else system
+    T = system.T.tocsr()
+    Tt = T.T.tocsr()
+    n_full = model.n_dof
+    s = tb.struts
+    E, G, rho = s.youngs_modulus, s.youngs_modulus / (2.0 * (1.0 + s.poisson_ratio)), s.density
+
+    xyz = model.xyz
+    idx = model.index_of(tbm.map.strut_nodes)  # (6, n)
+    pieces = []  # per strut: KA, KI, MA, MI as COO
+    for i in range(6):
+        a, b = idx[i, :-1], idx[i, 1:]
+        orient = np.broadcast_to(tbm.map.strut_frames[i, 1], (len(a), 3))
+        L, R = local_axes(xyz[a], xyz[b], orient)
+        z, o = np.zeros(len(L)), np.ones(len(L))
+        dofs = (6 * np.column_stack([a, b])[:, :, None] + np.arange(6)).reshape(len(a), 12)
+        kw = dict(R=R, theory="euler-bernoulli", mass=model.mass_formulation)
+        KA, MA = frame_matrices(L, o, z, z, z, E * o, G * o, rho * o, **kw)
+        KI, MI = frame_matrices(L, z, o, o, 2 * o, E * o, G * o, rho * o, **kw)
+        pieces.append([_reduced_data(T, Tt, blk, dofs, n_full) for blk in (KA, KI, MA, MI)])
+
+    n = system.n_dof
+    Kc, Mc = system.K.tocoo(), system.M.tocoo()
+    allr = np.concatenate([Kc.row, Mc.row] + [p.row for ps in pieces for p in ps])
+    allc = np.concatenate([Kc.col, Mc.col] + [p.col for ps in pieces for p in ps])
+    lin = np.unique(allr.astype(np.int64) * n + allc)
+    rows, cols = lin // n, lin % n
+
+    def on_pattern(c) -> np.ndarray:
+        out = np.zeros(len(lin))
+        np.add.at(out, np.searchsorted(lin, c.row.astype(np.int64) * n + c.col), c.data)
+        return out
+
+    basis = np.array([[on_pattern(p) for p in ps] for ps in pieces])  # (6, 4, nnz)
+    return WallBasis(n=n, rows=rows, cols=cols, K_ref=on_pattern(Kc), M_ref=on_pattern(Mc),
+                     KA=basis[:, 0], KI=basis[:, 1], MA=basis[:, 2], MI=basis[:, 3],
+                     walls_ref=np.asarray(s.walls, float), r_out=s.outer_radius, system=system)
+
+
+def wall_matrices(basis: WallBasis, walls) -> tuple[np.ndarray, np.ndarray]:
+    """Dense reduced ``K`` and ``M`` for the six tube walls ``walls`` [m]."""
+    k, m = basis.data(walls)
+    return basis.dense(k), basis.dense(m)
+
+
+def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest natural frequencies [Hz] and mass-normalised reduced shapes for ``walls``.
+
+    Parameters
+    ----------
+    basis : WallBasis
+    walls : (6,) float
+        Wall thicknesses [m].
+    n_modes : int
+    driver : str
+        LAPACK driver of :func:`scipy.linalg.eigh` for a subset ("gvx"; "gvd"/"gv" compute
+        all and are sliced).
+
+    Returns
+    -------
+    frequencies_hz : (n_modes,) float
+    shapes : (n, n_modes) float
+        ``shapes.T @ M @ shapes = I`` on the reduced DOFs (``basis.system.T`` expands them).
+    """
+    K, M = wall_matrices(basis, walls)
+    k = min(int(n_modes), basis.n)
+    if driver == "gvx":
+        lam, X = la.eigh(K, M, subset_by_index=[0, k - 1], driver="gvx", overwrite_a=True, overwrite_b=True,
+                         check_finite=False)
+    else:
+        lam, X = la.eigh(K, M, driver=driver, overwrite_a=True, overwrite_b=True, check_finite=False)
+        lam, X = lam[:k], X[:, :k]
+    return np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi), X
+
+
+def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | None = None,
+                        max_frequency_hz: float | None = None):
+    """Lowest modes of a testbed model as :class:`trussid.fem.modal.Modes`, by dense subset ``eigh``.
+
+    ``max_frequency_hz`` [Hz], when given, replaces ``n_modes``: every mode below it (LAPACK
+    finds them by value, which costs no more than a fixed count).
+
+    It gives the same modes as :func:`trussid.fem.modal.solve_modes` (which keeps the sub-hertz
+    suspension modes too: it clamps only the rigid-body null space), and adds finding all
+    modes below a frequency by value, which the plant uses. The testbed has no
+    zero-frequency mode (clamped, or hung on bungees).
+    """
+    from trussid.fem.modal import Modes
+
+    system = assemble(tbm.model) if system is None else system
+    K, M = system.K.toarray(), system.M.toarray()
+    d = np.abs(np.diag(M))
+    rot = (system.dofs % 6) >= 3
+    massless = np.zeros(len(d), bool)
+    for sel in (rot, ~rot):
+        massless[sel] = d[sel] <= 1e-12 * d[sel].max()
+    z, m = np.flatnonzero(massless), np.flatnonzero(~massless)
+    if len(z):
+        # Lumped mass leaves the rotations massless: condense them statically (exact, they
+        # carry no inertia).
+        G = -la.cho_solve(la.cho_factor(K[np.ix_(z, z)]), K[np.ix_(z, m)])
+        Kc = K[np.ix_(m, m)] + K[np.ix_(m, z)] @ G
+        K, M = 0.5 * (Kc + Kc.T), M[np.ix_(m, m)]
+    if max_frequency_hz is None:
+        k = min(int(n_modes), len(m))
+        lam, Y = la.eigh(K, M, subset_by_index=[0, k - 1], driver="gvx", check_finite=False)
+    else:
+        w_max = 2 * np.pi * float(max_frequency_hz)
+        lam, Y = la.eigh(K, M, subset_by_value=[-np.inf, w_max**2], driver="gvx", check_finite=False)
+        k = len(lam)
+    X = np.zeros((system.n_dof, k))
+    X[m] = Y
+    if len(z):
+        X[z] = G @ Y
+    lam = np.maximum(lam, 0.0)
+    omega = np.sqrt(lam)
+    return Modes(frequencies_hz=omega / (2 * np.pi), omega=omega, shapes=X, shapes_full=system.T @ X,
+                 node_ids=system.node_ids, xyz=system.xyz, n_dof=system.n_dof, method="dense")
+
+
+__all__ = ["TestbedMap", "solve_testbed_modes", "TestbedModel", "build_testbed", "strut_stations", "tube_properties",
+           "tube_property_derivatives", "adapter_constant_properties", "WallBasis", "wall_basis",
+           "wall_matrices", "wall_modes", "ELEMENTS_PER_SEGMENT"]

@@ -1,0 +1,180 @@
+"""The testbed's control-ready plant: actuator channels in (D/A volts), accelerometers out.
+
+Composes :mod:`trussid.testbed.model` (model and map), :mod:`trussid.fem.actuators` (PZT induced strain),
+:mod:`trussid.fem.sensors`, :mod:`trussid.fem.plant` (modal superposition) and :mod:`trussid.testbed.chain` (filters,
+amplifier, converters, ZOH discretisation), with every number taken from the
+:class:`trussid.geometry.spec.Testbed` parameters.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import control
+import numpy as np
+
+from trussid.fem.actuators import Wafer, strain_actuator_loads
+from trussid.fem.assembly import assemble
+from trussid.fem.errors import ModelError
+from trussid.testbed.chain import LabChain, lab_plant
+from trussid.fem.plant import modal_plant, residual_flexibility
+from trussid.fem.sensors import Sensor
+from trussid.testbed.model import TestbedModel, build_testbed, solve_testbed_modes
+
+@dataclass
+class TestbedPlant:
+    """A testbed plant and what it was made from.
+
+    Attributes
+    ----------
+    continuous, discrete : control.StateSpace
+        Command volts (per channel, at the D/A) to accelerometer volts, with the lab chain;
+        the discrete one at the sample rate (ZOH).
+    structure : control.StateSpace
+        PZT volts to accelerometer volts (the structure alone, continuous).
+    modes : fem.modal.Modes
+        The modes kept.
+    loads : (6 n_nodes, n_channels) float
+        Nodal loads per PZT volt of each channel [N/V, N m/V].
+    capacitance : float
+        Capacitance of one actuator from the wafer data [F] (wafers in parallel).
+    chain : LabChain
+    tbm : fem.testbed.TestbedModel
+    """
+
+    __test__ = False
+
+    continuous: control.StateSpace
+    discrete: control.StateSpace
+    structure: control.StateSpace
+    modes: object
+    loads: np.ndarray
+    capacitance: float
+    chain: LabChain
+    tbm: TestbedModel
+
+
+def wafer_of(tb) -> Wafer:
+    """The PZT wafer described by the testbed parameters."""
+    p = tb.pzt
+    return Wafer(width=p.width, length=p.length, thickness=p.thickness, youngs_modulus=p.youngs_modulus,
+                 d31=p.d31, relative_permittivity=p.relative_permittivity)
+
+
+def lab_chain_of(tb, sample_rate: float | None = None) -> LabChain:
+    """The electronics and converters described by the testbed parameters."""
+    f = tb.filters
+    return LabChain(smoothing_order=f.smoothing_order, smoothing_cutoff=f.smoothing_cutoff,
+                    amplifier_gain=tb.electrics.amplifier_gain, lowpass_order=f.lowpass_order,
+                    lowpass_cutoff=f.lowpass_cutoff,
+                    sample_rate=tb.daq.sample_rate if sample_rate is None else sample_rate)
+
+
+def channel_loads(tbm: TestbedModel, channels=None, arrangement: str = "extension") -> np.ndarray:
+    """Nodal loads per volt of each actuator channel.
+
+    Parameters
+    ----------
+    tbm : TestbedModel
+    channels : sequence of sequences of int, optional
+        Struts driven by each channel (default: the testbed's, the two struts that share
+        each top vertex), all driven in unison.
+    arrangement : {"extension", "bending"}
+        Wafers in phase (the testbed's) or in anti-phase.
+
+    Returns
+    -------
+    (6 n_nodes, n_channels) float
+    """
+    tb, mp = tbm.testbed, tbm.map
+    channels = mp.channel_struts if channels is None else channels
+    wafer = wafer_of(tb)
+    offset = 0.5 * tb.adapter.side + 0.5 * tb.pzt.thickness
+    n_struts = mp.wafer_elements.shape[0]
+    cols = []
+    for c, struts in enumerate(channels):
+        f = 0.0
+        for s in np.atleast_1d(struts):
+            if not 0 <= int(s) < n_struts:
+                raise ModelError(f"actuator channel {c + 1}: strut {s} does not exist (struts are 0..{n_struts - 1})")
+            elements = mp.wafer_elements[int(s)]
+            elements = elements[elements >= 0]
+            if elements.size == 0:
+                raise ModelError(f"actuator channel {c + 1}: strut {s} has no adapter with PZT wafers")
+            f = f + strain_actuator_loads(tbm.model, elements, wafer, offset, face_axis="y",
+                                          arrangement=arrangement, n_wafers=tb.pzt.wafers_per_strut)
+        cols.append(f)
+    return np.column_stack(cols)
+
+
+def accelerometers(tbm: TestbedModel, quantity: str = "acceleration") -> list[Sensor]:
+    """The testbed's sensors (accelerometers at the UDF corners, by default vertical).
+
+    Acceleration outputs are in volts at the A/D input: accelerometer sensitivity times the
+    signal conditioner's gain (``tb.accelerometers.conditioning_gain``).
+    """
+    tb, mp = tbm.testbed, tbm.map
+    sens = tb.accelerometers.sensitivity * tb.accelerometers.conditioning_gain
+    if quantity != "acceleration":
+        sens = 1.0  # displacement/velocity outputs for analysis are in SI units
+    return [Sensor(int(n), tuple(d), quantity, sens, name=f"acc{k + 1}")
+            for k, (n, d) in enumerate(zip(mp.accelerometer_nodes, mp.accelerometer_directions))]
+
+
+def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_rate: float | None = None,
+                  quantity: str = "acceleration", chain: LabChain | None = None,
+                  static_correction: bool = False, tbm: TestbedModel | None = None) -> TestbedPlant:
+    """Build the testbed plant.
+
+    Parameters
+    ----------
+    tb : geometry.testbed.Testbed, optional
+        Default: the default testbed.
+    n_modes : int, optional
+        Modes kept; default all below the Nyquist frequency.
+    damping : float or sequence, optional
+        Modal damping ratio(s) [-]; default ``tb.damping.modal_ratio``.
+    sample_rate : float, optional
+        [Hz]; default ``tb.daq.sample_rate``.
+    quantity : {"acceleration", "velocity", "displacement"}
+        What the sensors measure (the lab's are accelerometers).
+    chain : LabChain, optional
+        Electronics; default from ``tb``.
+    static_correction : bool
+        Add the truncated modes' static displacement (displacement outputs; clamped base).
+    tbm : TestbedModel, optional
+        A model already built from ``tb``.
+
+    Returns
+    -------
+    TestbedPlant
+    """
+    if tbm is None:
+        tbm = build_testbed(tb)
+    tb = tbm.testbed
+    chain = chain or lab_chain_of(tb, sample_rate)
+    system = assemble(tbm.model)
+    if n_modes is None:
+        modes = solve_testbed_modes(tbm, system=system, max_frequency_hz=0.5 * chain.sample_rate)
+        if len(modes.omega) == 0:
+            raise ModelError(f"no mode lies below the Nyquist frequency {0.5 * chain.sample_rate:g} Hz")
+    else:
+        if int(n_modes) < 1:
+            raise ModelError(f"n_modes must be >= 1, got {n_modes}")
+        modes = solve_testbed_modes(tbm, n_modes=int(n_modes), system=system)
+    keep = len(modes.omega)
+    F = channel_loads(tbm)
+    sensors = accelerometers(tbm, quantity)
+    zeta = tb.damping.modal_ratio if damping is None else damping
+    resid = residual_flexibility(system, modes, F, keep) if static_correction else None
+    names = [f"ch{k + 1}" for k in range(F.shape[1])]
+    structure = modal_plant(modes, F, sensors, zeta, n_modes=keep, residual_flexibility=resid,
+                            input_names=names)
+    cont, disc = lab_plant(structure, chain, max_mode_hz=float(modes.frequencies_hz[keep - 1]))
+    wafer = wafer_of(tb)
+    return TestbedPlant(continuous=cont, discrete=disc, structure=structure,
+                        modes=modes, loads=F,
+                        capacitance=tb.pzt.wafers_per_strut * wafer.capacitance, chain=chain, tbm=tbm)
+
+
+testbed_plant.__test__ = False  # a builder, not a pytest test, despite its name
