@@ -68,7 +68,7 @@ def test_nonuniform_time_names_the_sample(tmp_path):
 
 
 def test_nan_names_column_and_sample(tmp_path):
-    p = write_csv(tmp_path / "a.csv", "t,u1,y1,y2\n0,1,2,3\n1,2,3,nan\n2,-1,0,1\n")
+    p = write_csv(tmp_path / "a.csv", "t,u1,y1,y2\n0,1,2,3\n0.001,2,3,nan\n0.002,-1,0,1\n")
     with pytest.raises(DataError, match="column 'y2' has a non-finite value \\(nan\\) at sample 1"):
         read_data(p)
 
@@ -101,13 +101,13 @@ def test_constant_input_is_refused(tmp_path):
 
 
 def test_unknown_column_suggests_the_closest(tmp_path):
-    p = write_csv(tmp_path / "a.csv", "t,force,acc1,acc2\n0,1,2,3\n1,2,3,4\n2,-1,0,1\n")
+    p = write_csv(tmp_path / "a.csv", "t [s],force,acc1,acc2\n0,1,2,3\n1,2,3,4\n2,-1,0,1\n")
     with pytest.raises(DataError, match="unknown column 'forse'; did you mean 'force'"):
         read_data(p, inputs=["forse"], outputs=["acc1"])
 
 
 def test_explicit_lists_override_the_naming_convention(tmp_path):
-    p = write_csv(tmp_path / "a.csv", "t,force,acc1,acc2\n0,1,2,3\n1,2,3,4\n2,-1,0,1\n")
+    p = write_csv(tmp_path / "a.csv", "t [s],force,acc1,acc2\n0,1,2,3\n1,2,3,4\n2,-1,0,1\n")
     d = read_data(p, inputs=["force"])
     assert d.input_names == ["force"] and d.output_names == ["acc1", "acc2"]
     d = read_data(p, inputs=["force"], outputs=["acc2"])

@@ -56,7 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trussid._util.files import atomic_path
+from trussid._util.files import atomic_path, check_parent
 
 #: Standard gravity [m/s^2], to give sensor noise in g.
 G0 = 9.80665
@@ -689,6 +689,7 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
         from trussid._util.errors import UserError
 
         raise UserError(f"--out {out} exists and is not a directory")
+    check_parent(out, "--out directory")  # before minutes of work, not at the first write
     t_start = time.perf_counter()
     timings = {}
 
@@ -733,6 +734,7 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
 
     t0 = time.perf_counter()
     say(f"[5/5] writing the report in {out}/ ...")
+    out.mkdir(exist_ok=True)
     files = {"data": [], "models": [], "figures": []}
     for name, (rid, rval) in records.items():
         for rec in (rid, rval):

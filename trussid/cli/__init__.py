@@ -51,18 +51,26 @@ def main(argv: list[str] | None = None) -> int:
     debug = args.debug or os.environ.get("TRUSSID_DEBUG") == "1"
     try:
         return int(args.func(args) or 0)
-    except (UserError, FileNotFoundError, IsADirectoryError, PermissionError) as exc:
-        if debug:
-            raise
-        msg = str(exc) if isinstance(exc, UserError) else f"{exc.strerror}: {exc.filename}"
-        print(f"trussid {args.command}: error: {msg}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"trussid {args.command}: interrupted", file=sys.stderr)
-        return 130
     except BrokenPipeError:
         # Output piped into a reader that stopped early (e.g. ``| head``): end quietly, as
         # the Python documentation recommends, without a second error at interpreter exit.
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 1
+    except (UserError, OSError) as exc:
+        # Any OSError about a file the user named (missing, unwritable, read-only file
+        # system, disk full) is their input; one without a file name is a bug.
+        user_file = isinstance(exc, (UserError, FileNotFoundError, IsADirectoryError,
+                                     PermissionError)) or exc.filename is not None
+        if debug or not user_file:
+            raise
+        if isinstance(exc, UserError) or exc.filename is None:
+            msg = str(exc)
+        else:
+            msg = f"{exc.strerror}: {exc.filename}"
+        print(f"trussid {args.command}: error: {msg}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"trussid {args.command}: interrupted", file=sys.stderr)
+        return 130
+

@@ -21,7 +21,7 @@ import numpy as np
 
 from trussid.cli.commands.identify import json_safe, names_arg, pole_table, prediction_burn_in
 from trussid._util.errors import UserError
-from trussid._util.files import atomic_path
+from trussid._util.files import atomic_path, check_parent
 from trussid.plots import bode_figure, pole_map_figure
 
 # plid, python-control and matplotlib are imported inside the functions: they take seconds
@@ -187,6 +187,9 @@ def run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
+    # --out names the directory itself, so it is made; a missing parent is refused
+    check_parent(out, "--out directory")
+    out.mkdir(exist_ok=True)
     written = []
     try:
         for fname, fig in figs.items():

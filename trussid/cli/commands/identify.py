@@ -121,6 +121,18 @@ def add_parser(subparsers):
                    "one-step prediction on the data (plid.multipass.identify_reduced; "
                    "what trussid demo uses: for a structure with more significant modes "
                    "than N/2). --start subspace or scratch only")
+    p.add_argument("--stabilisation", metavar="PLOT.png", default=None,
+                   help="also identify over a range of orders (--stabilisation-orders) and "
+                   "draw the stabilisation diagram: each pole marked stable in frequency "
+                   "(1 %%), damping (5 %%) and mode shape (MAC 0.98) against the order below, "
+                   "over the summed H1 of the data")
+    p.add_argument("--stabilisation-orders", metavar="LO:HI[:STEP]", default=None,
+                   help="orders of the stabilisation diagram (default: the number of "
+                   "outputs up to --order in steps of the number of outputs)")
+    p.add_argument("--modal-table", action="store_true",
+                   help="print the modal parameter table of the model: frequency, damping, "
+                   "mode shape at each output (magnitude, largest = 1) and the participation "
+                   "of each input")
     p.add_argument("--json", action="store_true",
                    help="print poles and the prediction ratio as JSON")
     p.set_defaults(func=run)
@@ -128,6 +140,7 @@ def add_parser(subparsers):
 
 
 def run(args) -> int:
+    from trussid._util.files import check_parent
     from trussid.plid.canonical import check_order
     from trussid.plid.datafile import check_enough_samples, read_data
     from trussid.plid.errors import DataError, IdentificationError
@@ -138,6 +151,11 @@ def run(args) -> int:
     out = str(args.out)
     if not out.lower().endswith(".npz"):
         raise DataError(f"--out {out}: model files are .npz")
+    check_parent(out, "--out")
+    if getattr(args, "stabilisation", None) is not None:
+        if not str(args.stabilisation).lower().endswith(".png"):
+            raise DataError(f"--stabilisation {args.stabilisation}: the diagram is a .png")
+        check_parent(args.stabilisation, "--stabilisation")
     if args.order < 1:
         raise IdentificationError(f"--order must be a positive integer, got {args.order}")
     data = read_data(args.data, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
@@ -209,6 +227,11 @@ def run(args) -> int:
         summary["via"] = list(ident.info["via"])
         summary["chosen"] = ident.info["chosen"]
         summary["candidates"] = ident.info["candidates"]
+    from trussid.cli.commands._modal import modal_outputs
+
+    modal_lines = modal_outputs(args, data, model, start, form, summary)
+    for note in data.notes:
+        print(f"trussid identify: note: {note}", file=sys.stderr)
     for note in notes:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
@@ -226,4 +249,6 @@ def run(args) -> int:
     print("poles (frequency [Hz], damping):")
     for row in summary["poles"]:
         print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")
+    for line in modal_lines:
+        print(line)
     return 0
