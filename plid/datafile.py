@@ -629,10 +629,18 @@ def _sample_axis(shapes: dict, n_declared, source: str, t_key=None):
             if all(len(shape) == 1 or (shape[1] if shape[0] == n else shape[0]) < n
                    for shape in shapes.values()):
                 ok.append(n)
-        if not ok:  # name the lengths as samples along the longer axis, the usual layout
-            (k1, s1), (k2, s2) = next(
-                ((a, sa), (b, sb)) for a, sa in shapes.items() for b, sb in shapes.items()
-                if max(sa) != max(sb))
+        if not ok:
+            for key, shape in shapes.items():
+                if len(shape) == 2 and shape[0] == shape[1]:
+                    raise DataError(f"{source}: variable '{key}' is {shape[0]}x{shape[1]}: "
+                                    "cannot tell samples from channels")
+            # name the lengths as samples along the longer axis, the usual layout
+            pairs = [(a, sa, b, sb) for a, sa in shapes.items() for b, sb in shapes.items()
+                     if max(sa) != max(sb)]
+            desc = ", ".join(f"'{k}' {'x'.join(map(str, s))}" for k, s in shapes.items())
+            if not pairs:
+                raise DataError(f"{source}: cannot tell samples from channels ({desc})")
+            k1, s1, k2, s2 = pairs[0]
             raise DataError(f"{source}: length mismatch: '{k1}' has {max(s1)} samples, "
                             f"'{k2}' has {max(s2)}")
         if len(ok) > 1:
@@ -693,6 +701,11 @@ def _read_arrays(path: Path, inputs, outputs, fs_given=None) -> IOData:
     out_key = next((k for k in _OUT_KEYS if k in arrays), None)
     by_variable = req_in is not None or req_out is not None
     if by_variable:
+        for items, req in ((inputs, req_in), (outputs, req_out)):
+            if items is not None and req is None:  # a typo among variable names
+                bad = next(w for w in _join_specs(list(items))
+                           if w.split(":")[0] not in arrays)
+                raise _unknown(bad, sorted(arrays), source, "variable")
         if req_in is None:
             if inputs is not None or in_key is None:
                 raise DataError(f"{source}: name the input variable(s) with --inputs too "
@@ -822,7 +835,10 @@ def write_data(data: IOData, path) -> Path:
         with atomic_path(path) as tmp:
             with open(tmp, "w", newline="") as fh:
                 fh.write(",".join(["t", *in_names, *out_names]) + "\n")
-                np.savetxt(fh, table, delimiter=",", fmt="%.17g")
+                # %s of a float64 is its shortest exact form (0.000625, not %.17g's
+                # 0.00062500000000000001); the channels keep 17 digits, exact on reading
+                np.savetxt(fh, table, delimiter=",",
+                           fmt=["%s"] + ["%.17g"] * (table.shape[1] - 1))
     else:
         arrays = dict(u=data.u, y=data.y, fs=np.float64(data.fs),
                       input_names=np.array(data.input_names, dtype=str),
