@@ -14,6 +14,8 @@ _LAZY = {
     "n4sid": "subspace", "order_table": "order",
     "stabilise": "stability", "balanced_truncation": "reduce",
     "IOData": "datafile", "read_data": "datafile", "write_data": "datafile",
+    "read_uff": "uff", "write_uff": "uff",
+    "ModeShapes": "modal", "modal_table": "modal", "mac": "modal", "stabilisation": "modal",
     "save_model": "modelfile", "load_model": "modelfile",
     "excitation": "experiment", "run_experiment": "experiment", "simulate": "experiment",
     "h1": "frf", "h2": "frf", "stepped_sine": "frf", "FRF": "frf",

@@ -218,6 +218,10 @@ class Stabilisation:
         Per order and mode: ``"new"`` (no pole near it at the order below), ``"f"``
         (frequency stable), ``"fd"`` (frequency and damping), ``"fv"`` (frequency and
         shape) or ``"s"`` (all three: stable).
+    runs : list of ndarray of int
+        Per order and mode: over how many consecutive order steps (ending here) the pole
+        has been stable in all three (0 for any other status). Modal analysts trust a
+        column of stable poles, not one stable step: a noise pole can match once.
     failed : list of (int, str)
         Orders that gave no model, with the reason.
     tolerances : dict
@@ -230,23 +234,27 @@ class Stabilisation:
     orders: list
     modes: list
     status: list
+    runs: list = field(default_factory=list)
     failed: list = field(default_factory=list)
     tolerances: dict = field(default_factory=dict)
     models: list = field(default_factory=list)
     seconds: list = field(default_factory=list)
 
-    def stable_poles(self, order: int | None = None) -> ModeShapes:
-        """The modes marked ``"s"`` at ``order`` (default: the highest order)."""
+    def stable_poles(self, order: int | None = None, min_run: int = 1) -> ModeShapes:
+        """The modes stable in all three at ``order`` (default: the highest order) over at
+        least ``min_run`` consecutive order steps."""
         k = len(self.orders) - 1 if order is None else self.orders.index(order)
-        return self.modes[k].select(self.status[k] == "s")
+        return self.modes[k].select(self.runs[k] >= max(min_run, 1))
 
 
 def mark_stability(prev: ModeShapes | None, cur: ModeShapes, tol_f: float, tol_zeta: float,
-                   tol_mac: float) -> np.ndarray:
-    """Status of each mode of ``cur`` against the nearest-frequency mode of ``prev``."""
+                   tol_mac: float, return_match: bool = False):
+    """Status of each mode of ``cur`` against the nearest-frequency mode of ``prev``
+    (and, with ``return_match``, the index of that mode, -1 where none is near)."""
     status = np.array(["new"] * cur.n_modes, dtype=object)
+    match = np.full(cur.n_modes, -1)
     if prev is None or prev.n_modes == 0 or cur.n_modes == 0:
-        return status
+        return (status, match) if return_match else status
     macs = mac(cur.shapes, prev.shapes)
     for k in range(cur.n_modes):
         j = int(np.argmin(np.abs(prev.frequencies_hz - cur.frequencies_hz[k])))
@@ -254,10 +262,11 @@ def mark_stability(prev: ModeShapes | None, cur: ModeShapes, tol_f: float, tol_z
                                                                         1e-300)
         if df > tol_f:
             continue
+        match[k] = j
         dz = abs(cur.damping[k] - prev.damping[j]) / max(prev.damping[j], 1e-300)
         d_ok, v_ok = dz <= tol_zeta, macs[k, j] >= tol_mac
         status[k] = "s" if d_ok and v_ok else "fd" if d_ok else "fv" if v_ok else "f"
-    return status
+    return (status, match) if return_match else status
 
 
 def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
@@ -325,7 +334,11 @@ def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
         modes = modal_table(model, physical_only=True)
         res.orders.append(n)
         res.modes.append(modes)
-        res.status.append(mark_stability(prev, modes, tol_f, tol_zeta, tol_mac))
+        status, match = mark_stability(prev, modes, tol_f, tol_zeta, tol_mac, True)
+        run_prev = res.runs[-1] if res.runs else np.zeros(0, int)
+        res.status.append(status)
+        res.runs.append(np.array([run_prev[j] + 1 if st == "s" else 0
+                                  for st, j in zip(status, match)], dtype=int))
         res.models.append(model)
         res.seconds.append(time.perf_counter() - t0)
         prev = modes

@@ -77,10 +77,13 @@ def _stabilisation(args, data, start, form, summary) -> list[str]:
     fig = stabilisation_figure(stab, frf=(est.f, est.H),
                                title=f"stabilisation diagram: {args.data}")
     save_figure(fig, args.stabilisation)
-    stable = stab.stable_poles()
+    # a noise pole can match its neighbour once; a physical one stays: ask for two steps
+    min_run = min(2, max(len(stab.orders) - 1, 1))
+    stable = stab.stable_poles(min_run=min_run)
     summary["stabilisation"] = {
         "plot": str(args.stabilisation), "orders": stab.orders,
         "failed": [{"order": n, "reason": why} for n, why in stab.failed],
+        "stable_steps_required": min_run,
         "stable_at_highest_order": [
             {"frequency_hz": float(f), "damping": float(z)}
             for f, z in zip(stable.frequencies_hz, stable.damping)],
@@ -90,7 +93,8 @@ def _stabilisation(args, data, start, form, summary) -> list[str]:
              f"({len(stab.orders)} models), written to {args.stabilisation}"]
     for n, why in stab.failed:
         lines.append(f"  order {n}: no model ({why})")
-    lines.append(f"  stable at order {stab.orders[-1]} (frequency, damping and shape): "
+    lines.append(f"  stable at order {stab.orders[-1]} in frequency, damping and shape over "
+                 f"the last {min_run} order step(s): "
                  + (", ".join(f"{f:.2f} Hz ({100 * z:.2f} %)" for f, z in
                               zip(stable.frequencies_hz, stable.damping)) or "none"))
     return lines
