@@ -159,3 +159,11 @@ def test_identify_draws_the_stabilisation_diagram_and_the_modal_table(tmp_path, 
     code, _, err = run(capsys, "identify", tmp_path / "d.uff", "--order", 4, "--out",
                        tmp_path / "m.npz", "--stabilisation", tmp_path / "stab.pdf")
     assert code == 2 and "the diagram is a .png" in err[0]
+
+
+def test_demo_refuses_a_missing_parent_before_any_work(tmp_path, capsys):
+    """Audit B104: the demo failed only at its first write, after the plant was built."""
+    code, _, err = run(capsys, "demo", "--quick", "--out", tmp_path / "nope" / "report")
+    assert code == 2 and len(err) == 1
+    assert f"--out: directory {tmp_path / 'nope'} does not exist" in err[0]
+    assert not (tmp_path / "nope").exists()

@@ -22,8 +22,9 @@ def check_parent(path: str | os.PathLike, what: str = "output") -> Path:
     parent = path.parent
     if not parent.is_dir():
         kind = "is not a directory" if parent.exists() else "does not exist"
-        raise FileNotFoundError(errno.ENOENT, f"directory {parent} {kind} (trussid creates "
-                                f"no directories for an {what}; create it first)", str(path))
+        raise FileNotFoundError(errno.ENOENT, f"{what}: directory {parent} {kind} (create it "
+                                "first: trussid makes no directory it was not asked for)",
+                                str(path))
     return path
 
 

@@ -689,7 +689,7 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
         from trussid._util.errors import UserError
 
         raise UserError(f"--out {out} exists and is not a directory")
-    check_parent(out, "--out directory")  # before minutes of work, not at the first write
+    check_parent(out, "--out")  # before minutes of work, not at the first write
     t_start = time.perf_counter()
     timings = {}
 

@@ -188,7 +188,7 @@ def run(args) -> int:
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
     # --out names the directory itself, so it is made; a missing parent is refused
-    check_parent(out, "--out directory")
+    check_parent(out, "--out")
     out.mkdir(exist_ok=True)
     written = []
     try:
