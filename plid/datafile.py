@@ -523,7 +523,7 @@ def _names(raw, count: int, default: str) -> list[str]:
 
 _FS_KEYS = ("fs", "Fs", "FS", "fsamp", "sample_rate", "SampleRate", "samplerate")
 _TS_KEYS = ("Ts", "ts", "dt", "DT", "Dt", "T_s", "Tsamp")
-_T_KEYS = ("t", "time", "Time", "T")
+_T_KEYS = ("t", "time", "Time")
 _IN_KEYS = ("u", "U", "input", "inputs", "Input", "in")
 _OUT_KEYS = ("y", "Y", "output", "outputs", "Output", "out")
 

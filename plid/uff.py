@@ -102,7 +102,8 @@ def _records(path: Path) -> list[dict]:
     source = str(path)
     raw = path.read_bytes()
     lines = raw.splitlines()
-    delims = [i for i, ln in enumerate(lines) if ln.rstrip() == b"    -1" or ln.strip() == b"-1"]
+    # pyuff's own rule: '    -1' at the end of a line (trailing blanks allowed)
+    delims = [i for i, ln in enumerate(lines) if ln.rstrip(b" \r").endswith(b"    -1")]
     if not delims:
         raise DataError(f"{source}: not a UFF file (no '    -1' data-set delimiter)")
     if len(delims) % 2:
