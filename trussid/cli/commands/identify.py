@@ -88,16 +88,20 @@ def add_parser(subparsers):
         "(CSV with u*/y* columns and optional time column t, or NPZ/MAT with u, y, fs) by "
         "PLID, and write it as a model file with its one-step predictor gain. Noise "
         "covariances are in units of the data scaled to unit RMS per channel.")
-    p.add_argument("data", metavar="DATA", help="data file: .csv, .npz or .mat")
+    p.add_argument("data", metavar="DATA",
+                   help="data file: .csv (',', ';' or tab; units in the header such as "
+                   "'t [ms]'; # comments), .npz, .mat or .uff/.unv (UFF 58 time histories)")
     p.add_argument("--order", type=int, required=True, metavar="N",
                    help="model order (number of states; a multiple of the number of outputs)")
     p.add_argument("--out", required=True, metavar="MODEL.npz", help="output model file")
     p.add_argument("--fs", type=float, metavar="HZ",
                    help="sampling frequency, if the file has neither fs nor a time column")
     p.add_argument("--inputs", nargs="+", metavar="NAME",
-                   help="input columns/channels to use (names; space or comma separated)")
+                   help="input columns/channels to use (names; space or comma separated); "
+                   "in .mat/.npz files also variable names or VAR:COLUMNS counted from 1, "
+                   "e.g. data:1,2 or data:3-5")
     p.add_argument("--outputs", nargs="+", metavar="NAME",
-                   help="output columns/channels to use")
+                   help="output columns/channels to use (as --inputs)")
     p.add_argument("--start", choices=("subspace", "scratch", "plain"), default="subspace",
                    help="subspace (default): a quick N4SID estimate (D = 0) refined by one "
                    "PLID pass in a rotation observer basis (won the thesis-scale benchmarks, "
