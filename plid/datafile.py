@@ -412,6 +412,40 @@ def _parse_cells(rows, lines, header, source, delim):
     return values
 
 
+def _csv_roles(header, time_name, inputs, outputs, source):
+    """Input and output column names: listed, or by the u*/y* convention."""
+    others = [h for h in header if h != time_name]
+    for lst in (inputs, outputs):
+        for name in lst or []:
+            if name not in header:
+                raise _unknown(name, header, source)
+    if inputs is None and outputs is None:
+        in_names = [h for h in others if h[:1] in "uU"]
+        out_names = [h for h in others if h[:1] in "yY"]
+        rest = [h for h in others if h not in in_names and h not in out_names]
+        if rest:
+            raise DataError(f"{source}: cannot tell whether column '{rest[0]}' is an input "
+                            "or an output: name inputs u* and outputs y*, or list them "
+                            "with --inputs/--outputs")
+    elif outputs is None:
+        in_names = list(inputs)
+        out_names = [h for h in others if h not in in_names]
+    elif inputs is None:
+        out_names = list(outputs)
+        in_names = [h for h in others if h not in out_names]
+    else:
+        in_names, out_names = list(inputs), list(outputs)
+    both = set(in_names) & set(out_names)
+    if both:
+        raise DataError(f"{source}: column '{sorted(both)[0]}' is listed as both input and "
+                        "output")
+    if not in_names:
+        raise DataError(f"{source}: no input columns (name them u* or use --inputs)")
+    if not out_names:
+        raise DataError(f"{source}: no output columns (name them y* or use --outputs)")
+    return in_names, out_names
+
+
 def _read_csv(path: Path, inputs, outputs, fs_given=None) -> IOData:
     source = str(path)
     text = _decode(path)
@@ -463,35 +497,7 @@ def _read_csv(path: Path, inputs, outputs, fs_given=None) -> IOData:
     time_name = time_cols[0] if time_cols else None
     if len(time_cols) > 1:
         raise DataError(f"{source}: two time columns ('{time_cols[0]}', '{time_cols[1]}')")
-    others = [h for h in header if h != time_name]
-    for lst in (inputs, outputs):
-        for name in lst or []:
-            if name not in header:
-                raise _unknown(name, header, source)
-    if inputs is None and outputs is None:
-        in_names = [h for h in others if h[:1] in "uU"]
-        out_names = [h for h in others if h[:1] in "yY"]
-        rest = [h for h in others if h not in in_names and h not in out_names]
-        if rest:
-            raise DataError(f"{source}: cannot tell whether column '{rest[0]}' is an input "
-                            "or an output: name inputs u* and outputs y*, or list them "
-                            "with --inputs/--outputs")
-    elif outputs is None:
-        in_names = list(inputs)
-        out_names = [h for h in others if h not in in_names]
-    elif inputs is None:
-        out_names = list(outputs)
-        in_names = [h for h in others if h not in out_names]
-    else:
-        in_names, out_names = list(inputs), list(outputs)
-    both = set(in_names) & set(out_names)
-    if both:
-        raise DataError(f"{source}: column '{sorted(both)[0]}' is listed as both input and "
-                        "output")
-    if not in_names:
-        raise DataError(f"{source}: no input columns (name them u* or use --inputs)")
-    if not out_names:
-        raise DataError(f"{source}: no output columns (name them y* or use --outputs)")
+    in_names, out_names = _csv_roles(header, time_name, inputs, outputs, source)
     u = np.column_stack([cols[h] for h in in_names]) if rows else np.empty((0, len(in_names)))
     y = np.column_stack([cols[h] for h in out_names]) if rows else np.empty((0, len(out_names)))
     t, fs, notes = None, None, []
@@ -691,6 +697,44 @@ def _gather(req, arrays, transposed, source, kind):
     return np.column_stack(cols), names
 
 
+def _named_channels(arrays, u, y, in_key, out_key, transposed, inputs, outputs, source):
+    """Channel names from ``input_names``/``output_names`` and the channels picked by name."""
+    y_clean = None
+    in_names = _names(arrays.get("input_names"), u.shape[1], "u")
+    out_names = _names(arrays.get("output_names"), y.shape[1], "y")
+    if len(in_names) != u.shape[1]:
+        raise DataError(f"{source}: {len(in_names)} input_names for {u.shape[1]} "
+                        f"columns of '{in_key}'")
+    if len(out_names) != y.shape[1]:
+        raise DataError(f"{source}: {len(out_names)} output_names for {y.shape[1]} "
+                        f"columns of '{out_key}'")
+    if "y_clean" in arrays:
+        y_clean = _numeric(arrays, "y_clean", source)
+        y_clean = y_clean[:, None] if y_clean.ndim == 1 else (
+            y_clean.T if transposed.get("y_clean") else y_clean)
+        if y_clean.shape != y.shape:
+            raise DataError(f"{source}: array 'y_clean' has shape {y_clean.shape}, "
+                            f"'y' has {y.shape}")
+    known = in_names + out_names
+    for w in list(inputs or []) + list(outputs or []):
+        if w not in known:
+            raise _unknown(w, known, source)
+    # A name may move between roles only in CSV; in NPZ/MAT the arrays fix the role.
+    for w in inputs or []:
+        if w not in in_names:
+            raise DataError(f"{source}: '{w}' is an output channel (array "
+                            f"'{out_key}'), not an input")
+    for w in outputs or []:
+        if w not in out_names:
+            raise DataError(f"{source}: '{w}' is an input channel (array "
+                            f"'{in_key}'), not an output")
+    if y_clean is not None and outputs is not None:
+        _, y_clean = _select(out_names, y_clean, outputs, "output", source)
+    in_names, u = _select(in_names, u, inputs, "input", source)
+    out_names, y = _select(out_names, y, outputs, "output", source)
+    return u, y, in_names, out_names, y_clean
+
+
 def _read_arrays(path: Path, inputs, outputs, fs_given=None) -> IOData:
     source = str(path)
     arrays = _load_arrays(path, source)
@@ -739,40 +783,9 @@ def _read_arrays(path: Path, inputs, outputs, fs_given=None) -> IOData:
     u, in_names = _gather(req_in, arrays, transposed, source, "input")
     y, out_names = _gather(req_out, arrays, transposed, source, "output")
     y_clean = None
-    if not by_variable:
-        # the trussid layout: names in input_names/output_names, channels picked by name
-        in_names = _names(arrays.get("input_names"), u.shape[1], "u")
-        out_names = _names(arrays.get("output_names"), y.shape[1], "y")
-        if len(in_names) != u.shape[1]:
-            raise DataError(f"{source}: {len(in_names)} input_names for {u.shape[1]} "
-                            f"columns of '{in_key}'")
-        if len(out_names) != y.shape[1]:
-            raise DataError(f"{source}: {len(out_names)} output_names for {y.shape[1]} "
-                            f"columns of '{out_key}'")
-        if "y_clean" in arrays:
-            y_clean = _numeric(arrays, "y_clean", source)
-            y_clean = y_clean[:, None] if y_clean.ndim == 1 else (
-                y_clean.T if transposed.get("y_clean") else y_clean)
-            if y_clean.shape != y.shape:
-                raise DataError(f"{source}: array 'y_clean' has shape {y_clean.shape}, "
-                                f"'y' has {y.shape}")
-        known = in_names + out_names
-        for w in list(inputs or []) + list(outputs or []):
-            if w not in known:
-                raise _unknown(w, known, source)
-        # A name may move between roles only in CSV; in NPZ/MAT the arrays fix the role.
-        for w in inputs or []:
-            if w not in in_names:
-                raise DataError(f"{source}: '{w}' is an output channel (array "
-                                f"'{out_key}'), not an input")
-        for w in outputs or []:
-            if w not in out_names:
-                raise DataError(f"{source}: '{w}' is an input channel (array "
-                                f"'{in_key}'), not an output")
-        if y_clean is not None and outputs is not None:
-            _, y_clean = _select(out_names, y_clean, outputs, "output", source)
-        in_names, u = _select(in_names, u, inputs, "input", source)
-        out_names, y = _select(out_names, y, outputs, "output", source)
+    if not by_variable:  # the trussid layout: names in input_names/output_names
+        u, y, in_names, out_names, y_clean = _named_channels(
+            arrays, u, y, in_key, out_key, transposed, inputs, outputs, source)
     fs = _fs_of_arrays(arrays, t_key, t_vec, fs_given, source, notes)
     return IOData(u=u, y=y, fs=fs, input_names=in_names, output_names=out_names,
                   y_clean=y_clean, notes=notes)

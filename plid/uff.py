@@ -116,13 +116,13 @@ def _records(path: Path) -> list[dict]:
     try:
         uf = pyuff.UFF(str(path))
         types = [int(t) for t in uf.get_set_types()]
-    except Exception as exc:
+    except Exception as exc:  # pyuff raises bare Exception for every failure
         raise DataError(f"{source}: cannot read as UFF ({exc})") from None
     out = []
     for k, kind in enumerate(types):
         try:
             ds = uf.read_sets(k)
-        except Exception as exc:
+        except Exception as exc:  # pyuff raises bare Exception for every failure
             raise DataError(f"{source}: record {k + 1} (data set {kind}) cannot be read "
                             f"({exc})") from None
         ds = dict(ds)

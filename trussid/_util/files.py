@@ -89,7 +89,7 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None):
             if exc.filename is not None and os.fspath(exc.filename) == os.fspath(tmp):
                 raise type(exc)(exc.errno, exc.strerror, str(path)) from None
             raise
-    except BaseException:
+    except BaseException:  # any failure, Ctrl-C included: remove the temporary file, re-raise
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
