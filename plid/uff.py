@@ -445,6 +445,9 @@ def _frf_sets(frf, input_names, output_names) -> list[dict]:
 
 
 def _mode_sets(modes) -> list[dict]:
+    if modes.dofs is None or len(modes.dofs) != modes.shapes.shape[0]:
+        raise DataError("mode shapes to write: UFF 55 needs a (node, direction) for each of "
+                        f"the {modes.shapes.shape[0]} rows of the shapes (ModeShapes.dofs)")
     nodes = sorted({n for n, _ in modes.dofs})
     complex_ = np.iscomplexobj(modes.shapes)
     sets = []

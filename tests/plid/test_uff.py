@@ -221,3 +221,18 @@ def test_identify_reads_a_uff_file(tmp_path, capsys):
     (pole,) = [p for p in summary["poles"] if p["damping"] < 0.5]
     assert pole["frequency_hz"] == pytest.approx(10.0, rel=1e-3)
     assert pole["damping"] == pytest.approx(0.02, rel=2e-2)
+
+
+def test_real_normal_modes_round_trip_as_uff55_analysis_type_2(tmp_path, rng):
+    """FE modes are real: written as normal modes with frequency and viscous damping."""
+    modes = ModeShapes(frequencies_hz=np.array([50.43, 79.4]), damping=np.array([0.0, 0.005]),
+                       shapes=rng.standard_normal((3, 2)), dofs=[(11, 1), (11, 2), (12, 3)])
+    back = read_uff(write_uff(tmp_path / "fe.uff", modes=modes)).modes
+    assert not np.iscomplexobj(back.shapes)
+    np.testing.assert_allclose(back.frequencies_hz, modes.frequencies_hz, rtol=E13_5)
+    np.testing.assert_allclose(back.damping, modes.damping, atol=1e-8)
+    rows = [back.dofs.index(d) for d in modes.dofs]
+    np.testing.assert_allclose(back.shapes[rows], modes.shapes, rtol=E13_5, atol=1e-300)
+    with pytest.raises(DataError, match="needs a \\(node, direction\\) for each of the 3 rows"):
+        write_uff(tmp_path / "x.uff", modes=ModeShapes(modes.frequencies_hz, modes.damping,
+                                                       modes.shapes))

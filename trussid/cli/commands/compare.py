@@ -15,6 +15,7 @@ mistake leaves no output behind.
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -117,6 +118,8 @@ def _load_reference(args, model, meta, kind, ref_path):
         return truth, (val.data.u, val.data.y, val.y_clean, meta["K"], None)
     data = read_data(ref_path, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
                      fs=args.fs)
+    for note in data.notes:  # what the reader assumed, e.g. a time column in milliseconds
+        print(f"trussid compare: note: {note}", file=sys.stderr)
     if abs(data.fs - fs) > 1e-6 * fs:
         raise UserError(f"the model samples at {fs:g} Hz but the data at {data.fs:g} Hz")
     _check_channels(meta, (data.input_names, data.output_names), "data")
