@@ -92,7 +92,8 @@ def main(argv=None) -> int:
     M = mac(sets[0], sets[1])
     fig = mac_figure(M, sets[0].frequencies_hz, sets[1].frequencies_hz,
                      f"first half, order {args.order}", f"second half, order {args.order}",
-                     title="MAC at accelerometers 1, 10, 19: PLID on the two halves of the record")
+                     title="MAC at accelerometers 1, 10, 19: PLID on the two halves of the record\n"
+                     "(3 sensors: different modes cannot all be orthogonal)")
     save_figure(fig, out / "subframe_mac.png")
     best = M.max(axis=1)
     print(f"MAC, first half ({sets[0].n_modes} modes below 5 % damping) against the second "
@@ -100,6 +101,7 @@ def main(argv=None) -> int:
     for f, b, j in zip(sets[0].frequencies_hz, best, M.argmax(axis=1)):
         print(f"  {f:8.2f} Hz -> {sets[1].frequencies_hz[j]:8.2f} Hz  MAC {b:.3f}")
     print(f"wrote {out / 'subframe_stabilisation.png'} and {out / 'subframe_mac.png'}")
+    print(f"seconds: stabilisation {t_stab:.0f}, whole run {time.perf_counter() - t0:.0f}")
     return 0
 
 
