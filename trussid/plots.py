@@ -191,71 +191,6 @@ def pole_zero_figure(model, truth, band, title, collocated: int = 0):
     ax2.legend(loc="upper right", fontsize=8)
     ax2.set_title("modes: frequency and damping")
     fig.suptitle(title)
-#: Marker of each stability status in the stabilisation diagram (as modal-analysis software
-#: draws them: o new, f frequency, d damping, v vector (shape), s all stable).
-STABILITY_MARKERS = {
-    "new": dict(marker="o", ms=3.5, mfc="none", color="0.6", label="new pole"),
-    "f": dict(marker="_", ms=7, color="C0", label="f: frequency stable"),
-    "fd": dict(marker="x", ms=4.5, color="C2", label="d: + damping stable"),
-    "fv": dict(marker="^", ms=4, mfc="none", color="C1", label="v: + shape stable (MAC)"),
-    "s": dict(marker="+", ms=7, mew=1.6, color="C3", label="s: all stable"),
-}
-
-
-def stabilisation_figure(stab, frf=None, title: str = "stabilisation diagram",
-                         fmax: float | None = None):
-    """Stabilisation diagram: every pole of every order at its frequency, marked by stability.
-
-    Parameters
-    ----------
-    stab : trussid.plid.modal.Stabilisation
-    frf : (f [Hz], H (n_freq, p, m)), optional
-        Drawn behind the poles as the sum over channels of |H| [dB] (right axis), so that
-        stable columns can be checked against the resonance peaks.
-    title : str
-    fmax : float, optional
-        Upper frequency limit [Hz] (default: the largest pole or FRF frequency).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    fig = Figure(figsize=(10, 6))
-    ax = fig.subplots()
-    top = 0.0
-    if frf is not None:
-        f, H = frf
-        ax2 = ax.twinx()
-        level = 20 * np.log10(np.sum(np.abs(H), axis=(1, 2)) + 1e-300)
-        ax2.plot(f, level, color="0.75", lw=1.0, zorder=0)
-        ax2.set_ylabel("sum of |FRF| [dB]", color="0.45")
-        ax2.tick_params(axis="y", colors="0.45")
-        top = float(np.max(f))
-        ax.set_zorder(ax2.get_zorder() + 1)
-        ax.patch.set_visible(False)
-    seen = set()
-    for n, modes, status in zip(stab.orders, stab.modes, stab.status):
-        for key, style in STABILITY_MARKERS.items():
-            sel = status == key
-            if not np.any(sel):
-                continue
-            st = dict(style)
-            label = st.pop("label")
-            label = label if key not in seen else None
-            seen.add(key)
-            ax.plot(modes.frequencies_hz[sel], np.full(int(sel.sum()), n), ls="none",
-                    label=label, **st)
-            top = max(top, float(np.max(modes.frequencies_hz[sel])))
-    ax.set_xlim(0, fmax or top * 1.02 or 1.0)
-    ax.set_ylim(min(stab.orders) - 1, max(stab.orders) + 1)
-    ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel("model order (states)")
-    tol = stab.tolerances
-    ax.set_title(f"{title}\nstable: frequency within {100 * tol.get('f', 0):g} %, damping "
-                 f"within {100 * tol.get('damping', 0):g} %, MAC >= {tol.get('mac', 0):g} "
-                 "against the order below", fontsize=10)
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
     fig.tight_layout()
     return fig
 
@@ -372,6 +307,79 @@ def plant_bode_figure(plant: control.StateSpace, title: str = ""):
     ax1.legend(fontsize=7, ncol=3)
     for ax in (ax1, ax2):
         ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+#: Marker of each stability status in the stabilisation diagram (as modal-analysis software
+#: draws them: o new, f frequency, d damping, v vector (shape), s all stable).
+STABILITY_MARKERS = {
+    "new": dict(marker="o", ms=3.5, mfc="none", color="0.6", label="new pole"),
+    "f": dict(marker="_", ms=7, color="C0", label="f: frequency stable"),
+    "fd": dict(marker="x", ms=4.5, color="C2", label="d: + damping stable"),
+    "fv": dict(marker="^", ms=4, mfc="none", color="C1", label="v: + shape stable (MAC)"),
+    "s": dict(marker="+", ms=7, mew=1.6, color="C3", label="s: all stable"),
+}
+
+
+def stabilisation_figure(stab, frf=None, title: str = "stabilisation diagram",
+                         fmax: float | None = None):
+    """Stabilisation diagram: every pole of every order at its frequency, marked by stability.
+
+    Parameters
+    ----------
+    stab : trussid.plid.modal.Stabilisation
+    frf : (f [Hz], H (n_freq, p, m)), optional
+        Drawn behind the poles as the sum over channels of |H| [dB] (right axis), so that
+        stable columns can be checked against the resonance peaks.
+    title : str
+    fmax : float, optional
+        Upper frequency limit [Hz] (default: the largest pole or FRF frequency).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = Figure(figsize=(10, 6))
+    ax = fig.subplots()
+    top = 0.0
+    if frf is not None:
+        f, H = frf
+        ax2 = ax.twinx()
+        level = 20 * np.log10(np.sum(np.abs(H), axis=(1, 2)) + 1e-300)
+        ax2.plot(f, level, color="0.75", lw=1.0, zorder=0)
+        ax2.set_ylabel("sum of |FRF| [dB]", color="0.45")
+        ax2.tick_params(axis="y", colors="0.45")
+        top = float(np.max(f))
+        ax.set_zorder(ax2.get_zorder() + 1)
+        ax.patch.set_visible(False)
+    seen = set()
+    for n, modes, status in zip(stab.orders, stab.modes, stab.status):
+        for key, style in STABILITY_MARKERS.items():
+            sel = status == key
+            if not np.any(sel):
+                continue
+            st = dict(style)
+            label = st.pop("label")
+            label = label if key not in seen else None
+            seen.add(key)
+            ax.plot(modes.frequencies_hz[sel], np.full(int(sel.sum()), n), ls="none",
+                    label=label, **st)
+            top = max(top, float(np.max(modes.frequencies_hz[sel])))
+    ax.set_xlim(0, fmax or top * 1.02 or 1.0)
+    ax.set_ylim(min(stab.orders) - 1, max(stab.orders) + 1)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("model order (states)")
+    tol = stab.tolerances
+    ax.set_title(f"{title}\nstable: frequency within {100 * tol.get('f', 0):g} %, damping "
+                 f"within {100 * tol.get('damping', 0):g} %, MAC >= {tol.get('mac', 0):g} "
+                 "against the order below", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
+    fig.tight_layout()
+    return fig
+
+
 def mac_figure(M, freqs_a=None, freqs_b=None, name_a: str = "set A", name_b: str = "set B",
                title: str = "MAC"):
     """MAC matrix as a colour map with the value in each cell.
