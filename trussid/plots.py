@@ -375,7 +375,9 @@ def stabilisation_figure(stab, frf=None, title: str = "stabilisation diagram",
                  f"within {100 * tol.get('damping', 0):g} %, MAC >= {tol.get('mac', 0):g} "
                  "against the order below", fontsize=10)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
+    # below the axes: inside, it hides the poles of the highest orders
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=5, fontsize=8,
+              frameon=False)
     fig.tight_layout()
     return fig
 
