@@ -1,0 +1,94 @@
+"""Sphinx configuration of the trussid documentation site.
+
+Build (from the repository root)::
+
+    python -m sphinx -W -b html docs docs/_build/html
+
+The API reference is generated from the docstrings (numpydoc); the examples in
+``examples/`` are run by sphinx-gallery, which keeps their figures.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import trussid
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(DOCS))  # for the gallery's argv helper, _gallery_argv.py
+
+project = "trussid"
+author = "trussid contributors"
+copyright = "2026, trussid contributors"  # noqa: A001 - Sphinx's name
+release = version = trussid.__version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "myst_parser",
+    "sphinx_gallery.gen_gallery",
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+exclude_patterns = ["_build", "**.ipynb_checkpoints", "auto_examples/*.ipynb",
+                    "auto_examples/*.py", "auto_examples/*.zip"]
+templates_path = ["_templates"]
+root_doc = "index"
+
+# API reference: one page per public name of each subpackage's __all__.
+autosummary_generate = True
+autosummary_ignore_module_all = False
+autosummary_imported_members = True  # the exports live in submodules
+autodoc_default_options = {"members": False}
+autodoc_typehints = "none"  # numpydoc sections carry the types and units
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_xref_param_type = False
+
+myst_heading_anchors = 3
+
+# The examples: run at build time unless they take minutes; figures kept.
+sphinx_gallery_conf = {
+    "examples_dirs": [str(ROOT / "examples")],
+    "gallery_dirs": ["auto_examples"],
+    "filename_pattern": r".*\.py$",
+    "ignore_pattern": r"__init__\.py",
+    "reset_argv": "_gallery_argv.reset_argv",
+    "within_subsection_order": "FileNameSortKey",
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "plot_gallery": "True",
+    "matplotlib_animations": False,
+    "show_memory": False,
+}
+
+html_theme = "alabaster"
+html_title = f"trussid {release}"
+html_static_path: list[str] = []
+html_theme_options = {
+    "description": "Beam FE, control-ready plants and PLID identification for piezo-actuated trusses",
+    "fixed_sidebar": True,
+}
+
+
+def _skip_foreign(app, what, name, obj, skip, options):
+    """Leave out names a module merely imports (matplotlib's Figure in trussid.plots).
+
+    Modules with an ``__all__`` list only its names; this matters for those without one,
+    where autosummary would otherwise document every imported class and function. Class
+    members always belong to trussid, so the rule leaves them alone.
+    """
+    module = getattr(obj, "__module__", None)
+    if isinstance(module, str):
+        if not module.startswith("trussid.") or module.startswith("trussid._util"):
+            return True
+    return None
+
+
+def setup(app):
+    app.connect("autodoc-skip-member", _skip_foreign)
