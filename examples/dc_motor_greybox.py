@@ -68,7 +68,7 @@ fitted = both.representative
 if __name__ == "__main__":
     import matplotlib.pyplot as plt
 
-    ap = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    ap = argparse.ArgumentParser(prog="dc_motor_greybox", description="DC-motor grey-box identification")
     ap.add_argument("--plot", help="save measured vs fitted response to this PNG")
     args = ap.parse_args()
 

@@ -46,7 +46,9 @@ from trussid import geometry, plid, testbed, updating
 
 def parse_args(argv=None):
     """Options of the run; a bad value exits with status 2 and one line."""
-    p = argparse.ArgumentParser(prog="model_updating", description=__doc__.strip().splitlines()[0])
+    p = argparse.ArgumentParser(
+        prog="model_updating",
+        description="FE model updating of the strut walls from a simulated identification test")
     p.add_argument("--out", default="model_updating.png", help="output PNG (default %(default)s)")
     p.add_argument("--seed", type=int, default=1, help="seed of the perturbation and the test (default %(default)s)")
     p.add_argument("--perturb", type=float, default=0.15,

@@ -34,7 +34,8 @@ from trussid import geometry, testbed
 
 def parse_args(argv=None):
     """Options of the study; a bad value or parameter file exits with status 2 and one line."""
-    p = argparse.ArgumentParser(prog="wall_thickness_study", description=__doc__.strip().splitlines()[0])
+    p = argparse.ArgumentParser(prog="wall_thickness_study",
+                                description="Wall-thickness study of the testbed")
     p.add_argument("--out", default="wall_thickness_study.png", help="output PNG (default %(default)s)")
     p.add_argument("--params", default=None, help="testbed parameter file (.toml); default: the default testbed")
     p.add_argument("--points", type=int, default=15, help="designs per strut (default %(default)s)")
