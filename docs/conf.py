@@ -10,8 +10,13 @@ The API reference is generated from the docstrings (numpydoc); the examples in
 
 from __future__ import annotations
 
+import importlib
+import inspect
+import pkgutil
 import sys
 from pathlib import Path
+
+from sphinx.pycode import ModuleAnalyzer
 
 import trussid
 
@@ -45,6 +50,34 @@ autosummary_generate = True
 autosummary_ignore_module_all = False
 autosummary_imported_members = True  # the exports live in submodules
 autodoc_default_options = {"members": False}
+API_MODULES = ("trussid.fem", "trussid.plid", "trussid.geometry", "trussid.testbed",
+               "trussid.plots", "trussid.updating", "trussid.campaign")
+
+
+def _constants(name: str) -> list[dict]:
+    """The values in a module's ``__all__`` (materials, unit factors), with their doc.
+
+    autosummary sorts a module's members into classes, functions and exceptions; a
+    constant re-exported from a submodule falls in none of them, and autodoc would show
+    the docstring of its type (``float``). The module template lists these itself, with
+    the ``#:`` comment of the submodule that defines the value.
+    """
+    module = importlib.import_module(name)
+    docs = {}
+    if hasattr(module, "__path__"):
+        for info in pkgutil.iter_modules(module.__path__, name + "."):
+            analyzer = ModuleAnalyzer.for_module(info.name)
+            docs.update({attr: " ".join(lines).strip()
+                         for (_, attr), lines in analyzer.find_attr_docs().items()})
+    out = []
+    for n in getattr(module, "__all__", ()):
+        value = getattr(module, n)
+        if not (inspect.isclass(value) or callable(value) or inspect.ismodule(value)):
+            out.append({"name": n, "value": repr(value), "doc": docs.get(n, "")})
+    return out
+
+
+autosummary_context = {"constants": {name: _constants(name) for name in API_MODULES}}
 autodoc_typehints = "none"  # numpydoc sections carry the types and units
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
