@@ -106,6 +106,8 @@ html_static_path: list[str] = []
 html_theme_options = {
     "description": "Beam FE, control-ready plants and PLID identification for piezo-actuated trusses",
     "fixed_sidebar": True,
+    "page_width": "1180px",  # room for the examples' code lines (up to ~100 characters)
+    "body_max_width": "none",
 }
 
 
