@@ -8,7 +8,8 @@ End to end, as a user would run it:
 2. simulate an identification test on the perturbed ("true") testbed: all six struts'
    wafer pairs driven in anti-phase (bending) from one D/A channel with band-limited
    white noise, six lateral accelerometers at the struts' mid-spans, 12-bit converters,
-   sensor noise (:func:`trussid.updating.bending_experiment_plant`). The lab's own plant
+   sensor noise (:func:`trussid.testbed.testbed_plant` with ``arrangement="bending"``,
+   ``sensors="struts"``). The lab's own plant
    (extension drive, UDF accelerometers) barely sees the strut bending modes that carry
    the wall information, which is why this experiment is used;
 3. identify a SIMO model with PLID and take its strongest modes in the bending band, with
@@ -42,6 +43,7 @@ import time
 import numpy as np
 
 from trussid import geometry, plid, testbed, updating
+from trussid.testbed.plant import strut_sensors  # where the test's sensors sit (not in __all__)
 
 
 def parse_args(argv=None):
@@ -97,7 +99,7 @@ if args.exact:
     report = updating.update_walls(measured, nominal_tb, tbm=nominal_tbm, seed=args.seed)
     title = "exact frequencies (12 bending + 6 UDF modes)"
 else:
-    plant, sensors, _ = updating.bending_experiment_plant(tbm=true_tbm)
+    plant = testbed.testbed_plant(tbm=true_tbm, arrangement="bending", sensors="struts").discrete
     fb = true_modes.frequencies_hz[first_bending]
     band = (0.8 * fb.min(), 1.25 * fb.max())  # around the first strut bending modes
     exp = plid.run_experiment(plant, args.n_samples, "white", rms=1.0, band=(30.0, 90.0),
@@ -118,7 +120,7 @@ else:
     report = updating.update_walls(
         ident.frequencies_hz, nominal_tb, tbm=nominal_tbm, damping=ident.damping,
         frequency_std_hz=ident.frequency_std_hz, damping_std=ident.damping_std,
-        shapes=ident.shapes, sensors=updating.strut_sensors(nominal_tbm), seed=args.seed)
+        shapes=ident.shapes, sensors=strut_sensors(nominal_tbm), seed=args.seed)
     title = f"PLID (order {args.order}, {args.n_samples} samples) of a bending SIMO test"
 
 wall_error = np.abs(report.walls / truth - 1)  # relative, per strut
