@@ -98,6 +98,9 @@ sphinx_gallery_conf = {
     "plot_gallery": "True",
     "matplotlib_animations": False,
     "show_memory": False,
+    # Run every example on every build: sphinx-gallery would otherwise skip an example
+    # whose file is unchanged, and a library change that breaks it would go unseen.
+    "run_stale_examples": True,
 }
 
 html_theme = "alabaster"
