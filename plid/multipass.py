@@ -35,7 +35,7 @@ from trussid.plid.errors import IdentificationError
 from trussid.plid.estimator import PLID, PLIDResult, PLIDWarning
 
 __all__ = ["Pass", "multipass", "identify", "identify_reduced", "default_via", "Identification",
-           "SCRATCH_SCHEDULE"]
+           "SCRATCH_SCHEDULE", "check_data"]
 
 
 @dataclass(frozen=True)
@@ -115,6 +115,32 @@ class Identification:
     info: dict = field(default_factory=dict)
 
 
+def check_data(u, y, dt) -> tuple[np.ndarray, np.ndarray]:
+    """``u, y`` as (N, m), (N, p) float arrays, checked as :meth:`PLID.fit` checks them.
+
+    Raises :class:`trussid.plid.errors.DataError` naming the problem (length mismatch, a
+    non-finite value with its column and sample, a sampling interval that is not a positive
+    number) before any library (numpy's concatenation, nfoursid's DataFrame) sees the data.
+    """
+    from trussid.plid.errors import DataError
+    from trussid.plid.estimator import _as_2d, _check_finite
+
+    try:
+        dt_ok = float(dt) > 0 and np.isfinite(float(dt))
+    except (TypeError, ValueError):
+        dt_ok = False
+    if not dt_ok:
+        raise DataError(f"dt (the sampling interval) must be a positive number of seconds, "
+                        f"got {dt!r}")
+    u = _as_2d(u, "u")
+    y = _as_2d(y, "y")
+    if u.shape[0] != y.shape[0]:
+        raise DataError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
+    _check_finite(u, "u")
+    _check_finite(y, "y")
+    return u, y
+
+
 def _noise_estimate(model, u, y, floor=1e-10):
     """Output-noise variance per channel in scaled units: the simulation error of a prior
     model on the data (an over-estimate by the prior's own model error)."""
@@ -127,7 +153,7 @@ def _noise_estimate(model, u, y, floor=1e-10):
 def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
              form: str = "direct", radius: float = 0.97, block_rows=None,
              schedule=None, prior_theta_var: float = 1e-4, Q: float = 0.0,
-             progress: bool | None = False) -> Identification:
+             progress: bool | None = None) -> Identification:
     """Identify an order-``order`` model: the recipe that won the benchmarks.
 
     Parameters
@@ -153,9 +179,11 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         the default is one pass ``Pass(Q, 0, prior_theta_var)``.
     prior_theta_var, Q : float
         Subspace start: the parameter prior variance and state noise of its pass.
+    progress : bool or None
+        tqdm bars of the PLID passes; None (default) shows them for passes expected to take
+        more than a few seconds (:meth:`trussid.plid.estimator.PLID._slow`).
     """
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    u, y = check_data(u, y, dt)
     p = y.shape[1]
     fs = 1.0 / dt
     if order % p:
@@ -222,7 +250,7 @@ def default_via(order: int, p: int) -> tuple:
 
 def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "subspace",
                      block_rows=None, form: str = "direct", prior_theta_var: float = 1e-4,
-                     progress: bool | None = False, log=None) -> Identification:
+                     progress: bool | None = None, log=None) -> Identification:
     """Identify an under-modelling order-``order`` model through higher-order fits.
 
     When the structure has more significant states than ``order`` (the FE testbed's
@@ -275,8 +303,7 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
     from trussid.plid.reduce import balanced_truncation
     from trussid.plid.subspace import refit_input_matrix
 
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    u, y = check_data(u, y, dt)
     p = y.shape[1]
     via = default_via(order, p) if via is None else tuple(int(h) for h in via)
     bad = [h for h in via if h <= order or h % p]
@@ -289,18 +316,32 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
     t_all = time.perf_counter()
     cands = []   # dicts: label, model, the Identification pieces, seconds (or error)
 
+    # One bar over the candidates (the PLID passes inside show their own when slow): the
+    # whole search took 77 s silent in the API on a 6000-sample record (newcomer audit).
+    from tqdm.auto import tqdm
+
+    m = u.shape[1]
+    show = (progress if progress is not None
+            else u.shape[0] * float(max(via, default=order) * (m + p)) ** 2 > PLID.PROGRESS_WORK)
+    bar = tqdm(total=1 + 2 * len(via), disable=not show, unit="candidate",
+               desc=f"identify_reduced {order} via {','.join(map(str, via))}")
+
     def _add(label, model, idn, result, basis, R, prior, seconds):
         cands.append({"label": label, "model": model, "idn": idn, "result": result,
                       "basis": basis, "R": R, "prior": prior, "seconds": seconds})
+        bar.update(1)
         if log is not None:
             log(f"{label}: {seconds:.1f} s")
+
+    def _fail(label, exc, seconds, skipped=0):
+        cands.append({"label": label, "model": None, "error": str(exc), "seconds": seconds})
+        bar.update(1 + skipped)
 
     t0 = time.perf_counter()
     try:
         base = identify(u, y, order, dt, **kw)
     except IdentificationError as exc:  # e.g. the direct form diverged: other candidates
-        cands.append({"label": f"direct {order}", "model": None, "error": str(exc),
-                      "seconds": time.perf_counter() - t0})
+        _fail(f"direct {order}", exc, time.perf_counter() - t0)
     else:
         _add(f"direct {order}", base.model, base, base.result, base.basis, base.R,
              base.prior, time.perf_counter() - t0)
@@ -314,8 +355,7 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
             # the output-error refit needs it.
             red = refit_input_matrix(_stable(red), u, y)
         except IdentificationError as exc:  # e.g. more unstable states than ``order``
-            cands.append({"label": f"via {h}", "model": None, "error": str(exc),
-                          "seconds": time.perf_counter() - t0})
+            _fail(f"via {h}", exc, time.perf_counter() - t0, skipped=1)
             continue
         t_red = time.perf_counter() - t0
         # Its PLID pass is the one at order h: result, basis, R and prior are that pass's.
@@ -328,12 +368,12 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
             res, hist = multipass(u, y, order, dt, (Pass(0.0, 0.0, prior_theta_var),),
                                   basis=basis, prior=red, R=R, form=form, progress=progress)
         except IdentificationError as exc:
-            cands.append({"label": f"via {h}, refined", "model": None, "error": str(exc),
-                          "seconds": time.perf_counter() - t1})
+            _fail(f"via {h}, refined", exc, time.perf_counter() - t1)
             continue
         _add(f"via {h}, refined", res.model, high, res, basis, R, red,
              t_red + time.perf_counter() - t1)
         cands[-1]["passes"] = hist
+    bar.close()
 
     table = []
     best, best_score, best_K, best_kinfo = None, -np.inf, None, None

@@ -211,3 +211,28 @@ def test_identify_reduced_survives_a_failed_candidate_and_names_total_failure(si
     monkeypatch.setattr(mp, "identify", all_fail)
     with pytest.raises(IdentificationError, match="every candidate failed: direct 6"):
         mp.identify_reduced(u, y, 6, 1 / FS, via=(8,))
+
+
+# ------------------------------------------------ bad data named before any library sees it
+
+
+@pytest.mark.parametrize("case, match", [
+    ("short_y", "u has 2000 samples but y has 1500"),           # audit A13 (numpy's concat)
+    ("nan_y", r"y column 1 has a non-finite value \(nan\) at sample 7"),  # A14 (nfoursid 'nulls')
+    ("dt_zero", "dt .* must be a positive number of seconds, got 0"),  # A18 (ZeroDivision)
+])
+@pytest.mark.parametrize("fn", ["identify", "identify_reduced"])
+def test_identify_names_bad_data_itself(case, match, fn):
+    from trussid.plid import multipass
+    from trussid.plid.errors import DataError
+
+    rng = np.random.default_rng(0)
+    u, y, dt = rng.standard_normal((2000, 1)), rng.standard_normal((2000, 2)), 1 / FS
+    if case == "short_y":
+        y = y[:1500]
+    elif case == "nan_y":
+        y[7, 1] = np.nan
+    else:
+        dt = 0
+    with pytest.raises(DataError, match=match):
+        getattr(multipass, fn)(u, y, 4, dt)

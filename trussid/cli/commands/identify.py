@@ -134,6 +134,7 @@ def run(args) -> int:
     from trussid.plid.estimator import PLID, PLIDWarning
     from trussid.plid.metrics import prediction_ratio_db, predictor_gain
     from trussid.plid.modelfile import save_model
+    from trussid.plid.stability import UnstableModelWarning, check_stability
 
     out = str(args.out)
     if not out.lower().endswith(".npz"):
@@ -186,9 +187,13 @@ def run(args) -> int:
         K = predictor_gain(model, res.Q + model.B @ res.N @ model.B.T, res.R)
     skip = prediction_burn_in(data.n_samples, n)
     ratio = prediction_ratio_db(model, data.u, data.y, K=K, skip=skip)
-    poles_z = np.linalg.eigvals(model.A)
-    unstable = int(np.sum(np.abs(poles_z) >= 1))
-    save_model(out, model, K=K, input_names=data.input_names, output_names=data.output_names)
+    stability = check_stability(model)
+    unstable = int(stability.unstable.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnstableModelWarning)  # said below, in one line
+        save_model(out, model, K=K, input_names=data.input_names,
+                   output_names=data.output_names)
+    stability_note = stability.message(f"the identified model {out}")
     summary = {
         "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
         "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
@@ -203,13 +208,15 @@ def run(args) -> int:
         "signal_to_prediction_error_db_per_output": ratio["per_channel"],
         "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
         "prediction_skip_samples": skip, "unstable_poles": unstable,
+        "stable": stability.stable, "stability": stability_note,
+        "prediction_ratio_is": "in-sample (on the identification data itself)",
         "poles": pole_table(model), "warnings": notes,
     }
     if via is not None:
         summary["via"] = list(ident.info["via"])
         summary["chosen"] = ident.info["chosen"]
         summary["candidates"] = ident.info["candidates"]
-    for note in notes:
+    for note in notes + ([stability_note] if stability_note else []):
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
         print(json.dumps(json_safe(summary), indent=2))
@@ -219,10 +226,9 @@ def run(args) -> int:
           f"{start} start{'; kept ' + ident.info['chosen'] if via is not None else ''})")
     print(f"wrote {out}")
     per = ", ".join(f"{name} {v:.2f}" for name, v in zip(data.output_names, ratio["per_channel"]))
-    print(f"one-step signal-to-prediction-error ratio: {ratio['overall']:.2f} dB ({per}; "
+    print(f"in-sample one-step signal-to-prediction-error ratio (on the identification "
+          f"data; validate with trussid compare): {ratio['overall']:.2f} dB ({per}; "
           f"first {skip} samples left out)")
-    if unstable:
-        print(f"note: {unstable} pole(s) on or outside the unit circle")
     print("poles (frequency [Hz], damping):")
     for row in summary["poles"]:
         print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")
