@@ -16,6 +16,7 @@ _LAZY = {
     "UnstableModelWarning": "stability", "balanced_truncation": "reduce",
     "IOData": "datafile", "read_data": "datafile", "write_data": "datafile",
     "save_model": "modelfile", "load_model": "modelfile",
+    "write_mat": "export", "python_code": "export", "write_python": "export",
     "excitation": "experiment", "run_experiment": "experiment", "simulate": "experiment",
     "h1": "frf", "h2": "frf", "stepped_sine": "frf", "FRF": "frf",
     "frequency_response": "frf",
