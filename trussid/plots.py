@@ -92,3 +92,66 @@ def pole_map_figure(systems, title: str = "poles (z-plane)"):
     ax.legend(loc="lower left")
     ax.set_title(title)
     return fig
+
+
+def plant_bode_figure(sys_, title: str = "", f=None):
+    """Magnitude [dB] of every channel of a plant, one axis, log frequency.
+
+    Parameters
+    ----------
+    sys_ : control.StateSpace
+        Discrete (up to Nyquist) or continuous (up to twice its highest natural frequency).
+    title : str
+    f : array [Hz], optional
+        Frequencies (default 2000 log-spaced).
+    """
+    dt = float(sys_.dt or 0.0)
+    if f is None:
+        w_max = np.max(np.abs(np.linalg.eigvals(np.asarray(sys_.A)))) if sys_.nstates else 1.0
+        f_hi = 0.5 / dt if dt else max(2 * w_max / (2 * np.pi), 1.0)
+        f = np.geomspace(f_hi * 1e-3, f_hi * 0.999, 2000)
+    s = np.exp(2j * np.pi * f * dt) if dt else 2j * np.pi * f
+    H = np.asarray(sys_(s)).reshape(sys_.noutputs, sys_.ninputs, -1)
+    fig = Figure(figsize=(9, 5))
+    ax = fig.subplots()
+    for i, yo in enumerate(sys_.output_labels):
+        for j, ui in enumerate(sys_.input_labels):
+            ax.semilogx(f, 20 * np.log10(np.abs(H[i, j]) + 1e-300), lw=0.9,
+                        label=f"{ui} -> {yo}")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("magnitude [dB, output units per input unit]")
+    if title:
+        ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=3)
+    fig.tight_layout()
+    return fig
+
+
+def order_figure(rows, title: str = "order selection"):
+    """Validation prediction ratio and FRF change against model order.
+
+    Parameters
+    ----------
+    rows : list of :class:`trussid.plid.order.OrderRow`
+    """
+    n = [r.order for r in rows]
+    fig = Figure(figsize=(7, 5.5))
+    ax = fig.subplots(2, 1, sharex=True)
+    ax[0].plot(n, [r.prediction_db for r in rows], "o-", color="C0")
+    bad = [r for r in rows if r.unstable_poles]
+    if bad:
+        ax[0].plot([r.order for r in bad], [r.prediction_db for r in bad], "x", color="C3",
+                   ms=10, label="unstable model")
+        ax[0].legend(loc="best", fontsize=8)
+    ax[0].set_ylabel("one-step prediction,\nvalidation data [dB]")
+    ax[0].grid(True, alpha=0.3)
+    ch = [(r.order, r.frf_change_db) for r in rows if r.frf_change_db is not None]
+    if ch:
+        ax[1].semilogy([c[0] for c in ch], [c[1] for c in ch], "s-", color="C1")
+    ax[1].set_ylabel("FRF change from the\nprevious order [dB RMS]")
+    ax[1].set_xlabel("model order (states)")
+    ax[1].grid(True, which="both", alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
