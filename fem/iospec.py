@@ -137,6 +137,8 @@ def read_io(path) -> IOSpec:
         Missing file, bad TOML, unknown keys, bad values, no actuator or no sensor; the
         message names the entry and key.
     """
+    # Long: one validation step per key of the file format, each naming entry and key; split
+    # up, the entry/key context would have to be passed around for every check.
     from trussid.fem.actuators import Wafer
     from trussid.fem.sensors import Sensor
 

@@ -9,12 +9,12 @@ and names, as every model file) and the continuous one beside it (``c_A`` ...).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from trussid._util.errors import UserError
+from trussid._util.jsonio import dumps
 
 
 def add_parser(subparsers) -> None:
@@ -44,82 +44,10 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _testbed(path):
-    from trussid.geometry.params_toml import load_testbed
-    from trussid.geometry.spec import Testbed
-
-    if path is None:
-        return Testbed(), "default testbed"
-    p = Path(path)
-    if p.suffix.lower() != ".toml":
-        raise UserError(f"{p}: a plant needs actuators and sensors: give them with --io IO.toml "
-                        f"for a NASTRAN deck, or a testbed parameter file (.toml), or no MODEL "
-                        f"for the default testbed")
-    return load_testbed(p), str(p)
-
-
-def summary(plant) -> dict:
-    """Poles (frequency, damping), channel gains and electrical facts of a TestbedPlant."""
-    import control
-
-    poles = np.linalg.eigvals(plant.continuous.A)
-    poles = poles[np.imag(poles) >= 0]
-    wn = np.abs(poles)
-    zeta = np.where(wn > 0, -np.real(poles) / np.where(wn > 0, wn, 1), 1.0)
-    order = np.argsort(wn)
-    f = np.linspace(1.0, 0.5 * plant.chain.sample_rate, 4000)
-    H = plant.discrete(np.exp(2j * np.pi * f / plant.chain.sample_rate))  # (p, m, nf)
-    peak = np.abs(H).max(axis=2)
-    return {
-        "inputs": list(plant.discrete.input_labels),
-        "outputs": list(plant.discrete.output_labels),
-        "states": int(plant.discrete.nstates),
-        "sample_rate_hz": plant.chain.sample_rate,
-        "modes_kept": len(plant.modes.frequencies_hz),
-        "mode_frequencies_hz": [float(x) for x in plant.modes.frequencies_hz],
-        "poles": [{"frequency_hz": float(wn[i] / (2 * np.pi)), "damping": float(zeta[i])} for i in order],
-        "peak_gain_v_per_v": peak.tolist(),
-        "actuator_capacitance_f": plant.capacitance,
-        "actuator_capacitance_thesis_f": plant.tbm.testbed.electrics.actuator_capacitance,
-        "strictly_proper": bool(np.all(plant.discrete.D == 0)),
-        "stable": bool(np.all(np.abs(control.poles(plant.discrete)) < 1)),
-    }
-
-
-def bode_plot(plant, out) -> None:
-    """Magnitude and phase of every channel of the discrete plant, written atomically."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from trussid._util.files import atomic_path
-
-    fs = plant.chain.sample_rate
-    f = np.geomspace(1.0, 0.5 * fs, 3000)
-    H = plant.discrete(np.exp(2j * np.pi * f / fs))
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
-    names_in, names_out = plant.discrete.input_labels, plant.discrete.output_labels
-    for i, yo in enumerate(names_out):
-        for j, ui in enumerate(names_in):
-            ax1.semilogx(f, 20 * np.log10(np.abs(H[i, j])), lw=0.9, label=f"{ui} -> {yo}")
-            ax2.semilogx(f, np.degrees(np.unwrap(np.angle(H[i, j]))), lw=0.9)
-    ax1.set_ylabel("magnitude [dB, V/V]")
-    ax2.set_ylabel("phase [deg]")
-    ax2.set_xlabel("frequency [Hz]")
-    ax1.set_title(f"Testbed plant: D/A volts to accelerometer volts, ZOH at {fs:g} Hz")
-    ax1.legend(fontsize=7, ncol=3)
-    for ax in (ax1, ax2):
-        ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    with atomic_path(out) as tmp:
-        fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-
-
 def run(args) -> int:
-    from trussid.testbed.plant import testbed_plant
+    from trussid.cli.loaders import testbed_spec
     from trussid.plid.modelfile import save_model
+    from trussid.testbed.plant import plant_summary, testbed_plant
 
     out = Path(args.out)
     if out.suffix.lower() != ".npz":
@@ -134,17 +62,27 @@ def run(args) -> int:
         raise UserError(f"--fs must be positive, got {args.fs}")
     if args.io is not None:
         return run_io(args, out)
-    tb, source = _testbed(args.model)
+    if args.model is not None and Path(args.model).suffix.lower() != ".toml":
+        raise UserError(f"{args.model}: a plant needs actuators and sensors: give them with "
+                        "--io IO.toml for a NASTRAN deck, or a testbed parameter file (.toml), "
+                        "or no MODEL for the default testbed")
+    tb = testbed_spec(args.model)
+    source = "default testbed" if args.model is None else str(args.model)
     plant = testbed_plant(tb, n_modes=args.modes, damping=args.damping, sample_rate=args.fs)
     save_model(out, plant.discrete, continuous=plant.continuous,
                extra={"mode_frequencies_hz": plant.modes.frequencies_hz})
     if args.plot:
-        bode_plot(plant, args.plot)
-    s = summary(plant)
+        from trussid.plots import plant_bode_figure, save_figure
+
+        fs = plant.chain.sample_rate
+        save_figure(plant_bode_figure(
+            plant.discrete, f"Testbed plant: D/A volts to accelerometer volts, ZOH at {fs:g} Hz"),
+            args.plot, dpi=120)
+    s = plant_summary(plant)
     s["model"] = source
     s["out"] = str(out)
     if args.json:
-        print(json.dumps(s, indent=2))
+        print(dumps(s), end="")
         return 0
     print(f"plant of the {source}: {len(s['inputs'])} inputs ({', '.join(s['inputs'])}), "
           f"{len(s['outputs'])} outputs ({', '.join(s['outputs'])}), {s['states']} states, "
@@ -168,15 +106,18 @@ def run_io(args, out: Path) -> int:
     """``trussid plant DECK --io IO.toml``: the generic plant of any deck (fem.iospec)."""
     import control
 
-    from trussid.cli.commands.modes import BULK_SUFFIXES, load_bulk_data
+    from trussid.cli.loaders import BULK_SUFFIXES, deck_structure
     from trussid.fem.iospec import io_plant, read_io
     from trussid.plid.modelfile import save_model
 
     if args.model is None or Path(args.model).suffix.lower() not in BULK_SUFFIXES:
         raise UserError(f"--io needs a NASTRAN deck ({', '.join(BULK_SUFFIXES)}) as MODEL, got "
                         f"{args.model or 'none'}")
-    loaded = load_bulk_data(Path(args.model))
     spec = read_io(args.io)
+    if args.plot and (args.fs or spec.fs) is None:
+        raise UserError("--plot draws the discrete plant: give a sample rate (--fs HZ or "
+                        f"[plant] fs in {args.io})")
+    loaded = deck_structure(Path(args.model))
     sc, sd, modes, n = io_plant(loaded.model, spec, n_modes=args.modes, damping=args.damping,
                                 fs=args.fs, autospc=loaded.autospc)
     main = sd if sd is not None else sc
@@ -186,10 +127,10 @@ def run_io(args, out: Path) -> int:
         from trussid.plots import plant_bode_figure, save_figure
 
         save_figure(plant_bode_figure(
-            main, f"Plant of {Path(args.model).name} with {Path(args.io).name}"), args.plot, 120)
+            sd, f"Plant of {Path(args.model).name} with {Path(args.io).name}"), args.plot, dpi=120)
     f = np.asarray(modes.frequencies_hz[:n])
-    stable = main.nstates == 0 or bool(np.all(np.abs(control.poles(main)) < 1) if sd is not None
-                                       else np.all(np.real(control.poles(main)) < 0))
+    poles = control.poles(main)
+    stable = bool(np.all(np.abs(poles) < 1) if sd is not None else np.all(np.real(poles) < 0))
     s = {"model": str(args.model), "io": str(args.io), "out": str(out),
          "inputs": list(main.input_labels), "outputs": list(main.output_labels),
          "states": int(main.nstates), "sample_rate_hz": args.fs or spec.fs,
@@ -197,7 +138,7 @@ def run_io(args, out: Path) -> int:
          "damping": args.damping if args.damping is not None else (spec.damping or 0.02),
          "stable": stable, "notes": loaded.notes}
     if args.json:
-        print(json.dumps(s, indent=2))
+        print(dumps(s), end="")
         return 0
     rate = (f"ZOH at {s['sample_rate_hz']:g} Hz" if sd is not None
             else "continuous only (give --fs or [plant] fs for a discrete plant)")
@@ -210,4 +151,3 @@ def run_io(args, out: Path) -> int:
         print(note)
     print(f"wrote {out}" + (f" and {args.plot}" if args.plot else ""))
     return 0
-
