@@ -123,3 +123,51 @@ def test_debug_and_threads_are_accepted_after_the_command(tmp_path, capsys):
     assert "invalid int value: 'x'" in capsys.readouterr().err
     code = main(["modes", str(tmp_path / "nonexistent.bdf"), "--threads", "-1"])
     one_line(code, capsys.readouterr().err, "modes", "--threads must be a whole number >= 0")
+
+
+@pytest.fixture
+def unstable_vs_plant(tmp_path):
+    """A 2-mode plant and the same model with A x 1.05 (every pole outside the unit circle)."""
+    rng = np.random.default_rng(2)
+    dt = 1e-3
+    A = np.zeros((4, 4))
+    for i, (f, z) in enumerate([(60.0, 0.02), (210.0, 0.02)]):
+        w = 2 * np.pi * f
+        A[2 * i:2 * i + 2, 2 * i:2 * i + 2] = [[0, 1], [-w**2, -2 * z * w]]
+    sd = control.c2d(control.ss(A, rng.standard_normal((4, 1)), rng.standard_normal((2, 4)),
+                                np.zeros((2, 1))), dt)
+    bad = control.ss(1.05 * sd.A, sd.B, sd.C, sd.D, dt)
+    save_model(tmp_path / "plant.npz", sd, input_names=["u1"], output_names=["y1", "y2"])
+    with pytest.warns(UserWarning, match="unstable"):
+        save_model(tmp_path / "bad.npz", bad, input_names=["u1"], output_names=["y1", "y2"])
+    return tmp_path
+
+
+def test_b90_compare_says_an_unstable_model_is_unstable(unstable_vs_plant, capsys):
+    d = unstable_vs_plant
+    assert main(["compare", str(d / "bad.npz"), str(d / "plant.npz"), "--out",
+                 str(d / "cmp")]) == 0
+    cap = capsys.readouterr()
+    lines = cap.err.strip().splitlines()
+    assert lines == [l for l in lines if l.startswith("trussid compare: warning: ")]
+    assert any(f"the model {d / 'bad.npz'} is unstable: 4 pole(s) outside the unit circle"
+               in l for l in lines), cap.err
+    assert "RuntimeWarning" not in cap.err and "overflow" not in cap.err
+    assert "simulation fit (against noise-free outputs): none: the model is unstable" in cap.out
+    import json
+
+    m = json.loads((d / "cmp" / "metrics.json").read_text())
+    assert m["stable"] is False and "is unstable" in m["stability"]
+
+
+def test_b91_compare_of_an_unstable_model_against_data_leaks_no_numpy_warning(
+        unstable_vs_plant, capsys):
+    d = unstable_vs_plant
+    assert main(["simulate", str(d / "plant.npz"), "--out", str(d / "val.csv"),
+                 "--samples", "2000", "--seed", "1"]) == 0
+    capsys.readouterr()
+    assert main(["compare", str(d / "bad.npz"), str(d / "val.csv"), "--out",
+                 str(d / "cmp2")]) == 0
+    cap = capsys.readouterr()
+    assert "is unstable" in cap.err and "RuntimeWarning" not in cap.err
+    assert "overflow" not in cap.err and "none: the model is unstable" in cap.out
