@@ -9,7 +9,7 @@ Plain functions over plain data, in the order ``trussid demo`` runs them::
     metrics  = evaluate(fit, truth, validation, h1)      prediction, FRF, poles
     write_report(out, ...)                               report.md, PNGs, summary.json, files
 
-The experiment reproduces the thesis's campaign (``shared/docs/testbed.md``): one SIMO
+The experiment reproduces the thesis's campaign (``docs/testbed.md``): one SIMO
 model per actuator channel, from a record in which only that channel is driven (1 input,
 3 accelerometers, 30 states), and one MIMO model from a record with all three channels
 driven by independent signals (3 x 3, ``mimo_order`` states).
