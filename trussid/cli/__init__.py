@@ -105,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     _early_threads(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = argv  # the command line as given, for reports' provenance
     if args.command is None:
         parser.print_help()
         return 2
@@ -119,10 +120,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"trussid {args.command}: error: out of memory{detail}; ask for less (fewer "
               "samples, modes or orders)", file=sys.stderr)
         return 2
-    except (UserError, FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+    except (UserError, FileNotFoundError, FileExistsError, NotADirectoryError,
+            IsADirectoryError, PermissionError) as exc:
         if debug:
             raise
-        msg = str(exc) if isinstance(exc, UserError) else f"{exc.strerror}: {exc.filename}"
+        if isinstance(exc, UserError):
+            msg = str(exc)
+        elif isinstance(exc, (FileExistsError, NotADirectoryError)):
+            msg = f"{exc.filename}: {exc.strerror}"
+        else:
+            msg = f"{exc.strerror}: {exc.filename}"
         print(f"trussid {args.command}: error: {msg}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
