@@ -81,11 +81,11 @@ def atomic_directory(path: str | os.PathLike, force: bool = False):
             os.replace(path, old / "previous")
         try:
             os.replace(tmp, path)
-        except BaseException:
+        except BaseException:  # Ctrl-C included: put the previous directory back
             if old is not None:  # put the previous directory back
                 os.replace(old / "previous", path)
             raise
-    except BaseException:
+    except BaseException:  # any failure, Ctrl-C included: drop the partial directory
         shutil.rmtree(tmp, ignore_errors=True)
         if old is not None and (old / "previous").exists() and not path.exists():
             os.replace(old / "previous", path)
