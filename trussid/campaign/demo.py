@@ -503,10 +503,14 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> dict:
     import platform
     import subprocess
 
-    import trussid
+    from importlib.metadata import PackageNotFoundError, version
 
+    try:
+        trussid_version = version("trussid")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        trussid_version = None
     commit = None
-    src = Path(trussid.__file__).resolve().parent
+    src = Path(__file__).resolve().parents[1]
     try:  # a checkout knows its commit; an installed wheel does not (then None)
         res = subprocess.run(["git", "-C", str(src), "rev-parse", "HEAD"], capture_output=True,
                              text=True, timeout=5)
@@ -522,7 +526,7 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> dict:
         load = list(os.getloadavg())
     except OSError:
         load = None
-    return {"trussid_version": trussid.__version__, "commit": commit, "seed": settings.seed,
+    return {"trussid_version": trussid_version, "commit": commit, "seed": settings.seed,
             "command": command, "machine": platform.node(), "platform": platform.platform(),
             "cpus": os.cpu_count(), "python": platform.python_version(),
             "load_average_start": load,

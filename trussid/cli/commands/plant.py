@@ -104,6 +104,7 @@ def run(args) -> int:
 def run_io(args, out: Path) -> int:
     """``trussid plant DECK --io IO.toml``: the generic plant of any deck (fem.iospec)."""
     import control
+    import numpy as np
 
     from trussid.cli.loaders import BULK_SUFFIXES, deck_structure
     from trussid.fem.iospec import io_plant, read_io
