@@ -171,3 +171,15 @@ def test_b91_compare_of_an_unstable_model_against_data_leaks_no_numpy_warning(
     cap = capsys.readouterr()
     assert "is unstable" in cap.err and "RuntimeWarning" not in cap.err
     assert "overflow" not in cap.err and "none: the model is unstable" in cap.out
+
+
+def test_help_descriptions_show_a_single_percent_sign(capsys):
+    """argparse %-formats help strings but not descriptions: '63.2 %%' showed doubled."""
+    with pytest.raises(SystemExit):
+        main(["greybox", "dc-motor", "--help"])
+    out = capsys.readouterr().out
+    assert "63.2 % rule" in out and "%%" not in out
+    with pytest.raises(SystemExit):
+        main(["identify", "--help"])
+    out = capsys.readouterr().out
+    assert "70 % of the record" in " ".join(out.split()) and "%%" not in out
