@@ -183,3 +183,11 @@ def test_help_descriptions_show_a_single_percent_sign(capsys):
         main(["identify", "--help"])
     out = capsys.readouterr().out
     assert "70 % of the record" in " ".join(out.split()) and "%%" not in out
+
+
+def test_b35_a_slow_sample_rate_is_told_which_filters_it_cannot_show(tmp_path, capsys):
+    assert main(["plant", "--fs", "100", "--out", str(tmp_path / "p100.npz")]) == 0
+    err = capsys.readouterr().err
+    assert ("corners of the smoothing filter (1300 Hz) and the low-pass (120 Hz) lie above the "
+            "Nyquist "
+            "frequency (50 Hz)") in err

@@ -68,6 +68,18 @@ def run(args) -> int:
     tb = testbed_spec(args.model)
     source = "default testbed" if args.model is None else str(args.model)
     plant = testbed_plant(tb, n_modes=args.modes, damping=args.damping, sample_rate=args.fs)
+    ch = plant.chain
+    above = [f"{name} ({fc:g} Hz)" for name, fc in
+             (("the smoothing filter", ch.smoothing_cutoff), ("the low-pass", ch.lowpass_cutoff))
+             if fc >= 0.5 * ch.sample_rate]
+    if above:  # audit B35: a 100 Hz plant silently kept filters it cannot represent
+        import sys
+
+        many = len(above) > 1
+        print(f"trussid plant: warning: at {ch.sample_rate:g} Hz the corner{'s' * many} of "
+              f"{' and '.join(above)} lie{'' if many else 's'} above the Nyquist frequency "
+              f"({0.5 * ch.sample_rate:g} Hz): the discrete plant cannot show "
+              f"{'it' if len(above) == 1 else 'them'}", file=sys.stderr)
     save_model(out, plant.discrete, continuous=plant.continuous,
                extra={"mode_frequencies_hz": plant.modes.frequencies_hz})
     if args.plot:
