@@ -165,5 +165,5 @@ def test_demo_refuses_a_missing_parent_before_any_work(tmp_path, capsys):
     """Audit B104: the demo failed only at its first write, after the plant was built."""
     code, _, err = run(capsys, "demo", "--quick", "--out", tmp_path / "nope" / "report")
     assert code == 2 and len(err) == 1
-    assert f"--out: directory {tmp_path / 'nope'} does not exist" in err[0]
+    assert f"the directory {tmp_path / 'nope'} does not exist" in err[0]
     assert not (tmp_path / "nope").exists()

@@ -1,5 +1,8 @@
 """Modal analysis of measured data: stabilisation diagram and MAC for the LMS steel subframe.
 
+(A benchmark-style script, not a gallery example: it reads the shared measured data and runs
+eleven PLID fits of 8523 samples, minutes of work.)
+
 The DaISy "flexible structure" record (LMS International: a steel subframe hung on rubber
 bands, 2 white-noise shakers, 28 accelerometers, 1024 Hz, 8523 samples; see
 ``../shared/realdata/README.md``) is read as MATLAB writes it, one 8523 x 30 matrix, with the
@@ -15,8 +18,8 @@ channels the PLID comparison uses: inputs columns 1-2, accelerometers 1, 10, 19 
 
 Usage::
 
-    python examples/subframe_modal.py --out docs/images
-    python examples/subframe_modal.py --data ../shared/realdata/flexibleStructure.mat --orders 6:36:3
+    python benchmarks/subframe_modal.py --out docs/images
+    python benchmarks/subframe_modal.py --data ../shared/realdata/flexibleStructure.mat --orders 6:36:3
 """
 
 from __future__ import annotations
