@@ -30,6 +30,17 @@ def orders_arg(text, order: int, p: int) -> list[int]:
     return list(range(nums[0], nums[1] + 1, step))
 
 
+def check_modal_args(args) -> None:
+    """Refuse a bad ``--stabilisation`` path before any work."""
+    from trussid._util.files import check_parent
+    from trussid.plid.errors import DataError
+
+    if getattr(args, "stabilisation", None) is not None:
+        if not str(args.stabilisation).lower().endswith(".png"):
+            raise DataError(f"--stabilisation {args.stabilisation}: the diagram is a .png")
+        check_parent(args.stabilisation, "--stabilisation")
+
+
 def modal_outputs(args, data, model, start: str, form: str, summary: dict) -> list[str]:
     """Run what ``--stabilisation`` / ``--modal-table`` ask for; add it to ``summary`` and
     return the lines to print."""

@@ -201,6 +201,7 @@ def run_orders(args, data) -> int:
 
 def run(args) -> int:
     from trussid._util.files import check_parent
+    from trussid.cli.commands._modal import check_modal_args, modal_outputs
     from trussid.plid.canonical import check_order
     from trussid.plid.datafile import check_enough_samples, read_data
     from trussid.plid.errors import DataError, IdentificationError
@@ -219,10 +220,7 @@ def run(args) -> int:
     if not out.lower().endswith(".npz"):
         raise DataError(f"--out {out}: model files are .npz")
     check_parent(out, "--out")
-    if getattr(args, "stabilisation", None) is not None:
-        if not str(args.stabilisation).lower().endswith(".png"):
-            raise DataError(f"--stabilisation {args.stabilisation}: the diagram is a .png")
-        check_parent(args.stabilisation, "--stabilisation")
+    check_modal_args(args)
     if args.order < 1:
         raise IdentificationError(f"--order must be a positive integer, got {args.order}")
     data = read_data(args.data, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
@@ -269,8 +267,6 @@ def run(args) -> int:
     if via is not None:
         summary.update(via=list(ident.info["via"]), chosen=ident.info["chosen"],
                        candidates=ident.info["candidates"])
-    from trussid.cli.commands._modal import modal_outputs
-
     modal_lines = modal_outputs(args, data, model, start, ident.result.form, summary)
     for note in data.notes:
         print(f"trussid identify: note: {note}", file=sys.stderr)
