@@ -106,3 +106,12 @@ def test_a_real_unwritable_place_names_the_given_path():
         with atomic_path("/sys/r7.png"):
             pass
     assert err.value.filename == "/sys/r7.png"
+
+
+def test_a_report_directory_gets_the_mode_the_umask_gives(tmp_path, umask_022):
+    from trussid._util.files import atomic_directory
+
+    with atomic_directory(tmp_path / "report") as tmp:
+        (tmp / "report.md").write_text("# report\n")
+    assert _mode(tmp_path / "report") == 0o755  # mkdtemp's 0700 would lock colleagues out
+    assert [p.name for p in tmp_path.iterdir()] == ["report"]

@@ -9,7 +9,7 @@ import secrets
 import stat
 from pathlib import Path
 
-__all__ = ["atomic_path", "check_parent"]
+__all__ = ["atomic_path", "atomic_directory", "check_parent"]
 
 
 def check_parent(path: str | os.PathLike, what: str = "output") -> Path:
@@ -49,6 +49,20 @@ def _create_temp(path: Path, suffix: str) -> Path:
         os.close(fd)
         return tmp
     raise FileExistsError(errno.EEXIST, "cannot create a temporary file beside it", str(path))
+
+
+def _make_temp_dir(path: Path, suffix: str) -> Path:
+    """Create an empty hidden directory beside ``path`` with the mode the umask gives
+    (``tempfile.mkdtemp`` makes it 0700, and the rename would keep that)."""
+    for _ in range(100):
+        tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}{suffix}")
+        try:
+            os.mkdir(tmp, 0o777)
+        except FileExistsError:
+            continue
+        return tmp
+    raise FileExistsError(errno.EEXIST, "cannot create a temporary directory beside it",
+                          str(path))
 
 
 @contextlib.contextmanager
@@ -126,12 +140,12 @@ def atomic_directory(path: str | os.PathLike, force: bool = False):
         raise NotADirectoryError(20, "exists and is not a directory", str(path))
     if not path.parent.is_dir():
         raise FileNotFoundError(2, "No such directory", str(path.parent))
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent))
+    tmp = _make_temp_dir(path, ".partial")
     old = None
     try:
         yield tmp
         if path.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old", dir=path.parent))
+            old = _make_temp_dir(path, ".old")
             os.replace(path, old / "previous")
         try:
             os.replace(tmp, path)
