@@ -153,7 +153,8 @@ def modal_table(sys, physical_only: bool = False) -> ModeShapes:
 
 
 def format_modal_table(modes: ModeShapes, max_rows: int | None = None) -> str:
-    """The modal parameter table as text: frequency, damping, |shape| per sensor, |L| per input."""
+    """The modal parameter table as text: frequency, damping, ``|shape|`` per sensor and
+    ``|L|`` per input."""
     labels = modes.labels or [f"dof{k + 1}" for k in range(modes.shapes.shape[0])]
     ins = modes.input_names or []
     head = ["mode", "f [Hz]", "damping [%]"] + [f"|{s}|" for s in labels] + \

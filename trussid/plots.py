@@ -337,7 +337,7 @@ def stabilisation_figure(stab, frf=None, title: str = "stabilisation diagram",
     ----------
     stab : trussid.plid.modal.Stabilisation
     frf : (f [Hz], H (n_freq, p, m)), optional
-        Drawn behind the poles as the sum over channels of |H| [dB] (right axis), so that
+        Drawn behind the poles as the sum over channels of ``|H|`` [dB] (right axis), so that
         stable columns can be checked against the resonance peaks.
     title : str
     fmax : float, optional
