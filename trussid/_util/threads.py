@@ -35,3 +35,9 @@ def blas_threads(n: int | None):
 def blas_thread_counts() -> list[int]:
     """Current thread count of every BLAS library loaded (for tests and reports)."""
     return [lib.num_threads for lib in _controller().select(user_api="blas").lib_controllers]
+
+
+def forget_blas_libraries() -> None:
+    """Rescan the loaded BLAS libraries at the next limit: call it after importing a package
+    that brings its own BLAS (cvxopt), or the limit will not reach that library."""
+    _controller.cache_clear()
