@@ -409,6 +409,11 @@ def main(argv: list[str] | None = None) -> int:
                                "results": results, "runs": all_runs, "tables": readme_tables(results, st)})
     if args.md:
         Path(args.md).write_text(md + "\n")
+    # A trussid run that failed is a crash of the code under test: fail the command.
+    bad = [case for case, per_tool in results.items() if per_tool.get("trussid", {}).get("status", "ok") != "ok"]
+    if bad:
+        print(f"trussid failed on: {', '.join(bad)}", file=sys.stderr)
+        return 1
     return 0
 
 
