@@ -1,18 +1,21 @@
-"""FE benchmark: trussid against OpenSeesPy on the same structures (issue 2, acceptance item 9).
+"""FE benchmark: trussid against OpenSeesPy (and plain scipy) on the same structures (issues 2, 18).
 
 Usage::
 
     python benchmarks/bench_fem_vs_opensees.py [--sizes small|all] [--repeat 3]
-        [--tools trussid,opensees] [--json OUT.json]
+        [--tools trussid,opensees,scipy] [--json OUT.json] [--md OUT.md]
 
 For every structure of :data:`fem_models.SIZES` (a truss boom of triangular section of
-~1.5e4 and ~1.5e5 DOF, a cubic lattice frame of ~3e3 and ~3e4 DOF; ``--sizes small`` runs
-the smaller of each) and every tool, the lowest 20 modes are computed ``--repeat`` times,
+~1.5e4 and ~1.5e5 DOF, a cubic lattice frame of ~3e3, ~3e4 and ~1.4e5 DOF; ``--sizes
+small`` runs the smaller boom and lattice) and every tool (plain scipy only on
+:data:`SCIPY_CASES`), the lowest 20 modes are computed ``--repeat`` times,
 each run in a fresh child process, and the best run is reported. Phases timed
 (``time.perf_counter``):
 
 - trussid: *setup* = the spec arrays -> :class:`trussid.fem.Model`; *assembly* =
   :func:`trussid.fem.assembly.assemble`; *modes* = :func:`trussid.fem.modal.solve_modes` (20 modes).
+- scipy: trussid's setup and assembly, then *modes* = ``scipy.sparse.linalg.eigsh(K, 20,
+  M, sigma=0)`` with scipy's own shift-invert (SuperLU with its defaults).
 - OpenSeesPy: *setup* = the ``node``/``fix``/``geomTransf``/``element`` calls; *modes* =
   ``ops.eigen`` (20 modes), which forms K and M itself, so OpenSees' assembly is inside its
   modes time and cannot be timed apart from the Python side.
