@@ -29,7 +29,9 @@ from trussid._util.threads import blas_threads
 #: SuperLU and ARPACK are small (supernodes of tens of columns, level-2 updates), so
 #: threads only add synchronisation: measured on the shared 2-core machine under load,
 #: 20 modes of the 2.8e4-DOF lattice took 9.6 s CPU / 38 s wall with 2 threads and
-#: 5.4 s / 19 s with 1 (1.5e5-DOF boom: 5.1 s / 17.5 s vs 1.9 s / 6.6 s).
+#: 5.4 s / 19 s with 1 (1.5e5-DOF boom: 5.1 s / 17.5 s vs 1.9 s / 6.6 s). Those figures
+#: are SuperLU's; CHOLMOD's supernodal blocks (:mod:`trussid.fem.factor`) are BLAS-3 and
+#: could use a second thread on an idle machine, not on this shared one.
 BLAS_THREADS = 1
 
 #: Above this many reduced DOFs ``method="auto"`` switches from dense to shift-invert
