@@ -204,6 +204,7 @@ def run_worker(tool: str, case: str, n_modes: int = N_MODES, timeout: float = 60
         err.seek(0)
         stdout, stderr = out.read(), err.read()
     result = {"tool": tool, "case": case, "wall": wall, "blas_threads": blas_threads, "settings": o, "peak_mb": usage.ru_maxrss / 1024.0,
+              "cpu_rusage": usage.ru_utime + usage.ru_stime,  # the child's CPU, also when killed
               "load_before": load_before, "load_after": os.getloadavg()[0]}
     lines = [ln for ln in stdout.splitlines() if ln.startswith("RESULT ")]
     if timed_out:
