@@ -46,6 +46,13 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
     Returns
     -------
     matplotlib.figure.Figure (not attached to pyplot: the caller saves it)
+
+    Notes
+    -----
+    Drawn here rather than with :func:`control.bode_plot`: that function lays a MIMO system
+    out as one grid of every input/output pair on pyplot's current figure, while a report
+    wants one figure per input with a nonparametric estimate on its own frequency grid
+    overlaid, on a linear frequency axis, without touching pyplot's state.
     """
     p = len(output_names)
     fig = Figure(figsize=(10, 2.4 * p + 0.6))
