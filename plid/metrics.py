@@ -167,15 +167,31 @@ def _stable_predictor(A, C, K) -> bool:
                 and np.max(np.abs(np.linalg.eigvals(A - K @ C)), initial=0) < 1)
 
 
-def refine_predictor_gain(model: control.StateSpace, u, y, K0, iterations: int = 2):
-    """Least-squares refinements of a predictor gain with ``A, B, C, D`` fixed.
+def _long_ar_innovations(r: np.ndarray, lags: int) -> np.ndarray:
+    """Innovations of ``r`` (N, p) from a long vector autoregression fitted by least
+    squares (the first step of Hannan and Rissanen's ARMA estimation); zero before ``lags``."""
+    N, p = r.shape
+    lags = int(max(1, min(lags, (N // 4) // max(p, 1))))
+    Phi = np.hstack([r[lags - i - 1:N - i - 1] for i in range(lags)])   # (N - lags, p lags)
+    from trussid.plid.subspace import _lstsq
 
-    In innovations form ``y = G(u) + (C (zI - A)^-1 K + I) e``: given the innovations ``e``
-    of the current gain, the output residual ``y - G(u) - e`` is linear in ``K`` (and the
-    initial state), so ``K`` follows by least squares on one-pole filters of ``e``
-    (:func:`trussid.plid.subspace.output_error_fit`'s regressors with ``e`` as the input);
-    the innovations are then recomputed with the new ``K`` (extended least squares, the
-    pseudo-linear regression of ARMAX estimation). ``A`` must be stable and diagonalisable.
+    coef = _lstsq(Phi, r[lags:])
+    e = np.zeros_like(r)
+    e[lags:] = r[lags:] - Phi @ coef
+    return e
+
+
+def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: int = 2):
+    """Least-squares estimates of a predictor gain with ``A, B, C, D`` fixed.
+
+    In innovations form ``y = G(u) + (C (zI - A)^-1 K + I) e``: given innovations ``e``, the
+    output residual ``y - G(u) - e`` is linear in ``K`` (and the initial state), so ``K``
+    follows by least squares on one-pole filters of ``e``
+    (:func:`trussid.plid.subspace.output_error_fit`'s regressors with ``e`` as the input).
+    The first innovations are those of a long autoregression of the output-error residual
+    (Hannan-Rissanen), or of the predictor with ``K0`` when given; each further iteration
+    recomputes them with the new ``K`` (extended least squares). ``A`` must be stable and
+    diagonalisable.
 
     Returns
     -------
@@ -191,10 +207,14 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0, iterations: int =
         return []
     w = 1.0 / np.sqrt(np.maximum(np.mean(y ** 2, axis=0), 1e-300))
     y_u = simulate(model, u)
-    K = np.asarray(K0, float)
+    if K0 is None:
+        e = _long_ar_innovations(y - y_u, 2 * n + 10)
+    else:
+        e = y - one_step_predict(model, u, y, K=np.asarray(K0, float))
     out = []
-    for _ in range(iterations):
-        e = y - one_step_predict(model, u, y, K=K)
+    for it in range(iterations):
+        if it:
+            e = y - one_step_predict(model, u, y, K=K)
         R = _modal_regressors(A, C, e, x0=True)          # (N, p, n p + n)
         Rm = (R * w[None, :, None]).reshape(-1, R.shape[2])
         theta = _lstsq(Rm, ((y - y_u - e) * w).ravel())
@@ -213,7 +233,8 @@ def best_predictor(model: control.StateSpace, u, y, candidates=None,
     never worse than simulation on these data), the gains in ``candidates``
     (``{label: K}``, e.g. the estimator's own), the steady-state Kalman gains of
     :func:`choose_predictor` (one per state-to-output noise ratio), and, from the best of
-    these, :func:`refine_predictor_gain`. Only gains with a stable predictor ``A - K C``
+    these and from a long autoregression of the output error, :func:`refine_predictor_gain`.
+    Only gains with a stable predictor ``A - K C``
     compete. The score is the mean-normalised one-step ratio (module docstring: every
     output counts alike, whatever its units) after the first eighth of the record (the
     predictor's start-up from x0 = 0). Give it the identification record, never the
@@ -255,12 +276,14 @@ def best_predictor(model: control.StateSpace, u, y, candidates=None,
     best = max(range(len(cands)), key=lambda i: scores[cands[i][0]])
     label, K = cands[best]
     if refine:
-        try:
-            refined = refine_predictor_gain(model, u, y, K)
-        except (np.linalg.LinAlgError, ValueError):
-            refined = []
-        labs = [f"least-squares refinement {i + 1} of {cands[best][0]}"
-                for i in range(len(refined))]
+        refined, labs = [], []
+        for start, K0 in (("long autoregression", None), (cands[best][0], K)):
+            try:
+                ks = refine_predictor_gain(model, u, y, K0)
+            except (np.linalg.LinAlgError, ValueError):
+                ks = []
+            refined += ks
+            labs += [f"least squares, {i + 1} iteration(s) from {start}" for i in range(len(ks))]
         if refined:
             scores.update(zip(labs, _one_step_scores(model, u, y, refined, skip)))
         for lab, Kr in zip(labs, refined):
