@@ -121,6 +121,11 @@ def add_parser(subparsers):
                    "one-step prediction on the data (plid.multipass.identify_reduced; "
                    "what trussid demo uses: for a structure with more significant modes "
                    "than N/2). --start subspace or scratch only")
+    p.add_argument("--direct", choices=("auto", "yes", "no"), default=None,
+                   help="direct term D (feed-through): auto (default for --start subspace or "
+                   "scratch) decides on the data by a held-out output-error test, and the "
+                   "report says what it chose; yes / no force it. --via defaults to no "
+                   "(strictly proper candidates); --start plain has none")
     p.add_argument("--json", action="store_true",
                    help="print poles and the prediction ratio as JSON")
     p.set_defaults(func=run)
@@ -143,10 +148,15 @@ def run(args) -> int:
     data = read_data(args.data, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
                      fs=args.fs)
     n, m, p = args.order, data.n_inputs, data.n_outputs
-    check_order(n, p)
+    start = getattr(args, "start", "plain")
+    if start == "plain":   # the shift basis; identify handles any order (by reduction)
+        check_order(n, p)
+    direct_opt = getattr(args, "direct", None)
+    if direct_opt is not None and start == "plain":
+        raise DataError("--direct works with --start subspace or scratch, not plain")
+    direct = {"auto": "auto", "yes": True, "no": False, None: None}[direct_opt]
     check_enough_samples(data, n * (m + p), f"an order-{n} model with {m} inputs and "
                          f"{p} outputs")
-    start = getattr(args, "start", "plain")
     form = args.form or ("sqrt" if start == "plain" else "direct")
     via = via_arg(getattr(args, "via", None), n, p, start)
     progress = None if sys.stderr.isatty() else False
@@ -164,6 +174,7 @@ def run(args) -> int:
 
             ident = identify_reduced(data.u, data.y, n, data.dt, via=via, start=start,
                                      form=form, progress=progress,
+                                     direct=False if direct is None else direct,
                                      log=lambda msg: print(f"  {msg}", file=sys.stderr))
             res, K = ident.result, ident.K
             R_used = [float(r) for r in np.atleast_1d(ident.R)]
@@ -171,7 +182,7 @@ def run(args) -> int:
             from trussid.plid.multipass import identify
 
             ident = identify(data.u, data.y, n, data.dt, start=start, R=args.R, form=form,
-                             progress=progress)
+                             direct="auto" if direct is None else direct, progress=progress)
             res, K = ident.result, ident.K
             R_used = [float(r) for r in np.atleast_1d(ident.R)]
     seconds = time.perf_counter() - t0
@@ -197,14 +208,18 @@ def run(args) -> int:
         "Q": args.Q if start == "plain" else [p["Q"] for p in ident.info["passes"]],
         "R": R_used,
         "seconds": seconds,
-        "K_source": (ident.info.get("predictor") or {}).get("chosen") if via is not None
-        else res.K_source,
+        "K_source": res.K_source if start == "plain"
+        else (ident.info.get("predictor") or {}).get("chosen"),
         "signal_to_prediction_error_db": ratio["overall"],
         "signal_to_prediction_error_db_per_output": ratio["per_channel"],
         "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
         "prediction_skip_samples": skip, "unstable_poles": unstable,
         "poles": pole_table(model), "warnings": notes,
     }
+    if start != "plain" and "direct" in ident.info:
+        summary["direct_term"] = ident.info["direct"]
+    if start != "plain" and "structure" in ident.info:
+        summary["structure"] = ident.info["structure"]
     if via is not None:
         summary["via"] = list(ident.info["via"])
         summary["chosen"] = ident.info["chosen"]
@@ -218,6 +233,17 @@ def run(args) -> int:
           f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s ({form} form, "
           f"{start} start{'; kept ' + ident.info['chosen'] if via is not None else ''})")
     print(f"wrote {out}")
+    if "structure" in summary:
+        print(f"structure: {summary['structure']}")
+    if "direct_term" in summary:
+        d = summary["direct_term"]
+        t = d.get("test")
+        why = (f" (held-out output error {t['held_out_nmse_with']:.3g} with D against "
+               f"{t['held_out_nmse_without']:.3g} without)" if t else "")
+        print(f"direct term D: {'estimated' if d['estimated'] else 'none (D = 0)'}"
+              f"{' (' + str(d['mode']) + ')' if d['mode'] != 'auto' else ''}{why}")
+    if start != "plain":
+        print(f"predictor gain K: {summary['K_source']}")
     per = ", ".join(f"{name} {v:.2f}" for name, v in zip(data.output_names, ratio["per_channel"]))
     print(f"one-step signal-to-prediction-error ratio: {ratio['overall']:.2f} dB ({per}; "
           f"first {skip} samples left out)")
