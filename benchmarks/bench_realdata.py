@@ -365,6 +365,12 @@ def report(all_res, env):
          f"{[round(v, 2) for v in env.get('loadavg_end', [])]}; numpy {env.get('numpy')}, "
          f"scipy {env.get('scipy')}, nfoursid {env.get('nfoursid')}, "
          f"sippy_unipi {env.get('sippy_unipi')}.\n",
+         *([f"Methods {', '.join(env['others']['methods'])} come from an earlier run of this "
+            f"script on the same machine the same day (commit {env['others']['commit']}, load "
+            f"average {env['others']['loadavg_start']} at its start): they do not depend on "
+            "trussid's code, and repeating SIPPY's subframe fits at this machine's load takes "
+            "over an hour. PLID and nfoursid N4SID (with the timings) are from this run.\n"]
+           if env.get("others") else []),
          "## Key table\n",
          "Cell: `1-step / sim (order)`; `U` unstable. Best of the other methods per measure, "
          "and PLID's verdict: `ok` when PLID is best or within 1 point of the best on both.\n",
@@ -473,24 +479,49 @@ def main(argv=None):
     ap.add_argument("--profile", metavar="OUT.txt", help="only profile one subframe PLID fit")
     ap.add_argument("--out", default=os.path.join(RESULTS, "realdata"),
                     help="results stem (.md and .json are written)")
+    ap.add_argument("--from-json", metavar="FILE",
+                    help="do not run: rewrite the report from this results file")
+    ap.add_argument("--others", metavar="FILE",
+                    help="take the methods this run did not fit from an earlier results file "
+                    "(the comparators do not depend on trussid's commit); the report says so")
     a = ap.parse_args(argv)
     if a.profile:
         profile_subframe(a.profile)
         return 0
-    if not os.path.isdir(DATA):
-        print(f"bench_realdata: no data directory {DATA}", file=sys.stderr)
-        return 2
-    env = environment()
-    methods = [m for m in a.methods.split(",") if m]
-    all_res = {}
-    t0 = time.perf_counter()
-    for name in [s for s in a.sets.split(",") if s]:
-        res = evaluate(name, methods, log=lambda s: print(s, flush=True))
-        res["retime"] = retime(name, res, [m for m in ("PLID", "N4SID") if m in methods],
-                               log=lambda s: print(s, flush=True))
-        all_res[name] = res
-    env["loadavg_end"] = os.getloadavg()
-    env["seconds"] = time.perf_counter() - t0
+    if a.from_json:
+        with open(a.from_json) as fh:
+            saved = json.load(fh)
+        env, all_res = saved["environment"], saved["results"]
+    else:
+        if not os.path.isdir(DATA):
+            print(f"bench_realdata: no data directory {DATA}", file=sys.stderr)
+            return 2
+        env = environment()
+        methods = [m for m in a.methods.split(",") if m]
+        all_res = {}
+        t0 = time.perf_counter()
+        for name in [s for s in a.sets.split(",") if s]:
+            res = evaluate(name, methods, log=lambda s: print(s, flush=True))
+            res["retime"] = retime(name, res, [m for m in ("PLID", "N4SID") if m in methods],
+                                   log=lambda s: print(s, flush=True))
+            all_res[name] = res
+        env["loadavg_end"] = os.getloadavg()
+        env["seconds"] = time.perf_counter() - t0
+    if a.others:
+        with open(a.others) as fh:
+            other = json.load(fh)
+        oenv = other["environment"]
+        for name, res in all_res.items():
+            have = {r["method"] for r in res["runs"]}
+            extra = [dict(r, source=f"run of commit {oenv.get('commit')}")
+                     for r in other["results"].get(name, {}).get("runs", [])
+                     if r["method"] not in have]
+            res["runs"] += extra
+        env["others"] = {"file": os.path.basename(a.others), "commit": oenv.get("commit"),
+                         "loadavg_start": oenv.get("loadavg_start"),
+                         "loadavg_end": oenv.get("loadavg_end"),
+                         "methods": sorted({r["method"] for res in other["results"].values()
+                                            for r in res["runs"]} - {"PLID", "N4SID"})}
     md, verdicts = report(all_res, env)
     os.makedirs(os.path.dirname(a.out), exist_ok=True)
     for ext, text in ((".md", md), (".json", json.dumps(
