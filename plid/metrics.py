@@ -213,7 +213,7 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: 
         e = _long_ar_innovations(y - y_u, 2 * n + 10)
     else:
         e = y - one_step_predict(model, u, y, K=np.asarray(K0, float))
-    out = []
+    out, K = [], None
     for it in range(iterations):
         if it:
             e = y - one_step_predict(model, u, y, K=K)
