@@ -269,18 +269,26 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     if start == "scratch" and direct == "auto" and stable:
         test = direct_term_test(model, u, y)
         use_d = test["direct"]
-    D_std = None
-    if use_d:
-        if stable:
-            model, _, D_std = output_error_fit(model, u, y, direct=True)
-        elif D0 is not None:   # an unstable model cannot be refitted: keep the prior's D
-            model = control.ss(model.A, model.B, model.C, D0, dt)
-        else:
-            use_d = False
+    model, use_d, D_std = _with_direct_term(model, u, y, use_d, stable, D0)
     info["direct"] = _direct_info(direct, use_d, test, model, D_std)
     K, info["predictor"] = _best_gain(model, u, y, R, {"estimator": res.K})
     info["seconds"] = time.perf_counter() - t0
     return Identification(res, model, K, start, basis, R, prior, info)
+
+
+def _with_direct_term(model, u, y, use_d: bool, stable: bool, D0):
+    """``(model, use_d, D standard errors)``: B and D refitted by output error when a direct
+    term is wanted; an unstable model cannot be refitted, so it keeps the prior's ``D0``."""
+    from trussid.plid.subspace import output_error_fit
+
+    if not use_d:
+        return model, False, None
+    if stable:
+        model, _, D_std = output_error_fit(model, u, y, direct=True)
+        return model, True, D_std
+    if D0 is not None:
+        return control.ss(model.A, model.B, model.C, D0, model.dt), True, None
+    return model, False, None
 
 
 def _count_unstable(model) -> int:
