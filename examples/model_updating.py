@@ -131,8 +131,11 @@ if __name__ == "__main__":
 
     print()
     print(report.table(truth))
-    print(f"\nlargest relative wall error {wall_error.max():.3e}; intervals cover the truth for "
-          f"{int(report.covers(truth).sum())} of 6 struts"
+    finite = np.isfinite(report.intervals).all(axis=1)
+    print(f"\nlargest relative wall error {wall_error.max():.3e}; finite intervals cover the "
+          f"truth for {int((report.covers(truth) & finite).sum())} of {int(finite.sum())} struts"
+          + ("" if finite.all() else f"; {int((~finite).sum())} wall(s) undetermined by these "
+             "modes (infinite interval)")
           + (" (exact data: the intervals hold only round-off)" if args.exact else ""))
     if report.damping is not None:
         print(f"true modal damping {100 * true_tb.damping.modal_ratio:.4f} %")
