@@ -30,11 +30,13 @@ def orders_arg(text, order: int, p: int) -> list[int]:
     return list(range(nums[0], nums[1] + 1, step))
 
 
-def check_modal_args(args) -> None:
-    """Refuse a bad ``--stabilisation`` path before any work."""
+def check_modal_args(args, out) -> None:
+    """Refuse a missing directory of ``--out`` and a bad ``--stabilisation`` path before any
+    work."""
     from trussid._util.files import check_parent
     from trussid.plid.errors import DataError
 
+    check_parent(out, "--out")
     if getattr(args, "stabilisation", None) is not None:
         if not str(args.stabilisation).lower().endswith(".png"):
             raise DataError(f"--stabilisation {args.stabilisation}: the diagram is a .png")
@@ -43,9 +45,12 @@ def check_modal_args(args) -> None:
 
 def modal_outputs(args, data, model, start: str, form: str, summary: dict) -> list[str]:
     """Run what ``--stabilisation`` / ``--modal-table`` ask for; add it to ``summary`` and
-    return the lines to print."""
+    return the lines to print. The reader's notes (e.g. a time column read as milliseconds)
+    go to stderr first."""
     import control
 
+    for note in data.notes:
+        print(f"trussid identify: note: {note}", file=sys.stderr)
     # the model as identified has generic signal names; the table names the data's channels
     model = control.ss(model.A, model.B, model.C, model.D, model.dt,
                        inputs=list(data.input_names), outputs=list(data.output_names))

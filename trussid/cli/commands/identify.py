@@ -205,7 +205,8 @@ def run_orders(args, data) -> int:
 
 
 def run(args) -> int:
-    from trussid._util.files import check_parent
+    # Long: the command's steps in order (check the paths, read, fit, score, write, report),
+    # each a few lines; split up they would only pass the same dozen names around.
     from trussid.cli.commands._modal import check_modal_args, modal_outputs
     from trussid.plid.canonical import check_order
     from trussid.plid.datafile import check_enough_samples, read_data
@@ -224,8 +225,7 @@ def run(args) -> int:
                                           outputs=names_arg(args.outputs), fs=args.fs))
     if not out.lower().endswith(".npz"):
         raise DataError(f"--out {out}: model files are .npz")
-    check_parent(out, "--out")
-    check_modal_args(args)
+    check_modal_args(args, out)
     if args.order < 1:
         raise IdentificationError(f"--order must be a positive integer, got {args.order}")
     data = read_data(args.data, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
@@ -282,8 +282,6 @@ def run(args) -> int:
         summary.update(via=list(ident.info["via"]), chosen=ident.info["chosen"],
                        candidates=ident.info["candidates"])
     modal_lines = modal_outputs(args, data, model, start, ident.result.form, summary)
-    for note in data.notes:
-        print(f"trussid identify: note: {note}", file=sys.stderr)
     for note in summary["warnings"]:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
