@@ -81,8 +81,8 @@ def channel_electronics(chain: LabChain) -> control.StateSpace:
 
 
 def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
-              check_nyquist: bool = True, max_mode_hz: float | None = None
-              ) -> tuple[control.StateSpace, control.StateSpace]:
+              check_nyquist: bool = True, max_mode_hz: float | None = None,
+              n_commands: int | None = None) -> tuple[control.StateSpace, control.StateSpace]:
     """Compose the electronics with a structural plant and discretise.
 
     Parameters
@@ -94,6 +94,10 @@ def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
         Refuse a sample rate below twice ``max_mode_hz``.
     max_mode_hz : float, optional
         Highest kept structural mode [Hz] (for the Nyquist check).
+    n_commands : int, optional
+        The first ``n_commands`` inputs are D/A commands and go through the electronics;
+        the others (disturbances acting on the structure) enter the structure directly.
+        Default: all inputs.
 
     Returns
     -------
@@ -110,9 +114,14 @@ def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
     if check_nyquist and max_mode_hz is not None and fs < 2 * max_mode_hz:
         raise ModelError(f"sample rate {fs:g} Hz is below twice the highest kept mode "
                          f"({max_mode_hz:.1f} Hz): keep fewer modes or sample faster")
-    m = structure.ninputs
+    m = structure.ninputs if n_commands is None else int(n_commands)
+    if not 0 <= m <= structure.ninputs:
+        raise ModelError(f"n_commands must be in 0..{structure.ninputs}, got {n_commands}")
     elec = channel_electronics(chain)
-    bank = control.append(*([elec] * m)) if m > 1 else elec
+    blocks = [elec] * m
+    if structure.ninputs > m:  # disturbances bypass the electronics
+        blocks.append(control.ss([], [], [], np.eye(structure.ninputs - m)))
+    bank = control.append(*blocks) if len(blocks) > 1 else blocks[0]
     cont = control.series(bank, structure)
     cont = control.ss(cont.A, cont.B, cont.C, cont.D, inputs=list(structure.input_labels),
                       outputs=list(structure.output_labels), name="plant")
@@ -125,9 +134,14 @@ def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
 
 
 def _delay_direct_term(sys: control.StateSpace) -> control.StateSpace:
-    """y_k = C x_k + D u_{k-1}: append the held input as ``m`` states."""
-    n, m = sys.A.shape[0], sys.B.shape[1]
-    A = np.block([[sys.A, np.zeros((n, m))], [np.zeros((m, n + m))]])
-    B = np.vstack([sys.B, np.eye(m)])
-    C = np.hstack([sys.C, sys.D])
+    """y_k = C x_k + D u_{k-1}: append the held input as states, one per input with a
+    direct term (every input when none is filtered; only the disturbances otherwise)."""
+    n = sys.A.shape[0]
+    cols = np.flatnonzero(np.any(np.asarray(sys.D) != 0, axis=0))
+    m, k = sys.B.shape[1], cols.size
+    A = np.block([[sys.A, np.zeros((n, k))], [np.zeros((k, n + k))]])
+    E = np.zeros((k, m))
+    E[np.arange(k), cols] = 1.0
+    B = np.vstack([sys.B, E])
+    C = np.hstack([sys.C, np.asarray(sys.D)[:, cols]])
     return control.ss(A, B, C, np.zeros_like(sys.D), sys.dt)
