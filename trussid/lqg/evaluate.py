@@ -112,12 +112,13 @@ def damping_table(plant, controller, *, band=(40.0, 450.0), dominant_fraction: f
     Each closed-loop pole is assigned (Hungarian assignment) to the open-loop plant mode
     that holds the largest share of its eigenvector's plant part (in the plant's modal
     coordinates); the poles left over are controller poles and belong to the plant mode
-    nearest in the s-plane. A controller pole is *visible* when its residue from the D/A
+    nearest in the s-plane. Every closed-loop pole also *belongs* to the open-loop mode
+    nearest to it in the s-plane; it is *visible* when its residue from the D/A
     disturbance to the sensors is at least ``visible_fraction`` of that mode's open-loop
     residue and at least ``floor_fraction`` of the largest open-loop residue. The worst
-    visible damping of a mode is the least damping among its tracked pole and its visible
-    controller poles: an estimator pole left at 1 % near a mode rings in the response as
-    the mode would.
+    visible damping of a mode is the least damping among its tracked pole and the visible
+    poles that belong to it: an estimator pole left at 1 % near a mode rings in the
+    response as the mode would, whichever eigenvector the assignment gave the mode.
 
     Dominant modes: residue at least ``dominant_fraction`` of the largest in the band.
 
@@ -151,9 +152,9 @@ def damping_table(plant, controller, *, band=(40.0, 450.0), dominant_fraction: f
     f_cl, z_cl = freq_damping(lam, dt)
     s_ol = np.log(np.where(np.abs(ol.poles) > 0, ol.poles, 1e-300).astype(complex)) / dt
     s_cl = np.log(np.where(np.abs(lam) > 0, lam, 1e-300).astype(complex)) / dt
-    owner = np.full(lam.size, -1)
-    for j in np.flatnonzero(is_ctrl):
-        owner[j] = int(np.argmin(np.abs(s_ol - s_cl[j])))
+    # every closed-loop pole also belongs to the open-loop mode nearest in the s-plane: a
+    # pole whose eigenvector the assignment gave to a neighbour still rings at this mode
+    owner = np.argmin(np.abs(s_ol[None, :] - s_cl[:, None]), axis=1)
     lo, hi = band
     up = (ol.poles.imag > 0)
     in_band = np.flatnonzero(up & (ol.frequency_hz >= lo) & (ol.frequency_hz <= hi))
@@ -162,9 +163,10 @@ def damping_table(plant, controller, *, band=(40.0, 450.0), dominant_fraction: f
     rows = []
     for i in in_band[np.argsort(ol.frequency_hz[in_band])]:
         j = tracked[i]
-        ctrl = [k for k in np.flatnonzero((owner == i) & is_ctrl)
-                if res_cl[k] >= max(visible_fraction * ol.residue[i], floor_fraction * rmax)]
-        zs = [z_cl[j]] + [z_cl[k] for k in ctrl]
+        near = [k for k in np.flatnonzero((owner == i) & (lam.imag > 0)) if k != j
+                and res_cl[k] >= max(visible_fraction * ol.residue[i], floor_fraction * rmax)]
+        ctrl = [k for k in near if is_ctrl[k]]
+        zs = [z_cl[j]] + [z_cl[k] for k in near]
         rows.append(ModeRow(float(ol.frequency_hz[i]), float(ol.damping[i]), float(ol.residue[i]),
                             float(f_cl[j]), float(z_cl[j]), float(min(zs)), len(ctrl),
                             bool(ol.residue[i] >= dominant_fraction * rmax_band)).__dict__)
