@@ -16,9 +16,10 @@ import sys
 from trussid import __version__
 from trussid._util.errors import UserError
 
-#: Sub-commands in the order ``--help`` lists them.
+#: Sub-commands in the order ``--help`` lists them (module ``trussid.cli.commands.<name>``
+#: with ``-`` read as ``_``).
 COMMANDS = ("demo", "modes", "render", "plant", "simulate", "identify", "compare", "greybox",
-            "control", "closed_loop")
+            "control", "closed-loop")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -31,12 +32,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks for errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
+        modname = f"trussid.cli.commands.{name.replace('-', '_')}"
         try:
-            module = importlib.import_module(f"trussid.cli.commands.{name}")
+            module = importlib.import_module(modname)
         except ModuleNotFoundError as exc:
             # A command whose module is not there yet is simply not offered; any other
             # missing module is a real installation problem and must surface.
-            if exc.name == f"trussid.cli.commands.{name}":
+            if exc.name == modname:
                 continue
             raise
         module.add_parser(sub)

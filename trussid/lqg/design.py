@@ -25,7 +25,9 @@ Recipe (measured in ``benchmarks/results/control.md``):
    (:func:`plid.metrics.choose_predictor`: steady-state Kalman gains for a ladder of
    state-to-output noise ratios, the best one-step predictor on the record wins; the
    out-of-band response of the structure then acts as output noise), or the identified
-   model's own ``K`` when the design model is the full model (``estimator="model"``).
+   model's own ``K`` projected on the target modes (``estimator="model"``). If the
+   record's choice leaves a target mode's estimator pole below half the target damping,
+   it would ring in the closed loop, so the dual of step 4 replaces it.
 4. State feedback: :func:`control.dlqr` with ``R = I`` and a weight per target mode on its
    real 2x2 modal block, iterated until the state-feedback damping of each target mode is
    ``target_damping``.
@@ -247,6 +249,18 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
         kinfo = {"chosen": "identified model's K, projected on the target modes"}
     else:
         Kd, _, kinfo = choose_predictor(dm, u, y)
+        zeta_k = _mode_damping(A - Kd @ C, blocks, len(blocks), model.dt)
+        if np.nanmin(zeta_k) < 0.5 * target_damping:
+            # An estimator pole left lightly damped on a target mode rings in the closed loop
+            # as the mode did (the best one-step predictor of a clean record can be slow).
+            # Use the dual of the state-feedback tuning instead: a steady-state Kalman gain
+            # whose predictor poles reach the target damping on every target mode.
+            Fd, _, _, _ = lqr_for_damping(A.T, C.T, blocks, target_damping, model.dt)
+            kinfo = dict(kinfo, rejected=kinfo.get("chosen"),
+                         rejected_min_damping=float(np.nanmin(zeta_k)),
+                         chosen="dual of the damping tuning (the record's best predictor "
+                                "left a target mode below half the target damping)")
+            Kd = Fd.T
     rho = np.max(np.abs(np.linalg.eigvals(A - Kd @ C)))
     if not rho < 1:
         raise ControlError(f"the estimator is unstable on the design model (pole magnitude {rho:.4f})")

@@ -21,6 +21,15 @@ from .modal import freq_damping, modal_data
 
 
 
+def check_pair(plant, controller, label: str = "plant") -> None:
+    """Refuse a controller that cannot close a loop around ``plant`` (names, sizes, dt),
+    with one line naming the item; ``label`` names the plant in the message."""
+    try:
+        _check_pair(plant, controller)
+    except ControlError as exc:
+        raise ControlError(f"{label}: {exc}") if label != "plant" else exc from None
+
+
 def _check_pair(plant, controller):
     for what, sys in (("plant", plant), ("controller", controller)):
         if not control.isdtime(sys, strict=True):

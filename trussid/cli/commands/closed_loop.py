@@ -56,6 +56,10 @@ def run(args) -> int:
         plants = [(Path(args.plant).stem, plant)]
     else:
         plants = truths(stretch=args.stretch)
+    from trussid.lqg.evaluate import check_pair
+
+    for label, plant in plants:  # every mismatch before any work
+        check_pair(plant, ctrl, label)
     ex = meta["extra"]
     base = {}
     if not args.no_baselines and "baseline_kinds" in ex:
