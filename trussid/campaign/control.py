@@ -511,3 +511,26 @@ def write_report(out, study: dict) -> list:
     with atomic_path(out / "report.md") as tmp:
         tmp.write_text("# trussid closed-loop report\n\n" + md)
     return ["report.md", "summary.json", *figs]
+
+
+def demo_section(model, K, data, truth, quick: bool, progress=None):
+    """``trussid demo``'s hook: the LQG from its MIMO model and identification record on
+    the FE truth (and, unless ``quick``, on the perturbed truths with the baselines beside
+    it).
+
+    Returns ``(markdown, {file name: Figure}, summary dict)`` (:func:`report_section`).
+    """
+    import control
+
+    m = control.ss(model.A, model.B, model.C, model.D, model.dt,
+                   inputs=list(data.input_names), outputs=list(data.output_names))
+    from trussid.lqg.errors import ControlError
+
+    plants = [("nominal", truth)] if quick else None
+    try:
+        study = control_study(m, data.u, data.y, K=K, plants=plants, baselines=not quick,
+                              progress=progress)
+    except ControlError as exc:  # e.g. a model too small to hold a lightly damped mode
+        md = f"## Closed loop: active damping\n\nNo controller designed: {exc}.\n"
+        return md, {}, {"error": str(exc)}
+    return report_section(study)

@@ -731,6 +731,21 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
         models.append(evaluate(fits[name], truth, rid, rval, h1s[name], settings, name, kind))
     timings["evaluation"] = time.perf_counter() - t0
 
+    control_md = None
+    if "mimo" in records:  # close the loop on the MIMO model (issue 14)
+        from trussid.campaign.control import demo_section
+        from trussid.plots import save_figure
+
+        t0 = time.perf_counter()
+        say("      closing the loop: LQG from the MIMO model, on the FE truths ...")
+        control_md, control_figs, control_summary = demo_section(
+            fits["mimo"].model, fits["mimo"].K, records["mimo"][0].data, truth, settings.quick,
+            progress=lambda m: say("      " + m))
+        out.mkdir(parents=True, exist_ok=True)
+        for fname, fig in control_figs.items():
+            save_figure(fig, out / fname)
+        timings["control"] = time.perf_counter() - t0
+
     t0 = time.perf_counter()
     say(f"[5/5] writing the report in {out}/ ...")
     files = {"data": [], "models": [], "figures": []}
@@ -786,13 +801,16 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
         "files": files,
         "timings_s": timings,
     }
+    if control_md is not None:
+        summary["control"] = control_summary
+        files["figures"] += list(control_figs)
     timings["report"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
     summary = json_safe(summary)
     with atomic_path(out / "summary.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2) + "\n")
     with atomic_path(out / "report.md") as tmp:
-        tmp.write_text(report_markdown(summary))
+        tmp.write_text(report_markdown(summary) + ("\n" + control_md if control_md else ""))
     say(f"      done in {timings['total']:.1f} s")
     return summary
 
