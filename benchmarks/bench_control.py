@@ -60,8 +60,8 @@ def main() -> None:
     import control
 
     from trussid.campaign.control import (control_study, report_markdown, summary, truths)
-    from trussid.campaign.demo import (build_plant, demo_settings, identify_model, json_safe,
-                                       run_experiments)
+    from trussid._util.jsonio import json_safe
+    from trussid.campaign.demo import build_plant, demo_settings, identify_model, run_experiments
 
     load0 = os.getloadavg()
     settings = demo_settings(quick=args.quick, simo_channels=())

@@ -498,7 +498,7 @@ def write_report(out, study: dict) -> list:
     from pathlib import Path
 
     from trussid._util.files import atomic_path
-    from trussid.campaign.demo import json_safe
+    from trussid._util.jsonio import json_safe
     from trussid.plots import save_figure
 
     out = Path(out)

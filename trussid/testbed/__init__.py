@@ -20,8 +20,8 @@ _LAZY = {
     "ModeLabels": "labels", "label_testbed_modes": "labels",
     "wall_sensitivities": "sensitivity", "testbed_sensitivities": "sensitivity",
     "LabChain": "chain", "lab_plant": "chain",
-    "TestbedPlant": "plant", "testbed_plant": "plant", "node_load": "plant",
-    "udf_wrench": "plant", "udf_motion": "plant",
+    "TestbedPlant": "plant", "testbed_plant": "plant", "plant_summary": "plant",
+    "node_load": "plant", "udf_wrench": "plant", "udf_motion": "plant",
     "testbed_decorations": "render",
 }
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)

@@ -53,7 +53,7 @@ def run(args) -> int:
 
     from trussid._util.errors import UserError
     from trussid.campaign.control import design_controller
-    from trussid.campaign.demo import json_safe
+    from trussid._util.jsonio import json_safe
     from trussid.plid.datafile import read_data
     from trussid.plid.modelfile import load_model, save_model
 
