@@ -109,3 +109,18 @@ def test_unstable_or_continuous_models_are_refused(structure, record):
         design_lqg(cont, *record)
     with pytest.raises(ControlError, match="record has 2 inputs"):
         design_lqg(structure, record[0][:, :2], record[1])
+
+
+def test_the_models_own_predictor_gain_can_be_the_estimator(structure, record):
+    """``estimator="model"``: the identified model's K, projected on the target modes, is
+    the design's predictor gain (here the Kalman gain of the full structure)."""
+    from trussid.plid.metrics import predictor_gain
+
+    n = structure.nstates
+    B = np.asarray(structure.B)
+    K = predictor_gain(structure, B @ B.T + 1e-9 * np.eye(n), 1e-2 * np.eye(3))
+    des = design_lqg(structure, *record, estimator="model", K=K)
+    assert des.K.shape == (des.design_model.nstates, 3)
+    assert "model's K" in des.info["estimator_choice"]["chosen"]
+    tab_rho = np.max(np.abs(np.linalg.eigvals(np.asarray(closed_loop(structure, des.controller).A))))
+    assert tab_rho < 1
