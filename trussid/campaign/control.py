@@ -418,8 +418,12 @@ def report_markdown(study: dict, heading: str = "##") -> str:
               f"them, estimator: {des.info['estimator_choice'].get('chosen', '')}. "
               f"Controller: {ctrl.nstates} states.", ""]
     else:
+        di = study.get("design_info") or {}
+        tm = ", ".join(f"{t['frequency_hz']:.1f} Hz" for t in di.get("target_modes", []))
         L += [f"Controller: {ctrl.nstates} states, {ctrl.ninputs} sensors in, "
-              f"{ctrl.noutputs} actuators out.", ""]
+              f"{ctrl.noutputs} actuators out"
+              + (f"; {di.get('form')} form, designed by `trussid control` from {di.get('model')} "
+                 f"and {di.get('data')} for the modes at {tm}" if di else "") + ".", ""]
     L += [f"{h}# Damping per mode on the {nom} truth", "",
           "Open-loop plant modes in 40-450 Hz; *tracked*: the closed-loop pole matched to "
           "the mode; *worst visible*: the least damped among it and the controller poles "

@@ -69,6 +69,10 @@ def run(args) -> int:
     study = robustness(ctrl, plants, base, LoopSettings(n_samples=args.samples),
                        progress=lambda msg: bar.update(1))
     bar.close()
+    if "design_json" in ex:
+        import json
+
+        study["design_info"] = json.loads(str(ex["design_json"]))
     files = write_report(out, study)
     for label, ok in study["checks"].items():
         r = study["rows"][label]
