@@ -220,6 +220,8 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     -------
     LQGDesign
     """
+    # One function over 80 lines: the four steps of the recipe (module docstring) in order,
+    # with the input checks before them; each step is a few lines calling a helper.
     from trussid.plid.metrics import choose_predictor
 
     if not (isinstance(target_damping, (int, float)) and 0 < target_damping < 1):
