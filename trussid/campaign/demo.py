@@ -751,8 +751,7 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
     with atomic_path(out / "summary.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2) + "\n")
     with atomic_path(out / "report.md") as tmp:
-        tmp.write_text(report_markdown(summary) + ("
-" + control[0] if control else ""))
+        tmp.write_text(report_markdown(summary) + ("\n" + control[0] if control else ""))
     return summary
 
 
