@@ -87,9 +87,10 @@ def test_control_refuses_unstable_and_continuous_models(files, tmp_path, capsys)
 
     d = files
     p = modal_structure()
-    save_model(tmp_path / "unstable.npz", control.ss(1.01 * np.asarray(p.A), p.B, p.C, p.D, p.dt,
-                                                     inputs=["ch1", "ch2", "ch3"],
-                                                     outputs=["acc1", "acc2", "acc3"]))
+    with pytest.warns(Warning, match="unstable"):  # save_model warns; control refuses
+        save_model(tmp_path / "unstable.npz", control.ss(1.01 * np.asarray(p.A), p.B, p.C, p.D,
+                                                         p.dt, inputs=["ch1", "ch2", "ch3"],
+                                                         outputs=["acc1", "acc2", "acc3"]))
     save_model(tmp_path / "cont.npz", control.ss(-np.eye(2), np.ones((2, 3)), np.ones((3, 2)),
                                                  np.zeros((3, 3)), inputs=["ch1", "ch2", "ch3"],
                                                  outputs=["acc1", "acc2", "acc3"]))
