@@ -399,6 +399,9 @@ def rigid_null_dimension(system: System) -> int:
     Q = R[system.dofs]                             # reduced coordinates of each motion
     w = np.tile(np.r_[np.ones(3), np.full(3, size)], len(xyz))[:, None]  # rotations in length units
     D = (system.T @ Q - R) * w
+    inert = getattr(system, "inert", None)
+    if inert is not None:
+        D[inert] = 0.0  # nothing acts on these DOFs: a support there stops no motion
     _, sv, Vt = np.linalg.svd(D, full_matrices=True)
     sv = np.r_[sv, np.zeros(6 - len(sv))]
     admissible = Vt[sv <= 1e-9 * max(np.linalg.norm(R * w), 1.0)].T   # (6, a)
