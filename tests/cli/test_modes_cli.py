@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from trussid.cli import main
@@ -149,3 +150,22 @@ def test_bad_testbed_toml_exits_with_one_line_naming_the_key(tmp_path, cli):
 
 def test_decks_have_no_labels_in_json(cli):
     assert json.loads(cli(FRAME, "--json").stdout)["labels"] is None
+
+
+def test_op2_option_writes_the_modes_for_pynastran(tmp_path, cli):
+    from trussid.fem.op2 import read_op2_modes
+
+    out = tmp_path / "frame.op2"
+    res = cli(FRAME, "--n", "4", "--json", "--op2", out)
+    assert res.returncode == 0, res.stderr
+    f = np.asarray(json.loads(res.stdout)["frequencies_hz"])
+    eig, _, vecs = read_op2_modes(out)
+    np.testing.assert_allclose(np.sqrt(eig) / (2 * np.pi), f, rtol=1e-7)
+    assert vecs.shape[0] == 4
+
+
+def test_op2_onto_a_directory_is_one_line_and_leaves_no_file(tmp_path, cli):
+    target = tmp_path / "out"
+    target.mkdir()
+    one_line_error(cli(FRAME, "--n", "2", "--op2", target))
+    assert list(tmp_path.iterdir()) == [target] and not list(target.iterdir())
