@@ -402,7 +402,8 @@ def rigid_null_dimension(system: System) -> int:
     inert = getattr(system, "inert", None)
     if inert is not None:
         D[inert] = 0.0  # nothing acts on these DOFs: a support there stops no motion
-    _, sv, Vt = np.linalg.svd(D, full_matrices=True)
+    # Only V is needed: full_matrices=True would also form U, (6 n_nodes)^2 (1.3 TB at 4e5 DOF).
+    _, sv, Vt = np.linalg.svd(D, full_matrices=False)
     sv = np.r_[sv, np.zeros(6 - len(sv))]
     admissible = Vt[sv <= 1e-9 * max(np.linalg.norm(R * w), 1.0)].T   # (6, a)
     if admissible.shape[1] == 0:
