@@ -20,9 +20,15 @@ Conventions that matter
   ``Iy = I2``. Shear areas are ``K1 A`` (along y) and ``K2 A`` (along z).
 * Shear flexibility follows NASTRAN: PBAR without K1/K2 has none (infinite shear area);
   PBEAM has K1 = K2 = 1.0 by default (0.0 means none); PBARL/PBEAML compute shear
-  factors from the shape (here: the Cowper factors of :mod:`trussid.fem.sections`, whose torsion
-  constants are used too). The model is Timoshenko when any CBAR/CBEAM has a finite shear
-  area, else Euler-Bernoulli.
+  factors from the shape: ROD 0.9 as recent NASTRAN builds convert it, the other shapes the
+  Cowper factors of :mod:`trussid.fem.sections` (whose torsion constants are used too). The
+  model is Timoshenko when any CBAR/CBEAM has a finite shear area, else Euler-Bernoulli.
+* Element mass follows NASTRAN where it differs from :mod:`trussid.fem.elements` (lumped
+  CBEAM torsional inertia, coupled CROD, CBAR and shear-flexible CBEAM mass): see
+  :func:`_nastran_mass_conventions`; these were found on real NASTRAN output.
+* Displacement systems (GRID CD, rectangular, cylindrical or spherical) become node frames
+  of the model (:meth:`trussid.fem.Model.set_node_frames`): supports, scalar masses and
+  springs, rigid elements, MPCs and OP2 results refer to them, as in NASTRAN.
 * CONM2 inertia: the deck gives I11, I21, I22, I31, I32, I33 with the products of inertia as
   positive integrals (I21 = int x1 x2 dm); NASTRAN supplies the minus signs, so the tensor
   is ``[[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]]`` (MSC/Autodesk QRG, CONM2
@@ -1490,7 +1496,10 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     CBUSH + PBUSH with a CORD2R for springs in other axes (grounded or between coincident
     grids only: elsewhere NASTRAN adds a lever arm the model's spring does not have); RBE2
     (a rigid body's mass as a CONM2 at its master, CID = 0, offset to its cg); SPC1 (set 1);
-    PARAM,COUPMASS (1 consistent, -1 lumped); EIGRL. Element ids that clash across kinds are
+    PARAM,COUPMASS (1 consistent, -1 lumped); EIGRL. NASTRAN's coupled CROD and CBAR mass differ
+    from the model's textbook consistent mass (see :func:`_nastran_mass_conventions`), so a
+    consistent-mass model with rods or torsional inertia reads back with NASTRAN's mass, as
+    NASTRAN would run it. Element ids that clash across kinds are
     renumbered above the largest id. Values are written in 16-character fields so that a
     re-read model matches to about 1e-12 (16-character fields).
     """
@@ -1504,6 +1513,15 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     ids, xyz = model.node_ids, model.xyz
     if len(ids) == 0:
         raise ModelError("write_bdf: the model has no nodes")
+    unwritable = [what for what, present in (
+        ("element matrices (add_matrices)", bool(getattr(model, "general", None))),
+        ("linear constraints (add_constraint)", bool(getattr(model, "constraints", None))),
+        ("node displacement frames", model.node_frames() is not None if hasattr(model, "node_frames") else False),
+        ("omitted DOFs", bool(model.omitted_mask().any()) if hasattr(model, "omitted_mask") else False),
+    ) if present]
+    if unwritable:
+        raise ModelError(f"write_bdf: the model has {', '.join(unwritable)}, which this writer does not "
+                         f"translate back into NASTRAN entries")
     for nid, x in zip(ids.tolist(), xyz):
         bdf.add_grid(nid, x.tolist())
 
