@@ -101,3 +101,36 @@ def test_coupled_mass_runs_agree_on_their_coupmass_copies(cid):
     """The coupled-mass references agree with the published decks given PARAM,COUPMASS,1 (the
     beam case exercises NASTRAN's coupled mass of a shear-flexible CBEAM)."""
     assert np.abs(_errors(cid, "compared_deck")).max() <= TOL
+
+
+def _survey_decks():
+    if CORPUS is None:
+        return []
+    survey = json.loads((CORPUS / "unsupported_cards.json").read_text())
+    return [d for d in survey["decks"] if not d["beam_type"]]
+
+
+@pytest.mark.parametrize("entry", _survey_decks(), ids=lambda d: d["deck"].split("/")[-1])
+def test_shell_and_solid_decks_of_the_survey_get_one_line_naming_their_elements(tmp_path, entry):
+    """The survey's shell/solid decks (not stored) rebuilt from their entry counts around a
+    small beam model: one line naming the unsupported element entries, as the CLI prints it
+    with exit status 2 (tests/cli), and no other failure."""
+    from trussid.fem import ModelError
+    from trussid.fem.nastran import IGNORED_CARDS, SUPPORTED_CARDS, _is_element_entry
+
+    lines = ["BEGIN BULK", "MAT1,1,70.+9,,0.3,2700.", "PBAR,1,1,1.-4,2.-9,2.-9,4.-9",
+             "GRID,1,,0.,0.,0.", "GRID,2,,1.,0.,0.", "CBAR,1,1,1,2,0.,0.,1.", "SPC1,1,123456,1"]
+    for name, count in entry["unsupported"].items():
+        if not name.startswith("PARAM,") and name not in SUPPORTED_CARDS:  # PARAMs: typed values
+            lines += [f"{name},{i + 1}" for i in range(count)]
+    p = tmp_path / "survey.bdf"
+    p.write_text("\n".join(lines + ["ENDDATA"]) + "\n")
+    with pytest.raises(ModelError) as exc:
+        read_bdf(p)
+    msg = str(exc.value)
+    elements = sorted(k for k in entry["unsupported"] if _is_element_entry(k) and k not in SUPPORTED_CARDS
+                      and k not in IGNORED_CARDS)
+    assert "\n" not in msg
+    assert msg.split(": ", 1)[1].startswith("unsupported element entries: " + elements[0])
+    for k in elements:
+        assert f"{k} ({entry['unsupported'][k]})" in msg
