@@ -373,3 +373,25 @@ def test_coupled_shear_flexible_cbeam_mass_is_euler_bernoulli_cubic(tmp_path):
                  f"CBEAM,{i + 1},1,{i + 1},{i + 2},0.,0.,1.\n" for i in range(n))
              + "SPC1,1,123456,1\nSPC1,1,1345,2,THRU,5\n")
     np.testing.assert_allclose(freqs(p, 2 * n), want, rtol=1e-10)
+
+
+def test_rbe2_dependent_components_are_in_the_dependent_grids_cd_system(tmp_path):
+    """RBE2 2 -> 3 on component 1 of grid 3, whose CD is turned 30 deg about z: u3' = c u2x
+    + s u2y carries the scalar mass m3, so M = m I + m3 [c s]^T [c s] on (u2x, u2y) (hand)."""
+    kx, ky, m, m3, a = 1000.0, 3000.0, 2.0, 1.5, math.radians(30.0)
+    c, s = math.cos(a), math.sin(a)
+    p = deck(tmp_path, f"""CORD2R,5,,0.,0.,0.,0.,0.,1.,
+,{c!r},{s!r},0.
+GRID,2,,0.,0.,0.
+GRID,3,,0.,0.,0.,5
+SPC1,1,3456,2
+SPC1,1,23456,3
+CELAS2,1,{kx},2,1
+CELAS2,2,{ky},2,2
+CONM2,3,2,,{m}
+CMASS2,4,{m3},3,1
+RBE2,9,2,1,3
+""")
+    v = np.array([c, s])
+    lam = sl.eigh(np.diag([kx, ky]), m * np.eye(2) + m3 * np.outer(v, v), eigvals_only=True)
+    np.testing.assert_allclose(freqs(p, 2), np.sqrt(lam) / TWO_PI, rtol=1e-12)
