@@ -742,8 +742,14 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         bad = ~np.isfinite(orient).all(axis=1)
         if bad.any():
             raise ModelError(f"{card} {eids[bad][0]}: no orientation (give X1-X3 or G0)")
-        model.add_beams(eids, ends, prop.section, prop.mat, orient, nsm=prop.nsm, rod=False,
-                        label=prop.label)
+        mat, nsm = prop.mat, prop.nsm
+        if card == "CBAR" and model.mass_formulation == "consistent":
+            # NASTRAN's coupled CBAR mass has no torsional (nor rotary) inertia: the structural
+            # mass goes in as non-structural mass per length, which the element gives
+            # translational inertia only (the same translational mass, exactly; MSC 2020 on
+            # the pt145 deck: torsion modes 2.6e-4 high with it, 3e-7 without).
+            mat, nsm = {**prop.mat, "rho": 0.0}, prop.nsm + prop.mat["rho"] * prop.section["A"]
+        model.add_beams(eids, ends, prop.section, mat, orient, nsm=nsm, rod=False, label=prop.label)
         pinned = np.array([bool(e.pa or e.pb) for e in group])
         if pinned.any():
             _add_pin_flags(model, [e for e, p in zip(group, pinned) if p], xyz[pinned], orient[pinned], prop)
@@ -1309,7 +1315,8 @@ def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict,
 
     * lumped CBEAM: the section's torsional inertia ``rho (I1 + I2) L / 2`` about the axis
       at each end (a CBAR's lumped mass has none);
-    * coupled CBAR: no torsional inertia (the textbook element has ``rho (I1 + I2)``);
+    * coupled CBAR: no torsional inertia (the textbook element has ``rho (I1 + I2)``): done
+      in :func:`_add_bars`, exactly, by reading its structural mass as non-structural mass;
     * coupled CROD/CONROD: axial ``m [[5/12, 1/12], [1/12, 5/12]]``, transverse lumped
       ``m / 2`` (the textbook rod interpolates all three translations linearly);
     * coupled shear-flexible CBEAM (NX): the Euler-Bernoulli cubic translational mass
@@ -1339,18 +1346,9 @@ def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict,
                               f"({int(sel.sum())} elements), as NASTRAN")
         return
     cbar = np.array([str(lbl).split()[0] in ("PBAR", "PBARL") for lbl in b.labels]) & ~b.rod
-    sel = cbar & (b.rho * (b.Iy + b.Iz) > 0)
-    if sel.any():
-        # The textbook consistent mass has the torsional inertia rho (I1 + I2) L / 6 [2 1; 1 2];
-        # NASTRAN's coupled CBAR mass has none (MSC 2020, pt145 deck: torsion modes 2.6e-4
-        # high with it, 1e-7 without).
-        t = b.rho[sel] * (b.Iy[sel] + b.Iz[sel]) * L[sel] / 6.0
-        ee = e[sel][:, :, None] * e[sel][:, None, :]
-        dM = np.zeros((int(sel.sum()), 12, 12))
-        dM[:, 3:6, 3:6] = dM[:, 9:12, 9:12] = -2.0 * t[:, None, None] * ee
-        dM[:, 3:6, 9:12] = dM[:, 9:12, 3:6] = -1.0 * t[:, None, None] * ee
-        model.add_matrices(b.ids[sel], b.nodes[sel], M=dM, label="CBAR coupled mass (NASTRAN)")
-        info.notes.append(f"CBAR coupled mass: no torsional inertia ({int(sel.sum())} elements), as NASTRAN")
+    if cbar.any():
+        info.notes.append(f"CBAR coupled mass: no torsional inertia ({int(cbar.sum())} elements: structural "
+                          f"mass read as non-structural mass per length), as NASTRAN")
     rod = np.asarray(b.rod, bool)
     if rod.any():
         m = (b.rho[rod] * b.A[rod] + b.nsm[rod]) * L[rod]

@@ -308,8 +308,12 @@ def test_coupmass_selects_consistent_mass_and_lumped_is_the_default(tmp_path):
 
 
 # ----------------------------------------------------------------- write -> read
-def _frame_model(theory="euler-bernoulli", mass="consistent") -> Model:
-    """A 3-D frame with every kind of item the writer handles."""
+def _frame_model(theory="euler-bernoulli", mass="consistent", nastran_bars=False) -> Model:
+    """A 3-D frame with every kind of item the writer handles.
+
+    ``nastran_bars``: the bars as NASTRAN's coupled CBAR mass has them, without torsional
+    or rotary inertia: their structural mass given as non-structural mass per length.
+    """
     m = Model(beam_theory=theory, mass=mass, name="roundtrip")
     al = Material.isotropic(68.9e9, 0.33, 2700.0, "al")
     st = Material.isotropic(200e9, 0.29, 7850.0, "steel")
@@ -319,9 +323,15 @@ def _frame_model(theory="euler-bernoulli", mass="consistent") -> Model:
     m.add_nodes(list(pts), list(pts.values()))
     tube = Section.tube(0.01, 0.0015, name="tube")
     rect = Section.rectangle(0.02, 0.008, name="rect")
-    m.add_beams([1, 2, 3, 4], [[1, 5], [2, 6], [3, 7], [4, 8]], tube, al, orient=[1, 0.2, 0])
-    m.add_beams([5, 6, 7, 8], [[5, 6], [6, 7], [7, 8], [8, 5]], rect, st, orient=[0.1, 0.3, 1],
-                nsm=0.05)
+    def bar_mass(sec, mat, nsm=0.0):
+        if not nastran_bars:
+            return mat, nsm
+        return {"E": mat.E, "G": mat.G, "rho": 0.0}, nsm + mat.rho * sec.A
+
+    m.add_beams([1, 2, 3, 4], [[1, 5], [2, 6], [3, 7], [4, 8]], tube, bar_mass(tube, al)[0],
+                orient=[1, 0.2, 0], nsm=bar_mass(tube, al)[1])
+    m.add_beams([5, 6, 7, 8], [[5, 6], [6, 7], [7, 8], [8, 5]], rect, bar_mass(rect, st)[0],
+                orient=[0.1, 0.3, 1], nsm=bar_mass(rect, st, 0.05)[1])
     m.add_beams([9], [[5, 7]], Section.general(2e-5, 1, 1, 1e-10), al, orient=[0, 0, 1], rod=True)
     m.add_point_masses([6, 9], [0.3, 1.5],
                        inertia=[np.diag([1e-4, 2e-4, 3e-4]),
@@ -339,29 +349,22 @@ def _frame_model(theory="euler-bernoulli", mass="consistent") -> Model:
     return m
 
 
-def _add_nastran_coupled_mass(model: Model) -> None:
-    """Add (NASTRAN's coupled mass - the textbook consistent mass) to ``model``'s elements.
-
-    Rods: NASTRAN axial m [5/12 1/12; 1/12 5/12] and lumped transverse m/2, against linear
-    interpolation m/6 [2 1; 1 2] in every direction. CBARs (the writer's bars): no torsional
-    inertia, against rho (Iy + Iz) L / 6 [2 1; 1 2] about the axis.
-    """
+def _add_nastran_rod_mass(model: Model) -> None:
+    """Add (NASTRAN's coupled CROD mass - the textbook rod mass) to ``model``'s rods: NASTRAN
+    axial m [5/12 1/12; 1/12 5/12] and lumped transverse m/2, against linear interpolation
+    m/6 [2 1; 1 2] in every direction."""
     b = model.beams
     xyz = dict(zip(model.node_ids.tolist(), model.xyz))
-    for i in range(len(b)):
+    for i in np.flatnonzero(b.rod):
         d = xyz[int(b.nodes[i, 1])] - xyz[int(b.nodes[i, 0])]
         L = np.linalg.norm(d)
         ee = np.outer(d, d) / L**2
+        m = (b.rho[i] * b.A[i] + b.nsm[i]) * L
+        nastran = np.kron(m * np.array([[5 / 12, 1 / 12], [1 / 12, 5 / 12]]), ee) + np.kron(m / 2 * np.eye(2), np.eye(3) - ee)
+        textbook = np.kron(m / 6 * np.array([[2.0, 1.0], [1.0, 2.0]]), np.eye(3))
         M = np.zeros((12, 12))
-        if b.rod[i]:
-            m = (b.rho[i] * b.A[i] + b.nsm[i]) * L
-            nastran = np.kron(m * np.array([[5 / 12, 1 / 12], [1 / 12, 5 / 12]]), ee) + np.kron(m / 2 * np.eye(2), np.eye(3) - ee)
-            textbook = np.kron(m / 6 * np.array([[2.0, 1.0], [1.0, 2.0]]), np.eye(3))
-            t = [0, 1, 2, 6, 7, 8]
-            M[np.ix_(t, t)] = nastran - textbook
-        else:
-            r = [3, 4, 5, 9, 10, 11]
-            M[np.ix_(r, r)] = -np.kron(b.rho[i] * (b.Iy[i] + b.Iz[i]) * L / 6 * np.array([[2.0, 1.0], [1.0, 2.0]]), ee)
+        t = [0, 1, 2, 6, 7, 8]
+        M[np.ix_(t, t)] = nastran - textbook
         model.add_matrices([1000 + i], [b.nodes[i]], M=[M])
 
 
@@ -388,17 +391,19 @@ def test_written_deck_reads_back_to_the_same_frequencies(tmp_path, theory, mass)
     back, info = read_bdf(path)
     assert (info.mass, back.beam_theory, info.eigen.n_modes) == (mass, theory, 12)
     if mass == "consistent":
-        # NASTRAN (and so the re-read deck) gives a coupled CROD its own mass (axial
-        # m [5/12 1/12; 1/12 5/12], transverse lumped m/2, not the linear interpolation) and
-        # a coupled CBAR no torsional inertia.
-        _add_nastran_coupled_mass(model)
+        # NASTRAN (and so the re-read deck) gives a coupled CBAR no torsional or rotary
+        # inertia and a coupled CROD its own mass.
+        model = _frame_model(theory, mass, nastran_bars=True)
+        _add_nastran_rod_mass(model)
     f0 = solve_modes(model, n_modes=12).frequencies_hz
     f1 = solve_modes(back, n_modes=12, autospc=info.autospc).frequencies_hz
     np.testing.assert_allclose(f1, f0, rtol=1e-10)
 
 
 def test_written_deck_reads_back_to_the_same_model_arrays(tmp_path):
-    model = _frame_model("timoshenko")
+    # lumped: a coupled CBAR's mass is read back as non-structural mass (NASTRAN's coupled
+    # CBAR has no torsional inertia), which the frequency round trip above covers
+    model = _frame_model("timoshenko", "lumped")
     write_bdf(model, tmp_path / "rt.bdf")
     back, _ = read_bdf(tmp_path / "rt.bdf")
     np.testing.assert_array_equal(back.node_ids, model.node_ids)
