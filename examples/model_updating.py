@@ -103,7 +103,7 @@ def _run(args, n_samples) -> int:
         title = "exact frequencies (12 bending + 6 UDF modes)"
     else:
         tp = testbed_plant(tbm=true_tbm, arrangement="bending", sensors="struts")
-        plant, modes = tp.discrete, tp.modes
+        plant = tp.discrete
         fb = true_modes.frequencies_hz[first_bending]
         band = (0.8 * fb.min(), 1.25 * fb.max())  # around the first strut bending modes
         exp = run_experiment(plant, n_samples, "white", rms=1.0, band=(30.0, 90.0), seed=args.seed,

@@ -758,6 +758,84 @@ def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence, know
     return best, accepted, ambiguous
 
 
+def _intervals(known_sigma, dFj, sig, walls, chi2, dof, rep, confidence):
+    """Wall intervals in ln t: from known sigmas (inflated by the Birge ratio when the fit is
+    worse than they say), or from the residual scatter of the fit ``rep``.
+
+    Returns ``(intervals (6, 2) [m], std_log (6,), birge, source)``.
+    """
+    intervals = np.full((6, 2), np.nan)
+    std_log = np.full(6, np.nan)
+    if known_sigma:
+        jl = (dFj / sig[:, None]) * walls[None, :]
+        birge = math.sqrt(chi2 / dof) if dof > 0 else 1.0
+        infl = max(1.0, birge)
+        try:
+            cov = la.inv(jl.T @ jl) * infl**2
+            ok = np.isfinite(cov).all()
+        except la.LinAlgError:
+            ok = False
+        zq = scipy.stats.norm.ppf(0.5 + confidence / 2)
+        for i, n in enumerate(WALL_NAMES):
+            if ok and rep.determined.get(n, True) and n not in rep.at_bound:
+                std_log[i] = math.sqrt(max(cov[i, i], 0.0))
+                intervals[i] = walls[i] * np.exp([-zq * std_log[i], zq * std_log[i]])
+        source = "known sigma"
+    else:
+        birge = math.sqrt(chi2 / dof) if dof > 0 else float("nan")
+        for i, n in enumerate(WALL_NAMES):
+            iv = rep.intervals.get(n)
+            if iv is not None:
+                intervals[i] = iv
+                se = rep.std_errors.get(n)
+                std_log[i] = se if se is not None else np.nan
+        source = "residual scatter"
+    return intervals, std_log, birge, source
+
+
+def _damping_estimate(z_all, zsig_all, used, unres, f, confidence):
+    """One modal damping ratio, the weighted mean of the paired modes' ratios, and its
+    interval; ``(None, None)`` without measured damping."""
+    k = f.size
+    zeta = ziv = None
+    if z_all is not None:
+        zz = z_all[used]
+        # a blend of modes within the bandwidth looks more damped: up to span / 2f
+        zs = np.sqrt((zsig_all[used] if zsig_all is not None else 0.0) ** 2 + (unres / (2 * f)) ** 2)
+        w = 1.0 / zs**2 if np.all(zs > 0) else np.ones(k)
+        zeta = float(np.sum(w * zz) / np.sum(w))
+        scatter = math.sqrt(float(np.sum(w * (zz - zeta) ** 2) / np.sum(w) / max(k - 1, 1)))
+        stated = math.sqrt(1.0 / float(np.sum(w))) if np.all(zs > 0) else 0.0
+        se = max(scatter, stated)
+        tq = scipy.stats.t.ppf(0.5 + confidence / 2, max(k - 1, 1))
+        ziv = (zeta - tq * se, zeta + tq * se)
+    return zeta, ziv
+
+
+def _checked_inputs(measured_freqs_hz, frequency_std_hz, damping, damping_std, shapes, sensors,
+                    prior_range, confidence):
+    """The measured data of :func:`update_walls` as arrays, each mistake named."""
+    f_all = _vector("measured_freqs_hz", measured_freqs_hz, np.size(measured_freqs_hz))
+    k_all = f_all.size
+    known_sigma = frequency_std_hz is not None
+    sig_all = _vector("frequency_std_hz", frequency_std_hz, k_all) if known_sigma else None
+    z_all = _vector("damping", damping, k_all, positive=False) if damping is not None else None
+    zsig_all = (_vector("damping_std", damping_std, k_all) if damping_std is not None else None)
+    if not 0 < prior_range < 1:
+        raise UpdateError(f"prior_range must be in (0, 1), got {prior_range!r}")
+    if not 0 < confidence < 1:
+        raise UpdateError(f"confidence must be in (0, 1), got {confidence!r}")
+    if (shapes is None) != (sensors is None):
+        raise UpdateError("give shapes and sensors together (MAC pairing needs both)")
+    sh_all = None
+    if shapes is not None:
+        sh_all = np.asarray(shapes, complex)
+        if sh_all.ndim != 2 or sh_all.shape != (len(sensors), k_all):
+            raise UpdateError(f"shapes must be (n_sensors={len(sensors)}, n_modes={k_all}), "
+                              f"got {sh_all.shape}")
+    return f_all, sig_all, z_all, zsig_all, sh_all
+
+
 def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_std_hz=None,
                  damping_std=None, shapes=None, sensors=None, tbm=None, n_model_modes: int | None = None,
                  bounds=None, prior_range: float = 0.2, gate: float = 3.0, n_starts: int = 8,
@@ -832,33 +910,20 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         without sensors, fewer modes than can determine the walls, no measured mode
         reachable by the model.
     """
-    # Long: one statistical procedure (gate, stage-1 global fit, unresolved-mode sigma,
-    # stage-2 fit, intervals, damping) whose stages share the pairing closures below; split
-    # into _check/_gate/_fit/_intervals it would pass a dozen arrays between them.
+    # Long: the procedure (gate, stage-1 global fit, unresolved-mode sigma, stage-2 fit)
+    # shares the pairing closures below between its stages; input checks, intervals and
+    # damping are their own functions, the rest would pass a dozen arrays between steps.
     from trussid.fem.sensors import sensor_matrix
     from trussid.testbed.model import build_testbed, wall_basis, wall_modes
     from trussid.geometry.spec import Testbed
     from trussid.plid.greybox import fit_parameters
     from trussid._util.threads import blas_threads
 
-    f_all = _vector("measured_freqs_hz", measured_freqs_hz, np.size(measured_freqs_hz))
+    f_all, sig_all, z_all, zsig_all, sh_all = _checked_inputs(
+        measured_freqs_hz, frequency_std_hz, damping, damping_std, shapes, sensors, prior_range,
+        confidence)
     k_all = f_all.size
-    known_sigma = frequency_std_hz is not None
-    sig_all = _vector("frequency_std_hz", frequency_std_hz, k_all) if known_sigma else None
-    z_all = _vector("damping", damping, k_all, positive=False) if damping is not None else None
-    zsig_all = (_vector("damping_std", damping_std, k_all) if damping_std is not None else None)
-    if not 0 < prior_range < 1:
-        raise UpdateError(f"prior_range must be in (0, 1), got {prior_range!r}")
-    if not 0 < confidence < 1:
-        raise UpdateError(f"confidence must be in (0, 1), got {confidence!r}")
-    if (shapes is None) != (sensors is None):
-        raise UpdateError("give shapes and sensors together (MAC pairing needs both)")
-    sh_all = None
-    if shapes is not None:
-        sh_all = np.asarray(shapes, complex)
-        if sh_all.ndim != 2 or sh_all.shape != (len(sensors), k_all):
-            raise UpdateError(f"shapes must be (n_sensors={len(sensors)}, n_modes={k_all}), "
-                              f"got {sh_all.shape}")
+    known_sigma = sig_all is not None
 
     with blas_threads(threads):  # small dense eigen-solves, thousands of them
         tb = Testbed() if tb_nominal is None else tb_nominal
@@ -971,47 +1036,10 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         chi2 = float(r @ r)
         dof = max(k - 6, 0)
 
-        # Intervals in ln t.
-        intervals = np.full((6, 2), np.nan)
-        std_log = np.full(6, np.nan)
-        if known_sigma:
-            jl = (dF[j] / sig[:, None]) * walls[None, :]
-            birge = math.sqrt(chi2 / dof) if dof > 0 else 1.0
-            infl = max(1.0, birge)
-            try:
-                cov = la.inv(jl.T @ jl) * infl**2
-                ok = np.isfinite(cov).all()
-            except la.LinAlgError:
-                ok = False
-            zq = scipy.stats.norm.ppf(0.5 + confidence / 2)
-            for i, n in enumerate(WALL_NAMES):
-                if ok and rep.determined.get(n, True) and n not in rep.at_bound:
-                    std_log[i] = math.sqrt(max(cov[i, i], 0.0))
-                    intervals[i] = walls[i] * np.exp([-zq * std_log[i], zq * std_log[i]])
-            source = "known sigma"
-        else:
-            birge = math.sqrt(chi2 / dof) if dof > 0 else float("nan")
-            for i, n in enumerate(WALL_NAMES):
-                iv = rep.intervals.get(n)
-                if iv is not None:
-                    intervals[i] = iv
-                    se = rep.std_errors.get(n)
-                    std_log[i] = se if se is not None else np.nan
-            source = "residual scatter"
+        intervals, std_log, birge, source = _intervals(known_sigma, dF[j], sig, walls, chi2, dof,
+                                                       rep, confidence)
 
-        # Damping: one modal ratio, the weighted mean of the paired modes' ratios.
-        zeta = ziv = None
-        if z_all is not None:
-            zz = z_all[used]
-            # a blend of modes within the bandwidth looks more damped: up to span / 2f
-            zs = np.sqrt((zsig_all[used] if zsig_all is not None else 0.0) ** 2 + (unres / (2 * f)) ** 2)
-            w = 1.0 / zs**2 if np.all(zs > 0) else np.ones(k)
-            zeta = float(np.sum(w * zz) / np.sum(w))
-            scatter = math.sqrt(float(np.sum(w * (zz - zeta) ** 2) / np.sum(w) / max(k - 1, 1)))
-            stated = math.sqrt(1.0 / float(np.sum(w))) if np.all(zs > 0) else 0.0
-            se = max(scatter, stated)
-            tq = scipy.stats.t.ppf(0.5 + confidence / 2, max(k - 1, 1))
-            ziv = (zeta - tq * se, zeta + tq * se)
+        zeta, ziv = _damping_estimate(z_all, zsig_all, used, unres, f, confidence)
 
         # Report: pairs over all measured modes, with nominal frequencies of the same pairs.
         idx_used = np.flatnonzero(used)

@@ -48,7 +48,6 @@ Identification data and validation data are separate records with different seed
 from __future__ import annotations
 
 import json
-import math
 import time
 import warnings
 from dataclasses import asdict, dataclass, field, replace

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 
 from trussid._util.errors import UserError
 from trussid._util.jsonio import dumps
