@@ -1,27 +1,41 @@
-"""Wall-thickness study of the testbed: how each strut's wall moves the natural frequencies.
+"""
+Wall-thickness study of the testbed
+===================================
 
-Sweeps one strut's wall thickness at a time (the others at their nominal values) from
-``--low`` to ``--high`` times nominal, plots the lowest modes' frequencies against the
-thickness (one panel per strut) and prints the analytic sensitivities ``df/dt`` at the
-nominal design with each mode's label. The model is built once; every design of the
-sweep only re-forms the strut terms of K and M (:func:`trussid.testbed.model.wall_basis`).
+How each strut's wall thickness moves the testbed's natural frequencies. Sweeps one
+strut's wall at a time (the others at their nominal values) from ``--low`` to ``--high``
+times nominal, plots the lowest modes' frequencies against the thickness (one panel per
+strut) and prints the analytic sensitivities ``df/dt`` at the nominal design with each
+mode's label. The model is built once (:func:`trussid.testbed.build_testbed`); every
+design of the sweep only re-forms the strut terms of K and M
+(:func:`trussid.testbed.wall_basis`, :func:`trussid.testbed.wall_modes`), and the
+sensitivities are analytic (:func:`trussid.testbed.wall_sensitivities`).
 
 Usage::
 
     python examples/wall_thickness_study.py --out study.png
     python examples/wall_thickness_study.py --params examples/testbed.toml --points 21
+
+Imported, the module runs the default study and its globals hold the results
+(``f0``, ``dfdt``, ``labels``, ``walls``, ``sweep``).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 import numpy as np
+from tqdm import tqdm
+
+from trussid import geometry, testbed
 
 
 def parse_args(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    """Options of the study; a bad value or parameter file exits with status 2 and one line."""
+    p = argparse.ArgumentParser(prog="wall_thickness_study",
+                                description="Wall-thickness study of the testbed")
     p.add_argument("--out", default="wall_thickness_study.png", help="output PNG (default %(default)s)")
     p.add_argument("--params", default=None, help="testbed parameter file (.toml); default: the default testbed")
     p.add_argument("--points", type=int, default=15, help="designs per strut (default %(default)s)")
@@ -29,59 +43,48 @@ def parse_args(argv=None):
     p.add_argument("--high", type=float, default=1.4, help="highest wall / nominal (default %(default)s)")
     p.add_argument("--modes", type=int, default=30, help="modes computed (default %(default)s)")
     p.add_argument("--fmax", type=float, default=400.0, help="plot frequencies up to this [Hz] (default %(default)s)")
-    return p.parse_args(argv)
-
-
-def main(argv=None) -> int:
-    args = parse_args(argv)
+    args = p.parse_args(argv)
     if args.points < 2:
-        print(f"wall_thickness_study: error: --points {args.points} must be at least 2", file=sys.stderr)
-        return 2
+        p.exit(2, f"wall_thickness_study: error: --points {args.points} must be at least 2\n")
     if not 0 < args.low < args.high:
-        print(f"wall_thickness_study: error: need 0 < --low < --high, got {args.low}, {args.high}", file=sys.stderr)
-        return 2
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from tqdm import tqdm
-
-    from trussid.testbed.labels import label_testbed_modes
-    from trussid.testbed.sensitivity import wall_sensitivities
-    from trussid.testbed.model import build_testbed, solve_testbed_modes, wall_basis, wall_modes
-    from trussid.geometry.params_toml import load_testbed
-    from trussid.geometry.spec import INCH, Testbed
-    from trussid._util.errors import UserError
-    from trussid._util.files import atomic_path
-
+        p.exit(2, f"wall_thickness_study: error: need 0 < --low < --high, got {args.low}, {args.high}\n")
     try:
-        tb = load_testbed(args.params) if args.params else Testbed()
-    except UserError as exc:
-        print(f"wall_thickness_study: error: {exc}", file=sys.stderr)
-        return 2
-    tbm = build_testbed(tb)
-    basis = wall_basis(tbm)
-    nominal = np.array(tb.struts.walls)
-    r_out = tb.struts.outer_radius
+        args.testbed = geometry.load_testbed(args.params) if args.params else geometry.Testbed()
+    except geometry.ParameterError as exc:
+        p.exit(2, f"wall_thickness_study: error: {exc}\n")
+    return args
 
-    # Nominal modes, their labels and sensitivities.
-    modes = solve_testbed_modes(tbm, args.modes, system=basis.system)
-    labels = label_testbed_modes(tbm, modes).labels
-    f0, dfdt = wall_sensitivities(basis, nominal, args.modes)
 
-    factors = np.linspace(args.low, args.high, args.points)
-    sweep = np.empty((6, args.points, len(f0)))
-    walls = np.empty((6, args.points))
-    with tqdm(total=6 * args.points, desc="designs", unit="design") as bar:
-        for i in range(6):
-            for j, fac in enumerate(factors):
-                w = nominal.copy()
-                w[i] = min(fac * nominal[i], 0.95 * r_out)  # a wall must stay inside the tube
-                walls[i, j] = w[i]
-                sweep[i, j], _ = wall_modes(basis, w, args.modes)
-                bar.update()
+args = parse_args(sys.argv[1:] if __name__ == "__main__" else [])
+tb = args.testbed
+tbm = testbed.build_testbed(tb)
+basis = testbed.wall_basis(tbm)
+nominal = np.array(tb.struts.walls)  # m
 
+# %%
+# Nominal modes, their labels and the analytic sensitivities df/dt [Hz/m], (modes, struts).
+modes = testbed.solve_testbed_modes(tbm, args.modes, system=basis.system)
+labels = testbed.label_testbed_modes(tbm, modes).labels
+f0, dfdt = testbed.wall_sensitivities(basis, nominal, args.modes)
+
+# %%
+# The sweep: the k-th lowest frequency of each design, strut by strut.
+factors = np.linspace(args.low, args.high, args.points)
+sweep = np.empty((6, args.points, len(f0)))  # Hz
+walls = np.empty((6, args.points))  # m
+with tqdm(total=6 * args.points, desc="designs", unit="design", disable=__name__ != "__main__") as bar:
+    for i in range(6):
+        for j, fac in enumerate(factors):
+            w = nominal.copy()
+            w[i] = min(fac * nominal[i], 0.95 * tb.struts.outer_radius)  # a wall stays inside the tube
+            walls[i, j] = w[i]
+            sweep[i, j], _ = testbed.wall_modes(basis, w, args.modes)
+            bar.update()
+
+if __name__ == "__main__":
+    import matplotlib.pyplot as plt
+
+    INCH = geometry.INCH
     fig, axes = plt.subplots(2, 3, figsize=(13, 8), sharey=True)
     # Curves follow the k-th lowest frequency of each design, coloured by mode k's nominal
     # label; the sub-hertz suspension modes would only squash the scale.
@@ -101,9 +104,9 @@ def main(argv=None) -> int:
     fig.suptitle("Testbed frequencies vs one strut's wall thickness "
                  "(red: that strut's modes, blue: UDF rigid-body, grey: others)")
     fig.tight_layout()
-    with atomic_path(args.out) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
+    tmp = f"{args.out}.tmp"  # a temporary name, then a rename: no partial file on failure
+    fig.savefig(tmp, dpi=110, format="png")
+    os.replace(tmp, args.out)
 
     print(f"wrote {args.out}: {6 * args.points} designs, {len(f0)} modes each")
     print()
@@ -113,8 +116,4 @@ def main(argv=None) -> int:
     for k in range(len(f0)):
         row = "".join(f"{v:>11.3g}" for v in dfdt[k] * 0.001 * INCH)
         print(f"{k + 1:>4} {f0[k]:>9.3f}  {labels[k]:<34}{row}")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+    plt.show()

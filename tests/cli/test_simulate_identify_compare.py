@@ -83,12 +83,13 @@ def test_simulate_counts_clipping_in_its_report(work, capsys):
     out = work / "clipped.csv"
     assert main(["simulate", str(work / "plant.npz"), "--out", str(out), "--samples", "500",
                  "--bits", "12", "--full-scale", "1.0", "--rms", "1.0"]) == 0
-    stdout = capsys.readouterr().out
+    captured = capsys.readouterr()
+    stdout = captured.out
     d = read_data(out)
     expected = int(np.sum(np.abs(d.u[:, 0]) >= 1.0 - 2 / 4096))  # samples at the end codes
     assert f"D/A: 12 bits, +-1 V; clipped samples: {expected} of 500" in stdout
     assert expected > 100  # a 1 V-rms Gaussian exceeds +-1 V in a third of the samples
-    assert "warning: the converters clipped" in stdout
+    assert "trussid simulate: warning: the converters clipped" in captured.err
 
 
 def test_simulate_warns_when_outputs_drown_in_quantisation_and_auto_ranges(tmp_path, capsys):
@@ -98,8 +99,8 @@ def test_simulate_warns_when_outputs_drown_in_quantisation_and_auto_ranges(tmp_p
     out = tmp_path / "d.npz"
     assert main(["simulate", str(tiny), "--out", str(out), "--samples", "300",
                  "--bits", "12"]) == 0
-    stdout = capsys.readouterr().out
-    assert "warning: output acc1 has RMS" in stdout and "under 4 A/D LSB" in stdout
+    stderr = capsys.readouterr().err
+    assert "warning: output acc1 has RMS" in stderr and "under 4 A/D LSB" in stderr
     assert not read_data(out).y.any()  # all zero: the warning was deserved
     assert main(["simulate", str(tiny), "--out", str(out), "--samples", "300", "--bits", "12",
                  "--adc-full-scale", "auto"]) == 0
@@ -195,10 +196,34 @@ def test_simulate_missing_plant_fails_cleanly(tmp_path):
     assert_clean_failure(res, "simulate", out, match="no such model file")
 
 
-def test_identify_order_not_multiple_of_outputs_fails_cleanly(work, simulated, tmp_path):
+def test_identify_order_not_multiple_of_outputs_fails_cleanly_in_the_shift_basis(work, simulated,
+                                                                                tmp_path):
     out = tmp_path / "m.npz"
-    res = run("identify", work / "data.npz", "--order", 3, "--out", out)
+    res = run("identify", work / "data.npz", "--order", 3, "--out", out, "--start", "plain")
     assert_clean_failure(res, "identify", out, match="try order 2 or 4")
+
+
+def test_identify_reaches_an_order_not_multiple_of_outputs_by_reduction(work, simulated, tmp_path):
+    out = tmp_path / "m3.npz"
+    res = run("identify", work / "data.npz", "--order", 3, "--out", out, "--json")
+    assert res.returncode == 0, res.stderr
+    summary = json.loads(res.stdout)
+    assert "reduced to 3 states" in summary["structure"]
+    assert load_model(out)[0].nstates == 3
+
+
+def test_identify_json_says_whether_it_estimated_a_direct_term(work, simulated, tmp_path):
+    # the simulated plant is strictly proper (D = 0): auto keeps D = 0, --direct yes forces it
+    out = tmp_path / "md.npz"
+    auto = json.loads(run("identify", work / "data.npz", "--order", 4, "--out", out,
+                          "--json").stdout)
+    assert auto["direct_term"]["mode"] == "auto" and not auto["direct_term"]["estimated"]
+    assert auto["direct_term"]["test"]["held_out_nmse_with"] > 0
+    assert isinstance(auto["K_source"], str)
+    forced = json.loads(run("identify", work / "data.npz", "--order", 4, "--out", out,
+                            "--direct", "yes", "--json").stdout)
+    assert forced["direct_term"]["estimated"] and forced["direct_term"]["mode"] is True
+    assert np.shape(load_model(out)[0].D) == (2, 1)
 
 
 def test_compare_model_and_data_of_different_sizes_fails_cleanly(work, tmp_path):
