@@ -312,7 +312,7 @@ def test_wall_thickness_study_writes_a_plot_and_prints_sensitivities(tmp_path):
     import matplotlib.image as mpimg
 
     root = Path(__file__).resolve().parents[2]
-    out = tmp_path / "plots" / "study.png"
+    out = tmp_path / "study.png"  # an existing folder: nothing creates one uninvited
     res = subprocess.run([sys.executable, str(root / "examples" / "wall_thickness_study.py"), "--points", "2",
                           "--modes", "20", "--out", str(out)], capture_output=True, text=True, cwd=tmp_path)
     assert res.returncode == 0, res.stderr
