@@ -339,6 +339,9 @@ def rigid_null_dimension(system: System) -> int:
     Q = R[system.dofs]                             # reduced coordinates of each motion
     w = np.tile(np.r_[np.ones(3), np.full(3, size)], len(xyz))[:, None]  # rotations in length units
     D = (system.T @ Q - R) * w
+    inert = getattr(system, "inert", None)
+    if inert is not None:
+        D[inert] = 0.0  # nothing acts on these DOFs: a support there stops no motion
     # Thin SVD: D is (6 n_nodes, 6) and only its right singular vectors are needed; a full
     # one forms a dense (6 n_nodes)^2 U (3.5 GB and 10 s at 1.5e4 DOF, tests/fem/test_scaling.py).
     _, sv, Vt = np.linalg.svd(D, full_matrices=False)
