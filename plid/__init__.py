@@ -15,6 +15,8 @@ _LAZY = {
     "stabilise": "stability", "check_stability": "stability", "require_stable": "stability",
     "UnstableModelWarning": "stability", "balanced_truncation": "reduce",
     "IOData": "datafile", "read_data": "datafile", "write_data": "datafile",
+    "read_uff": "uff", "write_uff": "uff",
+    "ModeShapes": "modal", "modal_table": "modal", "mac": "modal", "stabilisation": "modal",
     "save_model": "modelfile", "load_model": "modelfile",
     "write_mat": "export", "python_code": "export", "write_python": "export",
     "excitation": "experiment", "run_experiment": "experiment", "simulate": "experiment",

@@ -143,6 +143,14 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 1
+    except OSError as exc:
+        # Any other OSError about a file the user named (read-only file system, disk
+        # full) is about their input too; one without a file name is a bug.
+        if debug or exc.filename is None:
+            raise
+        print(f"trussid {args.command}: error: {exc.strerror}: {exc.filename}",
+              file=sys.stderr)
+        return 2
 
 
 @contextlib.contextmanager

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from trussid._util.errors import UserError
-from trussid._util.files import atomic_path
+from trussid._util.files import atomic_path, check_parent
 from trussid._util.jsonio import dumps, json_safe
 from trussid.cli.commands.identify import names_arg
 
@@ -118,6 +118,8 @@ def _load_reference(args, model, meta, kind, ref_path):
         return truth, (val.data.u, val.data.y, val.y_clean, meta["K"], None)
     data = read_data(ref_path, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
                      fs=args.fs)
+    for note in data.notes:  # what the reader assumed, e.g. a time column in milliseconds
+        print(f"trussid compare: note: {note}", file=sys.stderr)
     if abs(data.fs - fs) > 1e-6 * fs:
         raise UserError(f"the model samples at {fs:g} Hz but the data at {data.fs:g} Hz")
     _check_channels(meta, (data.input_names, data.output_names), "data")
@@ -178,6 +180,9 @@ def run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
+    # --out names the directory itself, so it is made; a missing parent is refused
+    check_parent(out, "--out")
+    out.mkdir(exist_ok=True)
     for fname, fig in figs.items():
         save_figure(fig, out / fname)
     with atomic_path(out / "metrics.json") as tmp:

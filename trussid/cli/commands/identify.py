@@ -61,7 +61,9 @@ def add_parser(subparsers):
         "(CSV with u*/y* columns and optional time column t, or NPZ/MAT with u, y, fs) by "
         "PLID, and write it as a model file with its one-step predictor gain. Noise "
         "covariances are in units of the data scaled to unit RMS per channel.")
-    p.add_argument("data", metavar="DATA", help="data file: .csv, .npz or .mat")
+    p.add_argument("data", metavar="DATA",
+                   help="data file: .csv (',', ';' or tab; units in the header such as "
+                   "'t [ms]'; # comments), .npz, .mat or .uff/.unv (UFF 58 time histories)")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--order", type=int, metavar="N",
                       help="model order (number of states; a multiple of the number of outputs)")
@@ -78,9 +80,11 @@ def add_parser(subparsers):
     p.add_argument("--fs", type=float, metavar="HZ",
                    help="sampling frequency, if the file has neither fs nor a time column")
     p.add_argument("--inputs", nargs="+", metavar="NAME",
-                   help="input columns/channels to use (names; space or comma separated)")
+                   help="input columns/channels to use (names; space or comma separated); "
+                   "in .mat/.npz files also variable names or VAR:COLUMNS counted from 1, "
+                   "e.g. data:1,2 or data:3-5")
     p.add_argument("--outputs", nargs="+", metavar="NAME",
-                   help="output columns/channels to use")
+                   help="output columns/channels to use (as --inputs)")
     p.add_argument("--start", choices=("subspace", "scratch", "plain"), default="subspace",
                    help="subspace (default): a quick N4SID estimate (D = 0) refined by one "
                    "PLID pass in a rotation observer basis (won the thesis-scale benchmarks, "
@@ -104,6 +108,18 @@ def add_parser(subparsers):
                    "one-step prediction on the data (plid.multipass.identify_reduced; "
                    "what trussid demo uses: for a structure with more significant modes "
                    "than N/2). --start subspace or scratch only")
+    p.add_argument("--stabilisation", metavar="PLOT.png", default=None,
+                   help="also identify over a range of orders (--stabilisation-orders) and "
+                   "draw the stabilisation diagram: each pole marked stable in frequency "
+                   "(1 %%), damping (5 %%) and mode shape (MAC 0.98) against the order below, "
+                   "over the summed H1 of the data")
+    p.add_argument("--stabilisation-orders", metavar="LO:HI[:STEP]", default=None,
+                   help="orders of the stabilisation diagram (default: the number of "
+                   "outputs up to --order in steps of the number of outputs)")
+    p.add_argument("--modal-table", action="store_true",
+                   help="print the modal parameter table of the model: frequency, damping, "
+                   "mode shape at each output (magnitude, largest = 1) and the participation "
+                   "of each input")
     p.add_argument("--direct", choices=("auto", "yes", "no"), default=None,
                    help="direct term D (feed-through): auto (default for --start subspace or "
                    "scratch) decides on the data by a held-out output-error test, and the "
@@ -189,6 +205,9 @@ def run_orders(args, data) -> int:
 
 
 def run(args) -> int:
+    # Long: the command's steps in order (check the paths, read, fit, score, write, report),
+    # each a few lines; split up they would only pass the same dozen names around.
+    from trussid.cli.commands._modal import check_modal_args, modal_outputs
     from trussid.plid.canonical import check_order
     from trussid.plid.datafile import check_enough_samples, read_data
     from trussid.plid.errors import DataError, IdentificationError
@@ -206,6 +225,7 @@ def run(args) -> int:
                                           outputs=names_arg(args.outputs), fs=args.fs))
     if not out.lower().endswith(".npz"):
         raise DataError(f"--out {out}: model files are .npz")
+    check_modal_args(args, out)
     if args.order < 1:
         raise IdentificationError(f"--order must be a positive integer, got {args.order}")
     data = read_data(args.data, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
@@ -261,12 +281,15 @@ def run(args) -> int:
     if via is not None:
         summary.update(via=list(ident.info["via"]), chosen=ident.info["chosen"],
                        candidates=ident.info["candidates"])
+    modal_lines = modal_outputs(args, data, model, start, ident.result.form, summary)
     for note in summary["warnings"]:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
         print(dumps(summary), end="")
         return 0
     _print_summary(summary, via is not None)
+    for line in modal_lines:
+        print(line)
     return 0
 
 

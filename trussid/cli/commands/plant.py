@@ -44,6 +44,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    from trussid._util.files import check_parent
     from trussid.cli.loaders import testbed_spec
     from trussid.plid.modelfile import save_model
     from trussid.testbed.plant import plant_summary, testbed_plant
@@ -53,6 +54,9 @@ def run(args) -> int:
         raise UserError(f"--out {args.out}: the plant is written as a model file (.npz)")
     if args.plot is not None and Path(args.plot).suffix.lower() != ".png":
         raise UserError(f"--plot {args.plot}: the Bode plot is written as PNG")
+    check_parent(out, "--out")
+    if args.plot is not None:
+        check_parent(args.plot, "--plot")
     if args.modes is not None and args.modes < 1:
         raise UserError(f"--modes must be at least 1, got {args.modes}")
     if args.damping is not None and not (0 <= args.damping < 1):

@@ -64,6 +64,7 @@ def _decorations_and_labels(loaded, modes):
 
 
 def run(args) -> int:
+    from trussid._util.files import check_parent
     from trussid.fem import render
 
     out = Path(args.out)
@@ -71,6 +72,7 @@ def run(args) -> int:
     if suffix not in SUFFIXES:
         raise UserError(f"--out {args.out}: unknown image type {suffix or '(no suffix)'!r}; "
                         f"use {' or '.join(SUFFIXES)}")
+    check_parent(out, "--out")  # before the model is built and drawn
     if args.mode < 1:
         raise UserError(f"--mode {args.mode}: mode numbers start at 1 (the lowest mode)")
     if args.grid is not None:

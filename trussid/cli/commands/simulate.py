@@ -17,7 +17,7 @@ import numpy as np
 # plid is imported inside run() because it pulls in python-control and scipy.signal, which
 # take seconds, and `trussid --help` imports every command module.
 EXCITATIONS = ("white", "prbs", "chirp", "multisine")
-SUFFIXES = (".csv", ".npz", ".mat")
+SUFFIXES = (".csv", ".npz", ".mat", ".uff", ".unv")
 
 
 def count_arg(text: str) -> int:
@@ -42,7 +42,7 @@ def add_parser(subparsers):
         "outputs as measured (A/D output).")
     p.add_argument("plant", metavar="PLANT.npz", help="model file with a discrete plant")
     p.add_argument("--out", required=True, metavar="DATA",
-                   help="output data file: .csv, .npz or .mat")
+                   help="output data file: .csv, .npz, .mat or .uff (UFF 58 time histories)")
     p.add_argument("--samples", type=count_arg, default=4000, metavar="N",
                    help="number of samples (default 4000)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
@@ -74,6 +74,7 @@ def add_parser(subparsers):
 
 
 def run(args) -> int:
+    from trussid._util.files import check_parent
     from trussid.plid.datafile import write_data
     from trussid.plid.errors import DataError
     from trussid.plid.experiment import check_memory, run_experiment
@@ -83,6 +84,7 @@ def run(args) -> int:
     out = args.out
     if not str(out).lower().endswith(SUFFIXES):
         raise DataError(f"--out {out}: the data file type must be one of {', '.join(SUFFIXES)}")
+    check_parent(out, "--out")
     adc_fs = args.full_scale
     if args.adc_full_scale is not None:
         if args.adc_full_scale == "auto":
