@@ -17,7 +17,7 @@ from trussid import __version__
 from trussid._util.errors import UserError
 
 #: Sub-commands in the order ``--help`` lists them.
-COMMANDS = ("demo", "modes", "render", "plant", "simulate", "identify", "compare", "greybox")
+COMMANDS = ("demo", "modes", "render", "plant", "simulate", "identify", "compare", "greybox", "study")
 
 
 def build_parser() -> argparse.ArgumentParser:
