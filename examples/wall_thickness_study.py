@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -29,6 +30,11 @@ def parse_args(argv=None):
     p.add_argument("--high", type=float, default=1.4, help="highest wall / nominal (default %(default)s)")
     p.add_argument("--modes", type=int, default=30, help="modes computed (default %(default)s)")
     p.add_argument("--fmax", type=float, default=400.0, help="plot frequencies up to this [Hz] (default %(default)s)")
+    p.add_argument("--study", default=None,
+                   help="study output directory (Parquet, resumable; default: OUT without suffix + _study)")
+    p.add_argument("--workers", type=int, default=0,
+                   help="0: in this process (default); N: a local Dask cluster of N worker processes")
+    p.add_argument("--quiet", action="store_true", help="no progress dots")
     return p.parse_args(argv)
 
 
@@ -41,71 +47,63 @@ def main(argv=None) -> int:
         print(f"wall_thickness_study: error: need 0 < --low < --high, got {args.low}, {args.high}", file=sys.stderr)
         return 2
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from tqdm import tqdm
-
-    from trussid.testbed.labels import label_testbed_modes
-    from trussid.testbed.sensitivity import wall_sensitivities
-    from trussid.testbed.model import build_testbed, solve_testbed_modes, wall_basis, wall_modes
-    from trussid.geometry.params_toml import load_testbed
-    from trussid.geometry.spec import INCH, Testbed
     from trussid._util.errors import UserError
-    from trussid._util.files import atomic_path
+    from trussid.geometry.params_toml import load_testbed, testbed_to_dict
+    from trussid.geometry.spec import INCH, Testbed
+    from trussid.plots import save_figure
+    from trussid.study import read_study, run_study, spec_from_dict
+    from trussid.study.report import modes_figure
+    from trussid.testbed.labels import label_testbed_modes
+    from trussid.testbed.model import build_testbed, solve_testbed_modes, wall_basis
+    from trussid.testbed.sensitivity import wall_sensitivities
 
     try:
         tb = load_testbed(args.params) if args.params else Testbed()
     except UserError as exc:
         print(f"wall_thickness_study: error: {exc}", file=sys.stderr)
         return 2
-    tbm = build_testbed(tb)
-    basis = wall_basis(tbm)
     nominal = np.array(tb.struts.walls)
     r_out = tb.struts.outer_radius
 
-    # Nominal modes, their labels and sensitivities.
+    # The sweep as a study (trussid.study): one strut's wall at a time, the others nominal,
+    # listed point by point; each design's modes and labels come from the wall basis.
+    factors = np.linspace(args.low, args.high, args.points)
+    designs = np.repeat(nominal[None, :], 6 * args.points, axis=0)
+    for i in range(6):
+        # a wall must stay inside the tube
+        designs[i * args.points:(i + 1) * args.points, i] = np.minimum(factors * nominal[i], 0.95 * r_out)
+    spec = spec_from_dict({
+        "study": {"name": "wall-thickness-sweeps", "evaluate": "modes"},
+        "evaluate": {"n_modes": args.modes, **({"testbed": testbed_to_dict(tb)} if args.params else {})},
+        "sample": {"method": "list"},
+        "parameters": {f"wall{i}": [float(v) for v in designs[:, i]] for i in range(6)}})
+    study_dir = args.study or str(Path(args.out).with_suffix("")) + "_study"
+    try:
+        run = run_study(spec, study_dir, workers=args.workers,
+                        progress=None if args.quiet else lambda rows: print(".", end="", flush=True))
+    except UserError as exc:
+        print(f"wall_thickness_study: error: {exc}", file=sys.stderr)
+        return 2
+    if not args.quiet:
+        print()
+    _, df = read_study(study_dir)
+    if run.failed:
+        print(f"wall_thickness_study: {run.failed} designs failed: {sorted(run.reasons)}", file=sys.stderr)
+
+    fig = modes_figure(df, [f"wall{i}" for i in range(6)], args.modes, fmax=args.fmax,
+                       slice_at={f"wall{i}": nominal[i] for i in range(6)},
+                       title="Testbed frequencies vs one strut's wall thickness, the others nominal\n"
+                             "(red: that strut's modes, blue: UDF rigid-body, grey: others)")
+    save_figure(fig, args.out)
+
+    # Nominal modes, their labels and analytic sensitivities.
+    tbm = build_testbed(tb)
+    basis = wall_basis(tbm)
     modes = solve_testbed_modes(tbm, args.modes, system=basis.system)
     labels = label_testbed_modes(tbm, modes).labels
     f0, dfdt = wall_sensitivities(basis, nominal, args.modes)
 
-    factors = np.linspace(args.low, args.high, args.points)
-    sweep = np.empty((6, args.points, len(f0)))
-    walls = np.empty((6, args.points))
-    with tqdm(total=6 * args.points, desc="designs", unit="design") as bar:
-        for i in range(6):
-            for j, fac in enumerate(factors):
-                w = nominal.copy()
-                w[i] = min(fac * nominal[i], 0.95 * r_out)  # a wall must stay inside the tube
-                walls[i, j] = w[i]
-                sweep[i, j], _ = wall_modes(basis, w, args.modes)
-                bar.update()
-
-    fig, axes = plt.subplots(2, 3, figsize=(13, 8), sharey=True)
-    # Curves follow the k-th lowest frequency of each design, coloured by mode k's nominal
-    # label; the sub-hertz suspension modes would only squash the scale.
-    shown = (f0 <= args.fmax) & np.array([lab != "suspension" for lab in labels])
-    for i, ax in enumerate(axes.ravel()):
-        t_in = walls[i] / INCH
-        for k in np.flatnonzero(shown):
-            own = labels[k].startswith(f"strut {i} ")
-            ax.plot(t_in, sweep[i, :, k], color="C3" if own else ("C0" if "UDF" in labels[k] else "0.6"),
-                    lw=1.6 if own else 0.8)
-        ax.axvline(nominal[i] / INCH, color="k", ls=":", lw=0.8)
-        ax.set_title(f"strut {i} (nominal {nominal[i] / INCH:.3f} in)")
-        ax.set_xlabel(f"strut {i} wall thickness [in]")
-        ax.grid(alpha=0.3)
-    for ax in axes[:, 0]:
-        ax.set_ylabel("natural frequency [Hz]")
-    fig.suptitle("Testbed frequencies vs one strut's wall thickness "
-                 "(red: that strut's modes, blue: UDF rigid-body, grey: others)")
-    fig.tight_layout()
-    with atomic_path(args.out) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
-
-    print(f"wrote {args.out}: {6 * args.points} designs, {len(f0)} modes each")
+    print(f"wrote {args.out}: {6 * args.points} designs, {len(f0)} modes each (table: {study_dir})")
     print()
     print("sensitivities df/dt at the nominal walls [Hz per 0.001 in of wall]")
     header = "".join(f"{f'strut {i}':>11}" for i in range(6))

@@ -20,7 +20,7 @@ def small_spec(chunk=4, **extra):
 
 
 def table(out) -> pd.DataFrame:
-    return read_study(out)[1].drop(columns=["seconds", "worker"])
+    return read_study(out)[1].drop(columns=["seconds", "cpu_seconds", "worker"])
 
 
 def test_every_point_is_one_row_with_its_parameters(tmp_path):

@@ -29,7 +29,7 @@ WALL_STUDY = {"study": {"evaluate": "modes", "name": "lhs-200"}, "evaluate": {"n
 
 def table(out) -> pd.DataFrame:
     """The results without what legitimately differs between runs (timing, worker)."""
-    return read_study(out)[1].drop(columns=["seconds", "worker"])
+    return read_study(out)[1].drop(columns=["seconds", "cpu_seconds", "worker"])
 
 
 @pytest.fixture(scope="module")

@@ -19,6 +19,7 @@ so a chunk whose worker died and that Dask ran again elsewhere is still written 
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import socket
@@ -110,7 +111,7 @@ def evaluate_chunk(evaluate: str, options: dict, names: list[str], chunk: list) 
         for point, values in chunk:
             params = dict(zip(names, values))
             row = {"point": int(point), **params, "worker": worker}
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.thread_time()
             try:
                 if ctx_error is not None:
                     raise ctx_error
@@ -121,6 +122,9 @@ def evaluate_chunk(evaluate: str, options: dict, names: list[str], chunk: list) 
                 row["status"] = "failed"
                 row["error"] = f"{type(exc).__name__}: {text[0] if text else ''}"
             row["seconds"] = time.perf_counter() - t0
+            # CPU time of this thread (BLAS runs in it at one thread): the cost of the
+            # point whatever else shares the machine.
+            row["cpu_seconds"] = time.thread_time() - c0
             rows.append(row)
     return rows
 
@@ -194,8 +198,10 @@ def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None
         if client is None:
             if scheduler is None:
                 n = (os.cpu_count() or 1) if workers is None else int(workers)
+                # silence_logs: the nanny's warnings (a slow worker shutdown on a loaded
+                # machine) are not the user's business; errors still show.
                 own_cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                           dashboard_address=None)
+                                           dashboard_address=None, silence_logs=logging.ERROR)
                 own_client = client = Client(own_cluster)
             else:
                 own_client = client = Client(scheduler)

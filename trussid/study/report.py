@@ -70,13 +70,14 @@ def modes_figure(df, walls: list[str], n_modes: int, fmax: float = 400.0, slice_
         own = np.char.startswith(lab, f"strut {i} ")
         udf = np.char.find(lab, "UDF") >= 0
         xx = np.broadcast_to(x[:, None], f.shape)
-        for sel, c, z in ((shown & ~own & ~udf, "0.6", 1), (shown & udf, "C0", 2), (shown & own, "C3", 3)):
-            ax.plot(xx[sel], f[sel], ".", ms=2.5, color=c, alpha=0.5, zorder=z)
+        for sel, c, z, ms in ((shown & ~own & ~udf, "0.6", 1, 2.5), (shown & udf, "C0", 2, 2.5),
+                              (shown & own, "C3", 3, 4.5)):
+            ax.plot(xx[sel], f[sel], ".", ms=ms, color=c, alpha=0.6, zorder=z)
         lowest = np.where(own, f, np.inf).min(axis=1)
         levels = np.unique(x)
         med = [np.median(lowest[(x == v) & np.isfinite(lowest)]) if np.isfinite(lowest[x == v]).any()
                else np.nan for v in levels]
-        ax.plot(levels, med, "-", color="C3", lw=1.8, zorder=4, label=f"strut {i}: lowest own mode (median)")
+        ax.plot(levels, med, "-", color="C3", lw=1.0, alpha=0.8, zorder=4, label=f"strut {i}: lowest own mode (median)")
         ax.set_xlabel(f"strut {i} wall thickness [mm]")
         ax.set_title(f"strut {i}")
         ax.grid(alpha=0.3)

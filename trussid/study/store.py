@@ -29,7 +29,7 @@ from trussid.study.spec import StudyError, spec_from_dict, spec_hash
 META = "_study.json"
 #: Columns every row has besides its parameters and outputs.
 STATUS_COLUMNS = [("status", pa.string()), ("error", pa.string()), ("seconds", pa.float64()),
-                  ("worker", pa.string())]
+                  ("cpu_seconds", pa.float64()), ("worker", pa.string())]
 
 
 def _describe_difference(a: dict, b: dict, prefix: str = "") -> str:
