@@ -37,13 +37,13 @@ def test_sensitivities_equal_central_differences_of_the_frequencies():
     ctx = ev.context({})
     p = dict(zip(WALLS, DESIGN))
     out = ev.point(ctx, p, {"n_modes": 12})
-    h = 1e-7
+    h = 1e-6  # 1.7e-3 of the thinnest wall: truncation 1e-6, eigensolver noise ~0.02 Hz/m
     for i in (0, 3):
         up = mv.point(ctx, {**p, WALLS[i]: DESIGN[i] + h}, {"n_modes": 12, "labels": False})
         dn = mv.point(ctx, {**p, WALLS[i]: DESIGN[i] - h}, {"n_modes": 12, "labels": False})
         for k in range(7, 13):  # elastic modes
             fd = (up[f"f{k}"] - dn[f"f{k}"]) / (2 * h)
-            assert out[f"dfdt{k}_{i}"] == pytest.approx(fd, rel=1e-4, abs=1e-6 * out[f"f{k}"] / DESIGN[i])
+            assert out[f"dfdt{k}_{i}"] == pytest.approx(fd, rel=1e-4, abs=1e-5 * out[f"f{k}"] / DESIGN[i])
 
 
 def test_a_wall_outside_the_tube_raises_naming_the_strut():
