@@ -102,10 +102,13 @@ def engine_run(spec, workers: int, scratch: Path) -> dict:
     cpu_workers = sum(w1[k] - w0[k] for k in w0 if k in w1)
     n = run.computed
     background = (idle_driver + idle_workers) * wall
+    from trussid.study import read_study
+
+    eval_cpu = float(read_study(scratch / f"run{workers}")[1]["cpu_seconds"].sum())
     return {"workers": workers, "points": n, "failed": run.failed, "start_and_warm_s": start_s,
             "wall_s": wall, "points_per_s": n / wall, "cpu_driver_s": cpu_driver, "cpu_workers_s": cpu_workers,
             "cpu_s_per_point": (cpu_driver + cpu_workers) / n,
-            "idle_cpu_per_s_driver": idle_driver, "idle_cpu_per_s_workers": idle_workers,
+            "eval_cpu_in_workers_s": eval_cpu, "idle_cpu_per_s_driver": idle_driver, "idle_cpu_per_s_workers": idle_workers,
             "background_cpu_s": background, "cpu_s_per_point_less_background": (cpu_driver + cpu_workers
                                                                                - background) / n,
             "load_before": l0, "load_after": os.getloadavg()}
@@ -125,22 +128,34 @@ def measure(name, spec, scratch) -> dict:
     for w in (1, 2):
         print(f"[{name}] {w} worker(s)", flush=True)
         out[f"workers{w}"] = engine_run(spec, w, scratch / name)
+    derive(out)
+    print(json.dumps(out, indent=1, default=float), flush=True)
+    return out
+
+
+def derive(out: dict) -> None:
+    """Speed-ups and overheads from the raw figures of :func:`measure` (in place)."""
     s = out["serial"]
     for w in (1, 2):
         r = out[f"workers{w}"]
         r["speedup_wall"] = r["points_per_s"] / s["points_per_s"]
         r["overhead_cpu_s_per_point"] = r["cpu_s_per_point"] - s["cpu_s_per_point"]
         r["overhead_fraction"] = r["overhead_cpu_s_per_point"] / s["cpu_s_per_point"]
-        # Split: per-point work of the engine (tasks, transfers, Parquet parts) and the
-        # background, which on an unloaded machine lasts wall = CPU / workers.
-        r["work_overhead_s_per_point"] = r["cpu_s_per_point_less_background"] - s["cpu_s_per_point"]
-        r["work_overhead_fraction"] = r["work_overhead_s_per_point"] / s["cpu_s_per_point"]
+        # Split: the cluster's background (idle rate x wall time of the run) and the rest,
+        # the engine's per-point work (tasks, transfers, Parquet parts). On a loaded machine
+        # the background rate in the run is not the idle one, so the rest is noisy; a
+        # negative rest means "below what this run can resolve" and counts as 0 below.
         rate = r["idle_cpu_per_s_driver"] + r["idle_cpu_per_s_workers"]
-        r["unloaded_overhead_fraction"] = r["work_overhead_fraction"] + rate / w
-        r["speedup_cpu_bound"] = w * s["cpu_s_per_point"] / (s["cpu_s_per_point"] + r["work_overhead_s_per_point"]
-                                                              + rate * s["cpu_s_per_point"] / w)
-    print(json.dumps(out, indent=1, default=float), flush=True)
-    return out
+        r["background_cpu_s"] = rate * r["wall_s"]
+        r["work_overhead_s_per_point"] = ((r["cpu_driver_s"] + r["cpu_workers_s"] - r["background_cpu_s"])
+                                          / r["points"] - s["cpu_s_per_point"])
+        r["work_overhead_fraction"] = r["work_overhead_s_per_point"] / s["cpu_s_per_point"]
+        # Unloaded (each worker on a core of its own): a point lasts CPU / w of wall per
+        # worker, during which the background costs rate x that.
+        r["unloaded_overhead_fraction"] = max(r["work_overhead_fraction"], 0.0) + rate / w
+        r["speedup_cpu_bound"] = w / (1.0 + r["unloaded_overhead_fraction"])
+        if "eval_cpu_in_workers_s" in r:
+            r["eval_cpu_per_point_in_workers"] = r["eval_cpu_in_workers_s"] / r["points"]
 
 
 def estimate(res: dict) -> dict:
@@ -186,8 +201,9 @@ def markdown(results: dict) -> str:
         r = results[key]
         s = r["serial"]
         lines += [f"## {title}", "",
-                  "| run | points | wall s | points/s | speed-up (wall) | CPU s / point | engine overhead "
-                  "(CPU, all) | of which per-point work | cluster start + warm s | load 1-min before/after |",
+                  "| run | points | wall s | points/s | speed-up (wall) | CPU / point, all processes | "
+                  "engine overhead (CPU) | less the idle background | cluster start + warm s | "
+                  "load 1-min before/after |",
                   "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|",
                   f"| serial loop | {s['points']} | {s['wall_s']:.1f} | {s['points_per_s']:.3g} | 1 | "
                   f"{s['cpu_s_per_point'] * 1e3:.1f} ms | - | - | - | {s['load_before'][0]:.1f} / "
@@ -227,7 +243,18 @@ def main(argv=None):
     ap.add_argument("--fits", type=int, default=30)
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--only", choices=("wall", "fits"), default=None)
+    ap.add_argument("--table", action="store_true", help="rewrite study.md from study.json (no run)")
     args = ap.parse_args(argv)
+    if args.table:
+        results = json.loads((Path(args.out) / "study.json").read_text())
+        for key in ("wall_study", "fit_campaign"):
+            if key in results:
+                derive(results[key])
+        if "wall_study" in results:
+            results["estimate_1e6"] = estimate(results["wall_study"])
+        (Path(args.out) / "study.json").write_text(json.dumps(results, indent=1, default=float))
+        (Path(args.out) / "study.md").write_text(markdown(results) + "\n")
+        return 0
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
     meta = {"machine": f"{platform.machine()} {os.cpu_count()} cpus, shared with other agents",
