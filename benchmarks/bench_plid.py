@@ -103,11 +103,12 @@ def displacement_plant(n_modes: int, m: int, p: int, seed: int, lo=50.0, hi=350.
 
 def real_nfoursid(u, y, n, block_rows, dt):
     """The ``nfoursid`` package itself (full SVD), its model as a control.StateSpace."""
+    import pandas as pd
     from nfoursid.nfoursid import NFourSID
 
-    from trussid.plid.subspace import _frame
-
-    df, ucols, ycols = _frame(u, y)
+    ucols = [f"u{i}" for i in range(u.shape[1])]
+    ycols = [f"y{i}" for i in range(y.shape[1])]
+    df = pd.DataFrame(np.hstack([u, y]), columns=ucols + ycols)
     nf = NFourSID(df, output_columns=ycols, input_columns=ucols, num_block_rows=block_rows)
     nf.subspace_identification()
     ss, _ = nf.system_identification(rank=n)

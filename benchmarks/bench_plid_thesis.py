@@ -44,7 +44,9 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 
 from plid_cases import case_a, case_b, case_testbed_like, record  # noqa: E402
-from trussid.plid.metrics import compare_poles, frf_error, prediction_ratio_db, simulation_fit  # noqa: E402
+from trussid.plid.errors import DataError  # noqa: E402
+from trussid.plid.estimator import PLIDWarning  # noqa: E402
+from trussid.plid.evaluate import compare  # noqa: E402
 from trussid.plid.multipass import identify  # noqa: E402
 from trussid.plid.subspace import n4sid  # noqa: E402
 
@@ -52,19 +54,21 @@ BAND = (30.0, 790.0)
 N_ID, N_VAL = 10000, 4000
 
 
-def measure(model, case, val, seconds, extra=None):
-    e = frf_error(model, case.plant, band=BAND)
-    stable = bool(np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) < 1)
-    sim = simulation_fit(model, val.data.u, val.y_clean)["overall_db"] if stable else None
-    rows = compare_poles(model, case.plant)
+def measure(model, case, val, seconds, extra=None, K=None):
+    """The benchmark's row for one model, from :func:`trussid.plid.evaluate.compare` (the
+    evaluator of ``trussid compare`` and the demo) on the validation record."""
+    c = compare(model, case.plant, u=val.data.u, y=val.data.y, y_clean=val.y_clean, K=K,
+                band=BAND)
     fe, de = [], []
-    for r in rows:
+    for r in c.poles:
         tf = r["true_frequency_hz"]
         if tf is None or r["frequency_hz"] is None or not 30 < tf < 400:
             continue
         fe.append(abs(r["frequency_error_percent"]))
         de.append(abs(r["damping"] - r["true_damping"]) / r["true_damping"] * 100)
-    out = {"max_db": e["max_db"], "rms_db": e["rms_db"], "sim_db": sim, "stable": stable,
+    out = {"max_db": c.frf.max_db, "rms_db": c.frf.rms_db,
+           "sim_db": c.simulation.overall if c.stable else None, "stable": c.stable,
+           "one_step_db_val": c.prediction.overall if K is not None else None,
            "freq_err_max_pct": max(fe) if fe else None,
            "damp_err_max_pct": max(de) if de else None,
            "damp_err_median_pct": float(np.median(de)) if de else None,
@@ -104,14 +108,11 @@ def run_case(case, noise, orders, seed=11, methods=("n4sid", "subspace", "scratc
                 continue
             t0 = time.perf_counter()
             with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+                warnings.simplefilter("ignore", PLIDWarning)
                 ident = identify(u, y, n, dt, start=start)
             sec = time.perf_counter() - t0
-            pr = prediction_ratio_db(ident.model, val.data.u, val.data.y,
-                                     K=ident.K, skip=10 * n) if ident.K is not None else None
-            extra = {"prior_block_rows": ident.info.get("subspace", {}).get("block_rows"),
-                     "one_step_db_val": pr["overall"] if pr else None}
-            mm = measure(ident.model, case, val, sec, extra)
+            extra = {"prior_block_rows": ident.info.get("subspace", {}).get("block_rows")}
+            mm = measure(ident.model, case, val, sec, extra, K=ident.K)
             res[f"PLID {start}"] = mm
             log(f"  n={n} PLID {start}: rms {mm['rms_db']:.4f} max {mm['max_db']:.3f} "
                 f"sim {mm['sim_db']} ({sec:.1f}s)")
@@ -181,8 +182,8 @@ def run_testbed(seed=21, band=None, log=print):
         try:
             # the same predictor choice as identify_reduced's candidates get
             K = choose_predictor(m, u, y)[0] if stable else None
-            pr = prediction_ratio_db(m, val.data.u, val.data.y, K=K, skip=300)["overall"]
-        except Exception:
+            pr = compare(m, u=val.data.u, y=val.data.y, K=K).prediction.overall
+        except DataError:  # no stable predictor
             pr = None
         out["models"][f"N4SID D=0 i={i}"] = {"stable": stable, "one_step_db_val": pr,
                                              "seconds": sec}
@@ -192,25 +193,25 @@ def run_testbed(seed=21, band=None, log=print):
     for start in ("subspace", "scratch", "reduced"):
         t0 = time.perf_counter()
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+            warnings.simplefilter("ignore", PLIDWarning)
             if start == "reduced":
                 ident = identify_reduced(u, y, 30, dt)
             else:
                 ident = identify(u, y, 30, dt, start=start)
         sec = time.perf_counter() - t0
         stable = bool(np.max(np.abs(np.linalg.eigvals(np.asarray(ident.model.A)))) < 1)
-        prv = prediction_ratio_db(ident.model, val.data.u, val.data.y, K=ident.K, skip=300)
-        pr = prv["overall"]
-        pr_id = prediction_ratio_db(ident.model, u, y, K=ident.K, skip=300)["overall"]
+        prv = compare(ident.model, u=val.data.u, y=val.data.y, K=ident.K).prediction
+        pr = prv.overall
+        pr_id = compare(ident.model, u=u, y=y, K=ident.K).prediction.overall
         out["models"][f"PLID {start}"] = {"stable": stable, "one_step_db_val": pr,
                                           "one_step_db_val_mean_normalised":
-                                              prv["mean_normalised"],
-                                          "one_step_db_val_per_channel": prv["per_channel"],
+                                              prv.mean_normalised,
+                                          "one_step_db_val_per_channel": prv.per_output,
                                           "chosen": ident.info.get("chosen"),
                                           "one_step_db_id": pr_id, "seconds": sec,
                                           "prior_block_rows": ident.info.get("subspace", {}).get("block_rows")}
         log(f"  PLID {start}: stable {stable}, one-step {pr:.2f} dB validation "
-            f"{np.round(prv['per_channel'], 2).tolist()}, "
+            f"{np.round(prv.per_output, 2).tolist()}, "
             f"{pr_id:.2f} dB identification data ({sec:.1f}s)")
     return out
 
@@ -231,7 +232,7 @@ def speed(log=print):
             basis = None if bname == "shift" else basis_for(n, p, 1600.0, band_frequencies(n // 2, (40, 400)))
             for form in ("direct", "sqrt"):
                 with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
+                    warnings.simplefilter("ignore", PLIDWarning)
                     t0 = time.perf_counter()
                     PLID(n, form=form, dt=1 / 1600, basis=basis, history_every=0).fit(u, y)
                     sec = time.perf_counter() - t0

@@ -18,7 +18,7 @@ import argparse
 import numpy as np
 
 from trussid.plid.dcmotor import first_order_from_physical, identify_dc_motor, physical_model
-from trussid.plid.greybox import simulate
+from trussid.plid.greybox import simulate_continuous
 
 J, R, B, K = 9.85e-3, 6.29, 2.52e-3, 1.57e-2
 
@@ -27,7 +27,7 @@ def square_wave_data(seed: int = 0, fs: float = 20.0, half_period: float = 20.0)
     T, G = first_order_from_physical(J, B, R, K)
     t = np.arange(int(6 * half_period * fs)) / fs
     u = np.where((t // half_period) % 2 == 0, 3.25, -3.25)
-    y = simulate(physical_model({"J": J, "b": B, "R": R, "k": K}), t, u)[:, 0]
+    y = simulate_continuous(physical_model({"J": J, "b": B, "R": R, "k": K}), t, u)[:, 0]
     rng = np.random.default_rng(seed)
     return t, u, y + 0.01 * np.sqrt(np.mean(y**2)) * rng.standard_normal(t.size)
 
@@ -64,7 +64,7 @@ def main() -> None:
 
         from trussid._util.files import atomic_path
 
-        fit = simulate(physical_model(both.representative), t, u)[:, 0]
+        fit = simulate_continuous(physical_model(both.representative), t, u)[:, 0]
         fig, ax = plt.subplots(figsize=(8, 4))
         ax.plot(t, y, ".", ms=2, label="measured (synthetic, 1 % noise)")
         ax.plot(t, fit, label="fitted physical model")

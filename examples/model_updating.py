@@ -6,7 +6,7 @@ End to end, as a user would run it:
 2. simulate an identification test on the perturbed ("true") testbed: all six struts'
    wafer pairs driven in anti-phase (bending) from one D/A channel with band-limited
    white noise, six lateral accelerometers at the struts' mid-spans, 12-bit converters,
-   sensor noise (:func:`trussid.updating.bending_experiment_plant`). The lab's own plant
+   sensor noise (:func:`trussid.testbed.plant.testbed_plant` with ``arrangement="bending"``). The lab's own plant
    (extension drive, UDF accelerometers) barely sees the strut bending modes that carry
    the wall information, which is why this experiment is used;
 3. identify a SIMO model with PLID and take its strongest modes in the bending band, with
@@ -78,7 +78,8 @@ def _run(args, n_samples) -> int:
     from trussid.geometry.spec import INCH, Testbed
     from trussid.plid.experiment import run_experiment
     from trussid._util.files import atomic_path
-    from trussid.updating import bending_experiment_plant, modes_from_data, strut_sensors, update_walls
+    from trussid.testbed.plant import strut_sensors, testbed_plant
+    from trussid.updating import modes_from_data, update_walls
 
     t0 = time.perf_counter()
     nominal_tb = Testbed()
@@ -101,7 +102,8 @@ def _run(args, n_samples) -> int:
         rep = update_walls(measured, nominal_tb, tbm=nominal_tbm, seed=args.seed)
         title = "exact frequencies (12 bending + 6 UDF modes)"
     else:
-        plant, sensors, modes = bending_experiment_plant(tbm=true_tbm)
+        tp = testbed_plant(tbm=true_tbm, arrangement="bending", sensors="struts")
+        plant = tp.discrete
         fb = true_modes.frequencies_hz[first_bending]
         band = (0.8 * fb.min(), 1.25 * fb.max())  # around the first strut bending modes
         exp = run_experiment(plant, n_samples, "white", rms=1.0, band=(30.0, 90.0), seed=args.seed,

@@ -337,14 +337,14 @@ def _nodes(bdf) -> tuple[np.ndarray, np.ndarray]:
                                 xref_masses=False, xref_materials=False, xref_loads=False,
                                 xref_constraints=False, xref_aero=False, xref_sets=False,
                                 xref_optimization=False)
-    except Exception as exc:
+    except Exception as exc:  # pyNastran raises many types for a malformed system
         raise ModelError(f"cannot resolve coordinate systems: {' '.join(str(exc).split())[:200]}") from None
     if not (cp != 0).any():
         return ids, np.array([g.xyz for g in bdf.nodes.values()], dtype=float).reshape(-1, 3)
     try:
         _icd, icp, xyz_cp, nid_cp_cd = bdf.get_displacement_index_xyz_cp_cd()
         xyz = bdf.transform_xyzcp_to_xyz_cid(xyz_cp, nid_cp_cd[:, 0], icp, cid=0)
-    except Exception as exc:
+    except Exception as exc:  # pyNastran raises many types for a malformed system
         msg = " ".join(str(exc).split())[:200]
         raise ModelError(f"cannot resolve grid coordinate systems: {msg}") from None
     order = {int(n): i for i, n in enumerate(nid_cp_cd[:, 0])}

@@ -425,6 +425,8 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
     show_supports : bool
         Draw supported nodes as small dark cubes.
     """
+    # Long: one scene assembled part by part (beams, springs, masses, rigid bodies,
+    # decorations), each part a few lines over the same displacement field.
     import pyvista as pv
 
     if n_samples < 2:

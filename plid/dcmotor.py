@@ -27,7 +27,8 @@ import control
 import numpy as np
 
 from trussid.plid.errors import DataError
-from trussid.plid.greybox import GreyboxReport, _as_2d, _check_time, fit_greybox
+from trussid.plid._validate import as_2d, check_time
+from trussid.plid.greybox import GreyboxReport, fit_greybox
 
 __all__ = [
     "DCMotorResult",
@@ -121,9 +122,9 @@ def fit_first_order(t, u, y, *, hold: str = "zoh", initial_state: str = "fit",
     need not start at rest; ``"zero"`` assumes it does.
     """
     n = len(np.atleast_1d(t))
-    _check_time(t)
-    u1 = _as_2d("u", u, n)
-    y1 = _as_2d("y", y, n)
+    check_time(t)
+    u1 = as_2d(u, "u", n, finite=True)
+    y1 = as_2d(y, "y", n, finite=True)
     if u1.shape[1] != 1 or y1.shape[1] != 1:
         raise DataError(f"the DC motor has one input and one output; got u with "
                         f"{u1.shape[1]} and y with {y1.shape[1]} column(s)")

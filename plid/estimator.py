@@ -49,6 +49,7 @@ from tqdm.auto import tqdm
 
 from trussid._util.threads import blas_threads as _limit_blas
 from trussid.plid.canonical import ObserverBasis, check_order, from_statespace, split_theta
+from trussid.plid._validate import as_2d
 from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.recursion_common import Problem
 from trussid.plid.recursion_direct import direct_covariance, direct_init, direct_step
@@ -129,15 +130,6 @@ class PLIDResult:
     cov_min_eig: float
     first_negative_variance: int | None
     basis: ObserverBasis = field(repr=False)
-
-
-def _as_2d(a, name: str) -> np.ndarray:
-    arr = np.asarray(a, dtype=float)
-    if arr.ndim == 1:
-        arr = arr[:, None]
-    if arr.ndim != 2:
-        raise DataError(f"{name} must be a 1-D or 2-D array (samples x channels), got {arr.ndim}-D")
-    return arr
 
 
 def _check_finite(arr: np.ndarray, name: str) -> None:
@@ -333,8 +325,8 @@ class PLID:
         PLIDResult
             After the last pass. With ``passes=1`` the same as ``update`` on each sample.
         """
-        u = _as_2d(u, "u")
-        y = _as_2d(y, "y")
+        u = as_2d(u, "u")
+        y = as_2d(y, "y")
         if u.shape[0] != y.shape[0]:
             raise DataError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
         _check_finite(u, "u")
@@ -494,7 +486,8 @@ class PLID:
         Qd = pb.Q + (B_s @ pb.N @ B_s.T if pb.N is not None else 0.0)
         try:
             with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+                # An ill-conditioned DARE warns and may fail; the fallback below handles it.
+                warnings.simplefilter("ignore", RuntimeWarning)
                 X = scipy.linalg.solve_discrete_are(A_s.T, C.T, Qd, R)
             K = A_s @ X @ C.T @ np.linalg.inv(C @ X @ C.T + R)
             if np.all(np.isfinite(K)):

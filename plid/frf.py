@@ -13,6 +13,7 @@ import control
 import numpy as np
 import scipy.signal
 
+from trussid.plid._validate import as_2d
 from trussid.plid.errors import DataError
 
 
@@ -43,27 +44,31 @@ def frequency_response(sys: control.StateSpace, f) -> np.ndarray:
 
     Discrete models are evaluated at z = exp(j 2 pi f dt), continuous ones at s = j 2 pi f.
     Returns an array of shape (n_freq, p, m).
+
+    Notes
+    -----
+    Evaluated through one eigendecomposition, ``C (xI - A)^-1 B = (C V) diag(1 / (x -
+    lambda)) (V^-1 B)``: O(n) per frequency, where python-control without slycot solves an
+    n x n system per frequency (10 ms each for the 141-state testbed plant). When the
+    eigenvectors are ill-conditioned (cond(V) > 1e8, e.g. a defective A) python-control's
+    own evaluation is used instead.
     """
     f = np.atleast_1d(np.asarray(f, dtype=float))
-    if control.isdtime(sys, strict=True):
-        x = np.exp(2j * np.pi * f * sys.dt)
-    else:
-        x = 2j * np.pi * f
+    x = np.exp(2j * np.pi * f * sys.dt) if control.isdtime(sys, strict=True) else 2j * np.pi * f
+    A, B, C, D = (np.asarray(M, dtype=float) for M in (sys.A, sys.B, sys.C, sys.D))
+    if A.shape[0]:
+        lam, V = np.linalg.eig(A)
+        if np.linalg.cond(V) <= 1e8:
+            H = np.einsum("ps,fs,sm->fpm", C @ V, 1.0 / (x[:, None] - lam[None, :]),
+                          np.linalg.solve(V, B))
+            return H + D[None, :, :]
     H = np.asarray(sys(x, squeeze=False))  # python-control evaluates C (xI - A)^-1 B + D
     return np.moveaxis(H.reshape(sys.noutputs, sys.ninputs, f.size), -1, 0)
 
 
-def _as_2d(a, what):
-    a = np.asarray(a, dtype=float)
-    a = a[:, None] if a.ndim == 1 else a
-    if a.ndim != 2:
-        raise DataError(f"{what} must be (samples x channels), got shape {a.shape}")
-    return a
-
-
 def _spectra(u, y, fs, nperseg, window, noverlap):
     """Welch auto/cross spectra with scipy's convention S_xy = E[conj(X) Y]."""
-    u, y = _as_2d(u, "u"), _as_2d(y, "y")
+    u, y = as_2d(u, "u"), as_2d(y, "y")
     if u.shape[0] != y.shape[0]:
         raise DataError(f"u has {u.shape[0]} samples, y has {y.shape[0]}")
     n = u.shape[0]
@@ -137,7 +142,7 @@ def h2(u, y, fs: float, nperseg: int = 1024, window="hann", noverlap=None) -> FR
         # S_yy = H S_yu with S_yu = conj(S_uy), per output.
         H = (Syy / np.conj(Suy[:, 0, :]))[:, :, None]
     elif m == p:
-        _, Syy_full = scipy.signal.csd(_as_2d(y, "y")[:, :, None], _as_2d(y, "y")[:, None, :],
+        _, Syy_full = scipy.signal.csd(as_2d(y, "y")[:, :, None], as_2d(y, "y")[:, None, :],
                                        fs=fs, window=window, nperseg=min(nperseg, len(y)),
                                        noverlap=noverlap, axis=0, detrend="constant")
         # S_yy = conj(H) S_uy  =>  conj(H) = S_yy S_uy^-1  (solve on the right via transposes)

@@ -39,6 +39,7 @@ import scipy.signal
 import scipy.stats
 from scipy.stats import qmc
 
+from trussid.plid._validate import as_2d, check_time
 from trussid.plid.errors import DataError
 
 __all__ = [
@@ -48,7 +49,7 @@ __all__ = [
     "StartResult",
     "fit_greybox",
     "fit_parameters",
-    "simulate",
+    "simulate_continuous",
 ]
 
 #: Relative singular value below which a direction counts as structurally undetermined
@@ -580,6 +581,8 @@ def fit_parameters(
         inconsistent constraints, too few residuals, a residual that is not finite at the
         start.
     """
+    # Long: argument checks, scaling and the multi-start loop of one fit; the checks name
+    # the user's parameters, which the scaled inner functions no longer see.
     space = _build_space(initial, bounds, fixed, log, scales)
     constraints = _check_constraints(constraints)
     n_free = len(space.free)
@@ -746,6 +749,8 @@ def _solve(safe_r, jfun, cvec, space, th, constrained, ctol, cost0):
 def _analyse(safe_r, jfun, cvec, space, theta, r, results, starts, constraints,
              confidence, ctol, method) -> GreyboxReport:
     """Intervals and identifiability at the best estimate, plus the multi-start spread."""
+    # Long: the identifiability analysis reads top to bottom (Jacobian rank, RREF, readable
+    # combinations, power-product names); its steps share the scaled Jacobian and names.
     n_free = len(space.free)
     n_obs = r.size
     cost = float(r @ r / 2)
@@ -882,41 +887,13 @@ def _analyse(safe_r, jfun, cvec, space, theta, r, results, starts, constraints,
 # --------------------------------------------------------------------------- time domain
 
 
-def _check_time(t) -> float:
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1:
-        raise DataError(f"time vector must be 1-D, got shape {t.shape}")
-    if t.size < 2:
-        raise DataError(f"data too short: {t.size} sample(s)")
-    bad = np.flatnonzero(~np.isfinite(t))
-    if bad.size:
-        raise DataError(f"time at sample {bad[0]} is not finite")
-    d = np.diff(t)
-    dt = float(np.median(d))
-    if dt <= 0:
-        raise DataError("time must increase")
-    off = np.flatnonzero(np.abs(d - dt) > 1e-2 * dt)  # times printed with few decimals jitter
-    if off.size:
-        raise DataError(f"time is not uniformly sampled: step before sample {off[0] + 1} is "
-                        f"{d[off[0]]:g} s, the sampling interval is {dt:g} s")
-    return dt
-
-
-def _as_2d(name, a, n) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
-    if a.ndim == 1:
-        a = a[:, None]
-    if a.ndim != 2 or a.shape[0] != n:
-        raise DataError(f"{name} must have {n} samples (rows) like the time vector, "
-                        f"got shape {a.shape}")
-    bad = np.argwhere(~np.isfinite(a))
-    if bad.size:
-        raise DataError(f"{name} at sample {bad[0][0]} (column {bad[0][1]}) is not finite")
-    return a
-
-
-def simulate(system, t, u, hold: str = "zoh", x0=None) -> np.ndarray:
+def simulate_continuous(system, t, u, hold: str = "zoh", x0=None) -> np.ndarray:
     """Response of a continuous-time system to sampled input.
+
+    (Named apart from :func:`trussid.plid.experiment.simulate`, which runs a discrete model
+    through python-control: this one samples a continuous model with the input's hold, and
+    for the low orders of grey-box models runs the recursion in C through
+    ``scipy.signal.lfilter``, which the fit's hundreds of calls need.)
 
     Parameters
     ----------
@@ -941,8 +918,8 @@ def simulate(system, t, u, hold: str = "zoh", x0=None) -> np.ndarray:
     """
     if hold not in ("zoh", "foh"):
         raise DataError(f"hold must be 'zoh' or 'foh', got {hold!r}")
-    dt = _check_time(t)
-    u = _as_2d("u", u, len(t))
+    dt = check_time(t)
+    u = as_2d(u, "u", len(t), finite=True)
     try:
         sysc = control.ss(system)
     except Exception as exc:  # noqa: BLE001 - any failure here is the user's model
@@ -1016,7 +993,7 @@ def fit_greybox(
     initial, bounds, fixed, constraints, log, n_starts, seed, confidence, ctol
         As in :func:`fit_parameters`.
     hold : {"zoh", "foh"}
-        Inter-sample behaviour of the input (see :func:`simulate`).
+        Inter-sample behaviour of the input (see :func:`simulate_continuous`).
     initial_state : {"zero", "fit"}
         Start the simulation from rest, or estimate the state at ``t[0]`` as extra
         (nuisance) parameters named ``x0[0]``, ``x0[1]``, ... in the state coordinates of
@@ -1032,9 +1009,9 @@ def fit_greybox(
     GreyboxReport
     """
     n = len(np.atleast_1d(t))
-    _check_time(t)
-    u2 = _as_2d("u", u, n)
-    y2 = _as_2d("y", y, n)
+    check_time(t)
+    u2 = as_2d(u, "u", n, finite=True)
+    y2 = as_2d(y, "y", n, finite=True)
     space = _build_space(initial, bounds, fixed, log)
     need = len(space.free) + 2
     if n < need:
@@ -1059,7 +1036,7 @@ def fit_greybox(
 
     def residual(p):
         x0 = [p[n] for n in x0_names] if x0_names else None
-        ys = simulate(model(p), t, u2, hold, x0)
+        ys = simulate_continuous(model(p), t, u2, hold, x0)
         if ys.shape[1] != y2.shape[1]:
             raise DataError(f"model has {ys.shape[1]} output(s) but y has {y2.shape[1]} "
                             "column(s)")
@@ -1079,9 +1056,9 @@ def _initial_state_guess(model, space, t, u2, y2, w, hold, initial, log):
     clash = [nm for nm in names if nm in initial]
     if clash:
         raise DataError(f"parameter name {clash[0]!r} is reserved for the fitted initial state")
-    y_u = simulate(sys0, t, u2, hold)
+    y_u = simulate_continuous(sys0, t, u2, hold)
     zero = np.zeros_like(u2)
-    obs = np.column_stack([(simulate(sys0, t, zero, hold, np.eye(n)[i]) * w).ravel()
+    obs = np.column_stack([(simulate_continuous(sys0, t, zero, hold, np.eye(n)[i]) * w).ravel()
                            for i in range(n)])
     x0, *_ = np.linalg.lstsq(obs, ((y2 - y_u) * w).ravel(), rcond=None)
     initial = {**initial, **{nm: float(v) for nm, v in zip(names, x0)}}

@@ -31,10 +31,12 @@ import numpy as np
 
 from trussid.plid.bases import basis_for, data_frequencies, model_frequencies
 from trussid.plid.canonical import ObserverBasis
+from trussid.plid._validate import as_2d
 from trussid.plid.errors import IdentificationError
 from trussid.plid.estimator import PLID, PLIDResult, PLIDWarning
 
-__all__ = ["Pass", "multipass", "identify", "identify_reduced", "default_via", "Identification",
+__all__ = ["Pass", "multipass", "identify", "identify_reduced", "fit_model", "default_via",
+           "Identification", "Candidate", "RECIPES",
            "SCRATCH_SCHEDULE"]
 
 
@@ -154,8 +156,8 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     prior_theta_var, Q : float
         Subspace start: the parameter prior variance and state noise of its pass.
     """
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    u = as_2d(u, "u")
+    y = as_2d(y, "y")
     p = y.shape[1]
     fs = 1.0 / dt
     if order % p:
@@ -195,6 +197,7 @@ def _predictor(res: PLIDResult, u, y, R):
     """One-step predictor gain of the identified model: the recursion's own gain is the
     steady state of ``Q = 0`` passes (no correction at all), so the predictor assumes a
     small state noise instead: 1 % input noise through ``B`` and the estimated ``R``."""
+    from trussid.plid.errors import DataError
     from trussid.plid.metrics import default_noise_covariances, predictor_gain
 
     model = res.model
@@ -203,7 +206,7 @@ def _predictor(res: PLIDResult, u, y, R):
     Rd = np.diag(np.broadcast_to(R, sy2.shape) * sy2)
     try:
         return predictor_gain(model, Qd, Rd)
-    except Exception:  # no stabilising solution (e.g. an unstable mode): keep the recursion's
+    except DataError:  # no stabilising solution (e.g. an unstable mode): keep the recursion's
         return res.K
 
 
@@ -270,13 +273,8 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
         identification one-step ratio [dB], seconds), ``info["chosen"]`` the winner's
         label and ``info["predictor"]`` how its predictor was chosen.
     """
-    from trussid.plid.bases import basis_for, model_frequencies
-    from trussid.plid.metrics import choose_predictor
-    from trussid.plid.reduce import balanced_truncation
-    from trussid.plid.subspace import refit_input_matrix
-
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    u = as_2d(u, "u")
+    y = as_2d(y, "y")
     p = y.shape[1]
     via = default_via(order, p) if via is None else tuple(int(h) for h in via)
     bad = [h for h in via if h <= order or h % p]
@@ -287,102 +285,229 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
     kw = dict(start=start, block_rows=block_rows, form=form,
               prior_theta_var=prior_theta_var, progress=progress)
     t_all = time.perf_counter()
-    cands = []   # dicts: label, model, the Identification pieces, seconds (or error)
 
-    def _add(label, model, idn, result, basis, R, prior, seconds):
-        cands.append({"label": label, "model": model, "idn": idn, "result": result,
-                      "basis": basis, "R": R, "prior": prior, "seconds": seconds})
+    def note(c: Candidate) -> Candidate:
         if log is not None:
-            log(f"{label}: {seconds:.1f} s")
+            log(f"{c.label}: {c.seconds:.1f} s" + (f" (failed: {c.error})" if c.error else ""))
+        return c
 
+    cands = [note(_direct_candidate(u, y, order, dt, kw))]
+    for h in via:
+        cands += [note(c) for c in _via_candidates(u, y, order, h, dt, kw, form, prior_theta_var,
+                                                   progress)]
+    for c in cands:
+        _score(c, u, y, order)
+    best = _winner(cands)
+    info = dict(best.idn.info)
+    if best.passes is not None:
+        info["passes"] = best.passes
+    info.update({"candidates": [c.row(order) for c in cands], "chosen": best.label_shown,
+                 "via": list(via), "predictor": best.kinfo,
+                 "stabilised": {"applied": best.reflected_poles > 0,
+                                "reflected_poles": best.reflected_poles},
+                 "seconds": time.perf_counter() - t_all})
+    K = best.K if best.K is not None else best.idn.K
+    return Identification(best.result, best.model, K, best.idn.start, best.basis,
+                          np.atleast_1d(np.asarray(best.R, float)), best.prior, info)
+
+
+@dataclass
+class Candidate:
+    """One order-``order`` model competing in :func:`identify_reduced`.
+
+    ``idn`` is the :func:`identify` run it came from (at ``order`` or at a higher order);
+    ``result``, ``basis``, ``R`` and ``prior`` describe the PLID pass that produced
+    ``model``. ``error`` is set (and ``model`` None) when the fit failed. Scoring fills
+    ``stable``, ``reflected_poles`` (unstable poles reflected into the unit circle),
+    ``K`` and ``kinfo`` (:func:`trussid.plid.metrics.choose_predictor`) and ``score``
+    (one-step ratio on the identification record [dB]).
+    """
+
+    label: str
+    model: control.StateSpace | None
+    seconds: float
+    idn: Identification | None = None
+    result: PLIDResult | None = None
+    basis: ObserverBasis | None = None
+    R: np.ndarray | float | None = None
+    prior: control.StateSpace | None = None
+    passes: list | None = None
+    error: str = ""
+    stable: bool = False
+    reflected_poles: int = 0
+    K: np.ndarray | None = None
+    kinfo: dict | None = None
+    score: float | None = None
+
+    @property
+    def label_shown(self) -> str:
+        return self.label + (", stabilised" if self.reflected_poles else "")
+
+    def row(self, order: int) -> dict:
+        row = {"label": self.label_shown, "states": order, "stable": self.stable,
+               "identification_ratio_db": self.score, "seconds": self.seconds}
+        if self.reflected_poles:
+            row["reflected_poles"] = self.reflected_poles
+        if self.error:
+            row["error"] = self.error
+        return row
+
+
+def _direct_candidate(u, y, order, dt, kw) -> Candidate:
     t0 = time.perf_counter()
     try:
         base = identify(u, y, order, dt, **kw)
     except IdentificationError as exc:  # e.g. the direct form diverged: other candidates
-        cands.append({"label": f"direct {order}", "model": None, "error": str(exc),
-                      "seconds": time.perf_counter() - t0})
-    else:
-        _add(f"direct {order}", base.model, base, base.result, base.basis, base.R,
-             base.prior, time.perf_counter() - t0)
-    fs = 1.0 / dt
-    for h in via:
-        t0 = time.perf_counter()
-        try:
-            high = identify(u, y, h, dt, **kw)
-            red = balanced_truncation(_stable(high.model), order, u=u).model
-            # Weighted truncation does not guarantee stability (unlike the plain one), and
-            # the output-error refit needs it.
-            red = refit_input_matrix(_stable(red), u, y)
-        except IdentificationError as exc:  # e.g. more unstable states than ``order``
-            cands.append({"label": f"via {h}", "model": None, "error": str(exc),
-                          "seconds": time.perf_counter() - t0})
-            continue
-        t_red = time.perf_counter() - t0
-        # Its PLID pass is the one at order h: result, basis, R and prior are that pass's.
-        _add(f"via {h}, reduced", red, high, high.result, high.basis, high.R, high.prior,
-             t_red)
-        t1 = time.perf_counter()
-        basis = basis_for(order, p, fs, model_frequencies(red, order // 2, fs))
-        R = _noise_estimate(red, u, y)
-        try:
-            res, hist = multipass(u, y, order, dt, (Pass(0.0, 0.0, prior_theta_var),),
-                                  basis=basis, prior=red, R=R, form=form, progress=progress)
-        except IdentificationError as exc:
-            cands.append({"label": f"via {h}, refined", "model": None, "error": str(exc),
-                          "seconds": time.perf_counter() - t1})
-            continue
-        _add(f"via {h}, refined", res.model, high, res, basis, R, red,
-             t_red + time.perf_counter() - t1)
-        cands[-1]["passes"] = hist
+        return Candidate(f"direct {order}", None, time.perf_counter() - t0, error=str(exc))
+    return Candidate(f"direct {order}", base.model, time.perf_counter() - t0, base, base.result,
+                     base.basis, base.R, base.prior)
 
-    table = []
-    best, best_score, best_K, best_kinfo = None, -np.inf, None, None
-    for c in cands:
-        row = {"label": c["label"], "states": order, "stable": False,
-               "identification_ratio_db": None, "seconds": c["seconds"]}
-        if c.get("model") is None:
-            row["error"] = c.get("error", "")
-            table.append(row)
-            continue
-        A = np.asarray(c["model"].A)
-        row["stable"] = bool(np.max(np.abs(np.linalg.eigvals(A)), initial=0) < 1)
-        if not row["stable"]:
-            # A lightly damped pole just outside the unit circle: the candidate competes
-            # with its unstable poles reflected in (magnitude response kept).
-            try:
-                c["model"] = _stable(c["model"])
-                row["label"] = c["label"] = c["label"] + ", stabilised"
-                row["stable"] = True
-            except IdentificationError as exc:
-                row["error"] = str(exc)
-        if row["stable"]:
-            own = {}
-            if c["result"] is not None and c["result"].model.nstates == order:
-                own["estimator"] = c["result"].K
-            try:
-                K, _, kinfo = choose_predictor(c["model"], u, y, own)
-            except Exception:  # noqa: BLE001 - no stable predictor: not a candidate
-                K, kinfo = None, None
-            if kinfo is not None:
-                score = kinfo["identification_ratio_db"][kinfo["chosen"]]
-                row["identification_ratio_db"] = float(score)
-                if score > best_score:
-                    best, best_score, best_K, best_kinfo = c, score, K, kinfo
-        table.append(row)
-    if best is None:
-        usable = [c for c in cands if c.get("model") is not None]
-        if not usable:
-            raise IdentificationError(
-                "every candidate failed: " + "; ".join(f"{c['label']}: {c.get('error', '')}"
-                                                      for c in cands))
-        # No candidate with a stable predictor: return the first fit (the caller may
-        # stabilise it).
-        best, best_K = usable[0], usable[0]["idn"].K
-    info = dict(best["idn"].info)
-    if "passes" in best:
-        info["passes"] = best["passes"]
-    info.update({"candidates": table, "chosen": best["label"], "via": list(via),
-                 "predictor": best_kinfo, "seconds": time.perf_counter() - t_all})
-    return Identification(best["result"], best["model"], best_K, best["idn"].start,
-                          best["basis"], np.atleast_1d(np.asarray(best["R"], float)),
-                          best["prior"], info)
+
+def _via_candidates(u, y, order, h, dt, kw, form, prior_theta_var, progress) -> list:
+    """The fit at order ``h`` reduced to ``order``, and that reduction refined by PLID."""
+    from trussid.plid.reduce import balanced_truncation
+    from trussid.plid.subspace import refit_input_matrix
+
+    t0 = time.perf_counter()
+    try:
+        high = identify(u, y, h, dt, **kw)
+        red = balanced_truncation(_stable(high.model), order, u=u).model
+        # Weighted truncation does not guarantee stability (unlike the plain one), and
+        # the output-error refit needs it.
+        red = refit_input_matrix(_stable(red), u, y)
+    except IdentificationError as exc:  # e.g. more unstable states than ``order``
+        return [Candidate(f"via {h}", None, time.perf_counter() - t0, error=str(exc))]
+    t_red = time.perf_counter() - t0
+    # Its PLID pass is the one at order h: result, basis, R and prior are that pass's.
+    reduced = Candidate(f"via {h}, reduced", red, t_red, high, high.result, high.basis, high.R,
+                        high.prior)
+    t1 = time.perf_counter()
+    p = y.shape[1]
+    basis = basis_for(order, p, 1.0 / dt, model_frequencies(red, order // 2, 1.0 / dt))
+    R = _noise_estimate(red, u, y)
+    try:
+        res, hist = multipass(u, y, order, dt, (Pass(0.0, 0.0, prior_theta_var),),
+                              basis=basis, prior=red, R=R, form=form, progress=progress)
+    except IdentificationError as exc:
+        return [reduced, Candidate(f"via {h}, refined", None, time.perf_counter() - t1,
+                                   error=str(exc))]
+    refined = Candidate(f"via {h}, refined", res.model, t_red + time.perf_counter() - t1, high,
+                        res, basis, R, red, passes=hist)
+    return [reduced, refined]
+
+
+def _score(c: Candidate, u, y, order: int) -> None:
+    """Stabilise ``c`` if needed and score its best one-step predictor on ``u, y``."""
+    from trussid.plid.errors import DataError
+    from trussid.plid.metrics import choose_predictor
+    from trussid.plid.stability import stabilise
+
+    if c.model is None:
+        return
+    if np.max(np.abs(np.linalg.eigvals(np.asarray(c.model.A))), initial=0) >= 1:
+        # A lightly damped pole just outside the unit circle: the candidate competes
+        # with its unstable poles reflected in (magnitude response kept).
+        try:
+            st = stabilise(c.model)
+        except IdentificationError as exc:
+            c.error = str(exc)
+            return
+        c.model, c.reflected_poles = st.model, int(np.size(st.reflected))
+    c.stable = True
+    own = {}
+    if c.result is not None and c.result.model.nstates == order:
+        own["estimator"] = c.result.K
+    try:
+        c.K, _, c.kinfo = choose_predictor(c.model, u, y, own)
+    except DataError as exc:  # no stable one-step predictor: not a candidate
+        c.error = str(exc)
+        return
+    c.score = float(c.kinfo["identification_ratio_db"][c.kinfo["chosen"]])
+
+
+def _winner(cands: list) -> Candidate:
+    scored = [c for c in cands if c.score is not None]
+    if scored:
+        return max(scored, key=lambda c: c.score)  # first of equals: the direct fit
+    usable = [c for c in cands if c.model is not None]
+    if not usable:
+        raise IdentificationError(
+            "every candidate failed: " + "; ".join(f"{c.label}: {c.error}" for c in cands))
+    # No candidate with a stable predictor: return the first fit (the caller may stabilise it).
+    return usable[0]
+
+
+RECIPES = ("plain", "subspace", "scratch")
+
+
+def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
+              form: str | None = None, R=None, Q: float = 0.0, passes: int = 1,
+              block_rows=None, progress: bool | None = False, log=None) -> Identification:
+    """The one front end over the identification recipes (``trussid identify``, the demo).
+
+    Parameters
+    ----------
+    u, y : arrays (N, m), (N, p)
+    order : int
+    dt : float
+        Sample time [s].
+    start : {"subspace", "scratch", "plain"}
+        ``"subspace"`` and ``"scratch"``: :func:`identify` with that start; ``"plain"``: one
+        :class:`trussid.plid.estimator.PLID` fit from scratch (``Q``, ``R``, ``passes``).
+    via : sequence of int, optional
+        Higher orders for :func:`identify_reduced` (subspace or scratch start only).
+    form : {"direct", "sqrt"}, optional
+        Default ``"sqrt"`` for the plain fit (the class's default: it keeps the covariance
+        positive definite on long records), ``"direct"`` for the recipes (measured faster
+        at equal accuracy, ``benchmarks/results/plid_engine.md``).
+    R : float or (p,), optional
+        Output-noise variance (scaled units); default estimated by the recipes, 1e-4 plain.
+    Q : float
+        State-noise variance of the plain fit (scaled units).
+    passes : int
+        Passes of the plain fit.
+    block_rows, progress, log
+        As :func:`identify_reduced` (``block_rows``: the recipes' N4SID prior).
+
+    Returns
+    -------
+    Identification
+        ``K`` is always set (the recipe's chosen gain, or the steady-state gain of the plain
+        fit's noise model); ``info["K_source"]`` says where it came from,
+        ``info["warnings"]`` lists the estimator's warnings.
+    """
+    from trussid.plid.metrics import predictor_gain
+
+    if start not in RECIPES:
+        raise IdentificationError(f"start must be one of {', '.join(RECIPES)}; got {start!r}")
+    if via is not None and start == "plain":
+        raise IdentificationError("via works with the subspace or scratch start, not plain")
+    form = form or ("sqrt" if start == "plain" else "direct")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PLIDWarning)
+        if start == "plain":
+            R = 1e-4 if R is None else R
+            res = PLID(order, form=form, dt=dt, Q=Q, R=R, passes=passes,
+                       progress=progress).fit(u, y)
+            idn = Identification(res, res.model, res.K, "plain", res.basis,
+                                 np.atleast_1d(np.asarray(R, float)), None,
+                                 {"passes": [{"Q": Q}] * passes, "K_source": res.K_source})
+        elif via is not None:
+            idn = identify_reduced(u, y, order, dt, via=via, start=start, form=form,
+                                   block_rows=block_rows, progress=progress, log=log)
+            idn.info["K_source"] = (idn.info.get("predictor") or {}).get("chosen")
+        else:
+            idn = identify(u, y, order, dt, start=start, R=R, form=form, block_rows=block_rows,
+                           progress=progress)
+            idn.info["K_source"] = idn.result.K_source
+    idn.info["warnings"] = [str(w.message) for w in caught if issubclass(w.category, PLIDWarning)]
+    if not idn.result.finite:
+        raise IdentificationError(
+            f"PLID ({form} form) diverged on {len(u)} samples: the estimate is not finite; "
+            "try the sqrt form, a larger Q or R, or another order")
+    if idn.K is None:
+        res = idn.result
+        B = np.asarray(idn.model.B)
+        idn.K = predictor_gain(idn.model, res.Q + B @ res.N @ B.T, res.R)
+        idn.info["K_source"] = "steady state of the estimator's noise model"
+    return idn

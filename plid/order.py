@@ -12,7 +12,7 @@ and two numbers are tabulated:
   every channel of ``20 log10 |H_n / H_prev|`` [dB].
 
 The order the data support is where the prediction ratio stops rising and the change
-drops to the noise level. :func:`plot_orders` draws both against order (PNG).
+drops to the noise level. :func:`trussid.plots.order_figure` draws both against order.
 """
 
 from __future__ import annotations
@@ -24,12 +24,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from trussid.plid.canonical import check_order
+from trussid.plid._validate import as_2d
 from trussid.plid.errors import DataError
 from trussid.plid.frf import frequency_response
-from trussid.plid.metrics import (default_noise_covariances, one_step_predict, prediction_ratio_db,
-                          predictor_gain)
+from trussid.plid.estimator import PLIDWarning
+from trussid.plid.metrics import (default_noise_covariances, one_step_predict, prediction_burn_in,
+                                  prediction_ratio_db, predictor_gain)
 
-__all__ = ["OrderRow", "order_table", "format_table", "plot_orders"]
+__all__ = ["OrderRow", "order_table", "format_table"]
 
 
 @dataclass
@@ -77,8 +79,8 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
     from trussid.plid.multipass import identify
     from trussid.plid.subspace import subspace_prior
 
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    u = as_2d(u, "u")
+    y = as_2d(y, "y")
     p = y.shape[1]
     if u_val is None:
         u_all, y_all = u, y
@@ -87,8 +89,8 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
     else:
         u_all = y_all = None
         start = 0
-        u_val = np.atleast_2d(np.asarray(u_val, dtype=float).T).T
-        y_val = np.atleast_2d(np.asarray(y_val, dtype=float).T).T
+        u_val = as_2d(u_val, "u_val")
+        y_val = as_2d(y_val, "y_val")
     orders = sorted(int(n) for n in orders)
     for n in orders:
         check_order(n, p)
@@ -96,11 +98,12 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
     lo, hi = band if band is not None else (0.01 * fs, 0.49 * fs)
     f = np.linspace(lo, hi, n_freq)
     rows, H_prev = [], None
-    skip = min(10 * max(orders), u_val.shape[0] // 10)
     for n in orders:
         t0 = time.perf_counter()
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+            # A PLID pass that loses positive definiteness warns; the table lists its
+            # model (unstable poles and all) rather than stopping.
+            warnings.simplefilter("ignore", PLIDWarning)
             if method == "plid":
                 ident = identify(u, y, n, dt, block_rows=block_rows)
                 model, K = ident.model, ident.K
@@ -120,6 +123,7 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
             e = y_val - yhat
             pr = -10 * np.log10(np.mean(np.mean(e ** 2, 0) / np.mean(y_val ** 2, 0)))
         else:
+            skip = prediction_burn_in(model, K, u_val.shape[0])
             pr = prediction_ratio_db(model, u_val, y_val, K=K, skip=skip)["overall"]
         H = frequency_response(model, f)
         change = None
@@ -139,29 +143,3 @@ def format_table(rows) -> str:
         out.append(f"{r.order:5d}  {r.prediction_db:15.2f}  {ch:>15s}  {r.unstable_poles:8d}"
                    f"  {r.seconds:7.1f}")
     return "\n".join(out)
-
-
-def plot_orders(rows, path) -> None:
-    """PNG of prediction ratio and FRF change against order (written atomically)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from trussid._util.files import atomic_path
-
-    n = [r.order for r in rows]
-    fig, ax = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
-    ax[0].plot(n, [r.prediction_db for r in rows], "o-")
-    ax[0].set_ylabel("one-step prediction [dB]")
-    ax[0].grid(True, alpha=0.3)
-    ch = [(r.order, r.frf_change_db) for r in rows if r.frf_change_db is not None]
-    if ch:
-        ax[1].semilogy([c[0] for c in ch], [c[1] for c in ch], "s-")
-    ax[1].set_ylabel("FRF change from previous order [dB RMS]")
-    ax[1].set_xlabel("order")
-    ax[1].grid(True, alpha=0.3)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
-    plt.close(fig)

@@ -20,6 +20,7 @@ import control
 import numpy as np
 import scipy.linalg
 
+from trussid.plid._validate import as_2d
 from trussid.plid.errors import IdentificationError
 
 __all__ = ["ReductionResult", "hankel_singular_values", "balanced_truncation", "state_covariance"]
@@ -87,7 +88,7 @@ def state_covariance(A, B, u) -> np.ndarray:
     controllability Gramian of ``(A, B)`` weighted by the spectrum of the input ``u``
     (for white unit-variance ``u`` and a long record it tends to the usual Gramian)."""
     A, B = np.asarray(A, float), np.asarray(B, float)
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+    u = as_2d(u, "u")
     n = A.shape[0]
     # control.forced_response would do; this avoids building an output map of n rows.
     x = np.zeros(n)
@@ -136,7 +137,7 @@ def balanced_truncation(sys: control.StateSpace, order: int, u=None) -> Reductio
     if u is None:
         Wc = scipy.linalg.solve_discrete_lyapunov(As, Bs @ Bs.T)
     else:
-        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        u = as_2d(u, "u")
         if u.shape[1] != B.shape[1]:
             raise IdentificationError(
                 f"u has {u.shape[1]} columns but the model has {B.shape[1]} inputs")

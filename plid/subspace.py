@@ -1,11 +1,16 @@
 """Quick subspace (N4SID) estimates: the comparator for PLID and an optional PLID prior.
 
-The subspace step (block Hankel matrices, QR, SVD of the observability estimate) is the
-``nfoursid`` package's (Verhaegen and Verdult's PO-MOESP/N4SID variant). Its final least
-squares always fits a direct term D; PLID models have none, and dropping an estimated D
-afterwards costs accuracy (0.23 dB on the 24-state plant of ``docs/plid.md``). So
-:func:`n4sid` repeats that last least-squares step itself, on the same estimated state
-sequence, with D either free (nfoursid's model exactly) or forced to zero.
+The subspace step is PO-MOESP as Verhaegen and Verdult give it (*Filtering and System
+Identification*, Cambridge 2007, p. 329): block Hankel matrices of past and future inputs
+and outputs, one QR factorisation, the SVD of the observability estimate, then least
+squares for the system matrices from the estimated state sequence. It is the algorithm of
+the ``nfoursid`` package, step for step (tests compare the two to rounding), written out
+here because nfoursid (i) always fits a direct term D in its final least squares, where
+PLID models have none and dropping an estimated D costs accuracy (0.23 dB on the 24-state
+plant of ``docs/plid.md``), so that step must be redone with D = 0 on the same state
+sequence; (ii) takes a full SVD of the (p i) x N observability estimate, an N x N factor
+(47 s at N = 10000), where a thin SVD gives the same leading triplets; and (iii) takes its
+data as a pandas DataFrame. Reaching into its internals for (i) and (ii) was brittle.
 
 :func:`refit_input_matrix` then re-estimates ``B`` (and the initial state) with ``A, C``
 fixed and ``D = 0`` by output-error least squares, which is linear: in modal coordinates
@@ -20,26 +25,43 @@ import control
 import numpy as np
 import scipy.signal
 
+from trussid.plid._validate import as_2d
 from trussid.plid.errors import DataError, IdentificationError
 
-__all__ = ["SubspaceFit", "n4sid", "refit_input_matrix", "subspace_prior"]
+__all__ = ["SubspaceFit", "n4sid", "po_moesp", "block_hankel", "refit_input_matrix", "subspace_prior"]
 
 
 @dataclass
 class SubspaceFit:
     """Models from one subspace run (discrete, sample time ``dt``)."""
 
-    with_d: control.StateSpace       # nfoursid's model (A, B, C, D)
+    with_d: control.StateSpace       # the least squares with a direct term (nfoursid's model)
     zero_d: control.StateSpace       # same state sequence, least squares with D = 0
     block_rows: int
     singular_values: np.ndarray      # of the observability estimate (order selection)
 
 
-def _frame(u, y):
-    import pandas as pd  # nfoursid's interface takes a DataFrame
+def block_hankel(a: np.ndarray, rows: int) -> np.ndarray:
+    """Block Hankel matrix of the samples ``a`` (N, c): ``rows`` block rows of c entries,
+    N - rows + 1 columns; column k stacks samples k .. k + rows - 1."""
+    w = np.lib.stride_tricks.sliding_window_view(a, rows, axis=0)  # (N - rows + 1, c, rows)
+    return np.ascontiguousarray(w.transpose(0, 2, 1).reshape(w.shape[0], -1).T)
 
-    cols = [f"u{i}" for i in range(u.shape[1])] + [f"y{i}" for i in range(y.shape[1])]
-    return pd.DataFrame(np.hstack([u, y]), columns=cols), cols[: u.shape[1]], cols[u.shape[1]:]
+
+def po_moesp(u: np.ndarray, y: np.ndarray, block_rows: int):
+    """``(R22, R32, singular values of R32, [U; Y] past Hankel)`` of PO-MOESP.
+
+    The instrument is past inputs and outputs; the R factors are blocks of the QR
+    factorisation of ``[U_f; U_p; Y_p; Y_f]`` (as its transpose's QR).
+    """
+    i = block_rows
+    uh, yh = block_hankel(u, i), block_hankel(y, i)
+    stacked = np.concatenate([uh[:, i:], uh[:, :-i], yh[:, :-i], yh[:, i:]])
+    r = np.linalg.qr(stacked.T, mode="r").T
+    y_rows, u_rows = y.shape[1] * i, u.shape[1] * i
+    R32 = r[-y_rows:, u_rows:-y_rows]
+    R22 = r[u_rows:-y_rows, u_rows:-y_rows]
+    return R22, R32, np.linalg.svd(R32, compute_uv=False), np.concatenate([uh, yh])
 
 
 def n4sid(u, y, n: int, block_rows: int, dt: float) -> SubspaceFit:
@@ -56,27 +78,17 @@ def n4sid(u, y, n: int, block_rows: int, dt: float) -> SubspaceFit:
     dt : float
         Sample time [s] of the returned models.
     """
-    from nfoursid.nfoursid import NFourSID
-
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    u = as_2d(u, "u", finite=True)
+    y = as_2d(y, "y", finite=True)
     p = y.shape[1]
     if block_rows * p < n:
         raise IdentificationError(f"N4SID with {block_rows} block rows and {p} outputs "
                                   f"gives at most order {block_rows * p}, not {n}")
-    df, ucols, ycols = _frame(u, y)
-    nf = NFourSID(df, output_columns=ycols, input_columns=ucols, num_block_rows=block_rows)
-    nf.subspace_identification()
-    # Same steps as NFourSID.system_identification, keeping the state sequence so that the
-    # final least squares can also be done without D (nfoursid has no such option).
-    # nfoursid's own _get_observability_matrix_decomposition takes a *full* SVD of the
-    # (p i) x N observability estimate (an N x N factor: 47 s at N = 10000); the thin SVD
-    # gives the same leading singular triplets (the state basis may differ by signs).
-    from nfoursid.utils import Utils
-
-    uh = Utils.block_hankel_matrix(u, block_rows)
-    yh = Utils.block_hankel_matrix(y, block_rows)
-    obs = nf.R32 @ np.linalg.pinv(nf.R22) @ np.concatenate([uh, yh])
+    if y.shape[0] < 2 * block_rows + 2:
+        raise DataError(f"N4SID with {block_rows} block rows needs at least "
+                        f"{2 * block_rows + 2} samples, got {y.shape[0]}")
+    R22, R32, sv, uy = po_moesp(u, y, block_rows)
+    obs = R32 @ np.linalg.pinv(R22) @ uy
     _, s, vh = np.linalg.svd(obs, full_matrices=False)
     x = (np.sqrt(s[:n])[:, None] * vh[:n])[:, :-1]
     yl = y[block_rows:].T[:, :-1]
@@ -90,7 +102,6 @@ def n4sid(u, y, n: int, block_rows: int, dt: float) -> SubspaceFit:
     m = u.shape[1]
     with_d = control.ss(A, B, CD[:, :n], CD[:, n:], dt)
     zero_d = control.ss(A, B, C0, np.zeros((p, m)), dt)
-    sv = np.sqrt(np.abs(np.diag(nf.R32_decomposition.eigenvalues)))
     return SubspaceFit(with_d, zero_d, block_rows, sv)
 
 
@@ -133,8 +144,8 @@ def refit_input_matrix(sys, u, y) -> control.StateSpace:
     control.StateSpace
         ``(A, B_new, C, 0)``.
     """
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    u = as_2d(u, "u")
+    y = as_2d(y, "y")
     A, C = np.asarray(sys.A, float), np.asarray(sys.C, float)
     n, m, p = A.shape[0], u.shape[1], y.shape[1]
     if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
@@ -166,8 +177,8 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True)
     from trussid.plid.experiment import simulate
     from trussid.plid.stability import stabilise
 
-    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-    y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+    u = as_2d(u, "u")
+    y = as_2d(y, "y")
     p = y.shape[1]
     m = u.shape[1]
     if block_rows is None:

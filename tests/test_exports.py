@@ -36,3 +36,19 @@ def test_no_submodule_is_named_like_an_export(package):
 
     submodules = {m.name for m in pkgutil.iter_modules([path])}
     assert submodules.isdisjoint(module.__all__)
+
+
+def test_every_module_of_the_library_imports():
+    """The fast tier touches every module, at least by importing it."""
+    import pkgutil
+
+    import trussid
+
+    names = [m.name for m in pkgutil.walk_packages(trussid.__path__, "trussid.")]
+    for pkg in ("trussid.fem", "trussid.plid", "trussid.geometry"):
+        mod = importlib.import_module(pkg)
+        names += [m.name for m in pkgutil.walk_packages(mod.__path__, pkg + ".")]
+    names = [n for n in names if not n.endswith("__main__")]  # runs the command line
+    assert len(names) > 60
+    for name in names:
+        importlib.import_module(name)

@@ -5,10 +5,12 @@ from pathlib import Path
 
 import control
 import numpy as np
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow  # a 141-state plant and a 30-state identify_reduced: about a minute
 def test_readme_python_example_runs_as_written(tmp_path, monkeypatch):
     block = re.search(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S).group(1)
     from trussid.testbed import testbed_plant

@@ -7,10 +7,14 @@ selects no backend and registers nothing process-wide (a library must not call
 
 from __future__ import annotations
 
+import control
 import numpy as np
 from matplotlib.figure import Figure
 
 from trussid._util.files import atomic_path
+from trussid.plid.evaluate import frf_grid
+from trussid.plid.frf import frequency_response
+from trussid.plid.metrics import modal_parameters, one_step_predict
 
 
 def save_figure(fig: Figure, path, dpi: int = 110) -> None:
@@ -20,7 +24,7 @@ def save_figure(fig: Figure, path, dpi: int = 110) -> None:
 
 
 def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
-                logx: bool = False):
+                logx: bool = False, excited=None):
     """Bode overlay of one input column: one row per output, magnitude and phase.
 
     Parameters
@@ -36,10 +40,19 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
     title : str
     logx : bool
         Logarithmic frequency axis (for bands spanning decades).
+    excited : (float, float), optional
+        The excited band [Hz], shaded; outside it a nonparametric estimate is noise.
 
     Returns
     -------
     matplotlib.figure.Figure (not attached to pyplot: the caller saves it)
+
+    Notes
+    -----
+    Drawn here rather than with :func:`control.bode_plot`: that function lays a MIMO system
+    out as one grid of every input/output pair on pyplot's current figure, while a report
+    wants one figure per input with a nonparametric estimate on its own frequency grid
+    overlaid, on a linear frequency axis, without touching pyplot's state.
     """
     p = len(output_names)
     fig = Figure(figsize=(10, 2.4 * p + 0.6))
@@ -58,6 +71,9 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
         ax_p.set_ylim(-190, 190)
         for ax in (ax_m, ax_p):
             ax.grid(True, which="both", alpha=0.3)
+            if excited is not None:
+                ax.axvspan(*excited, color="C2", alpha=0.06, lw=0,
+                           label="excited band" if ax is axes[0, 0] else None)
             if logx:
                 ax.set_xscale("log")
             ax.set_xlim(lo, hi)
@@ -91,4 +107,205 @@ def pole_map_figure(systems, title: str = "poles (z-plane)"):
     ax.grid(True, alpha=0.3)
     ax.legend(loc="lower left")
     ax.set_title(title)
+    return fig
+
+
+def bode_overlay(truth, estimate, model, input_names, output_names, band, title, excited=None):
+    """One Bode overlay figure per input: true plant, nonparametric estimate, model.
+
+    Parameters
+    ----------
+    truth, model : control.StateSpace
+        Same inputs and outputs.
+    estimate : trussid.plid.frf.FRF
+        E.g. the H1 estimate of the identification record.
+    input_names, output_names : list of str
+    band : (float, float)
+        Plotted band [Hz].
+    title : str
+    excited : (float, float), optional
+        The excited band [Hz], shaded: outside it the estimate is noise.
+    """
+    f = frf_grid(truth, band, 1500)
+    Ht = frequency_response(truth, f)
+    Hm = frequency_response(model, f)
+    h1_est = estimate
+    keep = (h1_est.f >= band[0]) & (h1_est.f <= band[1])
+    figs = []
+    for j, name in enumerate(input_names):
+        curves = [("true plant", f, Ht), (f"H1 estimate ({h1_est.n_averages} averages)",
+                                          h1_est.f[keep], h1_est.H[keep]),
+                  ("identified model", f, Hm)]
+        figs.append(bode_figure(curves, j, name, output_names, title=f"{title}, input {name}",
+                                excited=excited))
+    return figs
+
+
+def pole_zero_figure(model, truth, band, title, collocated: int = 0):
+    """z-plane poles and zeros near the unit circle, and a frequency-damping map.
+
+    Zeros are those of the collocated channel (the first input to output ``collocated``),
+    the transfer function whose zeros interlace its poles; poles are those of the whole
+    model. ``truth`` has the model's inputs and outputs.
+    """
+    fig = Figure(figsize=(12, 5.6))
+    ax, ax2 = fig.subplots(1, 2)
+    dt = model.dt
+    tcols = truth
+    zp_t = np.linalg.eigvals(np.asarray(tcols.A))
+    zp_m = np.linalg.eigvals(np.asarray(model.A))
+    j = collocated
+    with np.errstate(all="ignore"):  # zeros at infinity of the strictly proper channel
+        zz_t = np.asarray(control.zeros(control.ss(tcols.A, tcols.B[:, :1], tcols.C[j:j + 1],
+                                                   tcols.D[j:j + 1, :1], dt)))
+        zz_m = np.asarray(control.zeros(control.ss(model.A, model.B[:, :1], model.C[j:j + 1],
+                                                   model.D[j:j + 1, :1], dt)))
+    th = np.linspace(0, 2 * np.pi * band[1] * dt, 400)
+    ax.plot(np.cos(th), np.sin(th), color="0.6", lw=0.8, label="unit circle (0-%g Hz)" % band[1])
+    ax.plot(zp_t.real, zp_t.imag, "o", mfc="none", color="0.35", ms=8, label="true poles")
+    ax.plot(zz_t.real, zz_t.imag, "s", mfc="none", color="C2", ms=7,
+            label=f"true zeros (ch{j + 1} to acc{j + 1})")
+    ax.plot(zp_m.real, zp_m.imag, "x", color="C3", ms=7, label="identified poles")
+    ax.plot(zz_m.real, zz_m.imag, "+", color="C0", ms=9, label="identified zeros")
+    # The lightly damped modes sit on the unit circle between 0 and the band's edge: zoom.
+    a_hi = 2 * np.pi * band[1] * dt
+    ax.set_xlim(min(np.cos(a_hi), 0.2) - 0.15, 1.08)
+    ax.set_ylim(-0.1, np.sin(min(a_hi, np.pi / 2)) + 0.15)
+    ax.set_aspect("equal")
+    ax.set_xlabel("Re z")
+    ax.set_ylabel("Im z")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="lower left", fontsize=8)
+    ax.set_title("z-plane, upper half near the unit circle")
+    ft, zt, _ = modal_parameters(tcols)
+    fm, zm, _ = modal_parameters(model)
+    sel_t = (ft > 1) & (ft < band[1])
+    sel_m = (fm > 1) & (fm < band[1])
+    ax2.semilogy(ft[sel_t], np.maximum(zt[sel_t], 1e-5), "o", mfc="none", color="0.35", ms=8,
+                 label="true modes")
+    ax2.semilogy(fm[sel_m], np.clip(zm[sel_m], 1e-5, None), "x", color="C3", ms=7,
+                 label="identified")
+    ax2.set_xlabel("frequency [Hz]")
+    ax2.set_ylabel("damping ratio")
+    ax2.grid(True, which="both", alpha=0.3)
+    ax2.legend(loc="upper right", fontsize=8)
+    ax2.set_title("modes: frequency and damping")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def convergence_figure(fits: dict, fs: float, y_rms: dict):
+    """Innovations (moving RMS relative to the output RMS) and parameter change per sample.
+
+    Parameters
+    ----------
+    fits : dict
+        Name -> object with ``innovations`` (N, p), ``theta_history`` (k, q) and
+        ``history_index`` (k,) of a PLID pass.
+    fs : float
+        Sample rate [Hz].
+    y_rms : dict
+        Name -> RMS of each output over the record.
+    """
+    fig = Figure(figsize=(10, 7))
+    a1, a2 = fig.subplots(2, 1, sharex=True)
+    w = max(int(round(0.1 * fs)), 1)  # 0.1 s windows
+    for k, (name, fit) in enumerate(fits.items()):
+        e = fit.innovations
+        if e.size:
+            nwin = e.shape[0] // w
+            ms = np.mean((e[: nwin * w] ** 2).reshape(nwin, w, -1), axis=1)
+            rel = np.mean(ms / y_rms[name][None, :] ** 2, axis=1)
+            t = (np.arange(nwin) + 0.5) * w / fs
+            a1.plot(t, 10 * np.log10(rel), color=f"C{k}", label=name)
+        h, idx = fit.theta_history, fit.history_index
+        if h.shape[0] >= 2:
+            step = np.diff(idx)
+            change = np.linalg.norm(np.diff(h, axis=0), axis=1) / step
+            scale = max(np.linalg.norm(h[-1]), 1e-300)
+            a2.semilogy(idx[1:] / fs, np.maximum(change / scale, 1e-18), color=f"C{k}",
+                        lw=0.8, label=name)
+    a1.set_ylabel("innovation power / output power [dB]\n(0.1 s windows)")
+    a1.grid(True, alpha=0.3)
+    a1.legend(loc="upper right", fontsize=8)
+    a1.set_title("PLID convergence on the identification records")
+    a2.set_ylabel("|theta_k - theta_(k-10)| / 10 / |theta_final|\nper sample")
+    a2.set_xlabel("time in the record [s]")
+    a2.grid(True, which="both", alpha=0.3)
+    a2.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def trace_figure(model, K, data, cols, title: str, seconds=(2.0, 2.25)):
+    """Measured versus one-step predicted sensor signals on (validation) data.
+
+    ``data`` is a :class:`trussid.plid.datafile.IOData`; ``cols`` the inputs the model has.
+    """
+    d = data
+    yhat = one_step_predict(model, d.u[:, cols], d.y, K=K)
+    k0, k1 = int(seconds[0] * d.fs), int(seconds[1] * d.fs)
+    k0, k1 = min(k0, d.n_samples - 2), min(k1, d.n_samples)
+    t = np.arange(k0, k1) / d.fs
+    p = d.y.shape[1]
+    fig = Figure(figsize=(10, 2.3 * p + 0.6))
+    axes = fig.subplots(p, 1, sharex=True, squeeze=False)
+    for i in range(p):
+        ax = axes[i, 0]
+        ax.plot(t, d.y[k0:k1, i], color="0.5", lw=2.2, label="measured (A/D)")
+        ax.plot(t, yhat[k0:k1, i], color="C0", lw=1.0, label="one-step predicted")
+        ax.plot(t, 10 * (d.y - yhat)[k0:k1, i], color="C3", lw=0.8,
+                label="prediction error x 10")
+        ax.set_ylabel(f"{d.output_names[i]} [V]")
+        ax.grid(True, alpha=0.3)
+    axes[0, 0].legend(loc="upper right", fontsize=8, ncol=3)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def order_figure(rows):
+    """One-step prediction ratio and FRF change against model order.
+
+    ``rows`` are :class:`trussid.plid.order.OrderRow` (``order``, ``prediction_db``,
+    ``frf_change_db``).
+    """
+    n = [r.order for r in rows]
+    fig = Figure(figsize=(6, 5))
+    ax = fig.subplots(2, 1, sharex=True)
+    ax[0].plot(n, [r.prediction_db for r in rows], "o-")
+    ax[0].set_ylabel("one-step prediction [dB]")
+    ax[0].grid(True, alpha=0.3)
+    ch = [(r.order, r.frf_change_db) for r in rows if r.frf_change_db is not None]
+    if ch:
+        ax[1].semilogy([c[0] for c in ch], [c[1] for c in ch], "s-")
+    ax[1].set_ylabel("FRF change from previous order [dB RMS]")
+    ax[1].set_xlabel("order")
+    ax[1].grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def plant_bode_figure(plant: control.StateSpace, title: str = ""):
+    """Magnitude [dB] and unwrapped phase of every channel of a discrete plant, 1 Hz to
+    Nyquist on a log axis, channels labelled by their signal names."""
+    fs = 1.0 / plant.dt
+    f = np.geomspace(1.0, 0.5 * fs, 3000)
+    H = frequency_response(plant, f)  # (nf, p, m)
+    fig = Figure(figsize=(9, 6.5))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    for i, yo in enumerate(plant.output_labels):
+        for j, ui in enumerate(plant.input_labels):
+            ax1.semilogx(f, 20 * np.log10(np.abs(H[:, i, j])), lw=0.9, label=f"{ui} -> {yo}")
+            ax2.semilogx(f, np.degrees(np.unwrap(np.angle(H[:, i, j]))), lw=0.9)
+    ax1.set_ylabel("magnitude [dB]")
+    ax2.set_ylabel("phase [deg]")
+    ax2.set_xlabel("frequency [Hz]")
+    ax1.set_title(title or f"plant, ZOH at {fs:g} Hz")
+    ax1.legend(fontsize=7, ncol=3)
+    for ax in (ax1, ax2):
+        ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
     return fig

@@ -67,7 +67,8 @@ neighbours, these include ``span / (2 f sqrt 3)``: a blend looks more damped).
 Which experiment
 ----------------
 The lab plant (extension drive, UDF accelerometers) hardly sees the strut bending modes.
-:func:`bending_experiment_plant` is the test suited to updating: all wafers driven in
+:func:`trussid.testbed.plant.testbed_plant` with ``arrangement="bending", sensors="struts"``
+is the test suited to updating: all wafers driven in
 anti-phase (bending) from one channel, a lateral sensor on each strut; a SIMO PLID model of
 its data gives one strong mode per strut, with a shape that names the strut.
 """
@@ -89,14 +90,11 @@ __all__ = [
     "IdentifiedModes",
     "UpdateReport",
     "reduced_wall_basis",
-    "model_modes",
     "pair_modes",
     "mode_groups",
     "modes_of_model",
     "modes_from_data",
     "update_walls",
-    "strut_sensors",
-    "bending_experiment_plant",
     "WALL_NAMES",
 ]
 
@@ -344,50 +342,22 @@ class _ModelModes:
         self.basis, self.n_modes, self.rows = basis, n_modes, sensor_rows
         self._key, self._val = None, None
         self.evaluations = 0
-        # A reduced basis is dense: there the pattern form of
-        # fem.sensitivity.eigenvalue_sensitivities (products over all r^2 entries per
-        # mode) cost 20 ms a call, dense products ~1 ms; same formula, phi^T B phi.
-        self._dense = None
-        if basis.rows.size == basis.n**2:
-            r = basis.n
-            self._dense = tuple(np.asarray(b).reshape(6, r, r) for b in (basis.KA, basis.KI, basis.MA, basis.MI))
-
-    def _sensitivities(self, w, lam, X):
-        from trussid.testbed.sensitivity import eigenvalue_sensitivities
-        from trussid.testbed.model import tube_property_derivatives
-
-        if self._dense is None:
-            return eigenvalue_sensitivities(self.basis, w, lam, X)
-        dA, dI = tube_property_derivatives(self.basis.r_out, w)
-        qKA, qKI, qMA, qMI = (np.einsum("rk,irc,ck->ik", X, B, X, optimize=True) for B in self._dense)
-        d = dA[:, None] * (qKA - lam[None, :] * qMA) + dI[:, None] * (qKI - lam[None, :] * qMI)
-        return d.T
 
     def __call__(self, walls):
         from trussid.testbed.model import wall_modes
+        from trussid.testbed.sensitivity import eigenvalue_sensitivities
 
         w = np.asarray(walls, float)
         key = w.tobytes()
         if key != self._key:
             f, X = wall_modes(self.basis, w, self.n_modes)
             lam = (2 * np.pi * f) ** 2
-            dfdt = self._sensitivities(w, lam, X) / (8 * np.pi**2 * np.maximum(f, 1e-300))[:, None]
+            dfdt = eigenvalue_sensitivities(self.basis, w, lam, X) / (
+                8 * np.pi**2 * np.maximum(f, 1e-300))[:, None]
             shapes = None if self.rows is None else self.rows @ X
             self._key, self._val = key, (f, dfdt, shapes)
             self.evaluations += 1
         return self._val
-
-
-def model_modes(tbm, walls, n_modes: int = 40):
-    """Frequencies [Hz] and ``d f / d t`` [Hz/m] of a testbed model at ``walls`` (full model).
-
-    A thin convenience over :func:`trussid.testbed.model.wall_modes` and
-    :func:`trussid.testbed.sensitivity.eigenvalue_sensitivities`.
-    """
-    from trussid.testbed.model import wall_basis
-
-    f, dfdt, _ = _ModelModes(wall_basis(tbm), n_modes, None)(walls)
-    return f, dfdt
 
 
 def _mac(measured: np.ndarray, model: np.ndarray) -> np.ndarray:
@@ -512,6 +482,8 @@ def modes_of_model(sys, band=None, *, max_damping: float = 0.2, min_damping: flo
     """
     import control
 
+    from trussid.plid.metrics import s_plane
+
     A = np.asarray(sys.A, float)
     B = np.asarray(sys.B, float)
     C = np.asarray(sys.C, float)
@@ -520,10 +492,7 @@ def modes_of_model(sys, band=None, *, max_damping: float = 0.2, min_damping: flo
     lam, W, V = la.eig(A, left=True, right=True)
     keep = lam.imag > 1e-12 * np.maximum(np.abs(lam), 1e-300)
     lam, W, V = lam[keep], W[:, keep], V[:, keep]
-    if control.isdtime(sys, strict=True):
-        s = np.log(lam.astype(complex)) / sys.dt
-    else:
-        s = lam.astype(complex)
+    s = s_plane(lam, sys.dt if control.isdtime(sys, strict=True) else None)
     wn = np.abs(s)
     f = wn / (2 * np.pi)
     z = -s.real / np.maximum(wn, 1e-300)
@@ -676,66 +645,6 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
 # --------------------------------------------------------------------------- experiment
 
 
-def strut_sensors(tbm, quantity: str = "acceleration", sensitivity: float = 1.0) -> list:
-    """One lateral sensor per strut, at the strut node nearest mid-span, along the strut's
-    local ``y`` (horizontal, normal to its bipod plane: the plane the anti-phase wafers on
-    the ``+-y`` faces bend). Massless (a non-contact probe, or an accelerometer light
-    enough to neglect): the model is unchanged. Output names ``strut0`` ... ``strut5``."""
-    from trussid.fem.sensors import Sensor
-
-    mp = tbm.map
-    mid = int(np.argmin(np.abs(mp.strut_s - 0.5 * mp.strut_s[-1])))
-    return [Sensor(int(mp.strut_nodes[i, mid]), tuple(mp.strut_frames[i, 1]), quantity, sensitivity,
-                   name=f"strut{i}") for i in range(mp.strut_nodes.shape[0])]
-
-
-def bending_experiment_plant(tb=None, *, tbm=None, damping=None, n_modes: int | None = None):
-    """The identification experiment used for updating: wafers in bending, sensors on struts.
-
-    The lab plant (:func:`trussid.testbed.plant.testbed_plant`) drives the struts in extension
-    and senses at the UDF: the strut bending modes, which carry the wall information, are
-    nearly invisible in it. This experiment drives all six struts' wafer pairs in
-    anti-phase (``arrangement="bending"``) from one D/A channel, through the lab's
-    amplifier, filters and converters, and reads the :func:`strut_sensors`: a SIMO plant
-    whose bending modes are strong and whose shapes say which strut is moving.
-
-    Parameters
-    ----------
-    tb : geometry.testbed.Testbed, optional
-    tbm : fem.testbed.TestbedModel, optional
-        ``build_testbed(tb)`` if already built.
-    damping : float, optional
-        Modal damping ratio (default ``tb.damping.modal_ratio``).
-    n_modes : int, optional
-        Modes kept (default: all below the Nyquist frequency).
-
-    Returns
-    -------
-    discrete : control.StateSpace
-        Command volts to sensor outputs [m/s^2], at the lab's sample rate (ZOH).
-    sensors : list of fem.sensors.Sensor
-    modes : fem.modal.Modes
-        The structure's modes (all computed).
-    """
-    from trussid.testbed.chain import lab_plant
-    from trussid.fem.plant import modal_plant
-    from trussid.testbed.model import build_testbed, solve_testbed_modes
-    from trussid.testbed.plant import channel_loads, lab_chain_of
-
-    tbm = build_testbed(tb) if tbm is None else tbm
-    tb = tbm.testbed
-    chain = lab_chain_of(tb)
-    modes = solve_testbed_modes(tbm, 80 if n_modes is None else int(n_modes))
-    keep = int(np.count_nonzero(modes.frequencies_hz < 0.5 * chain.sample_rate)) if n_modes is None \
-        else int(n_modes)
-    loads = channel_loads(tbm, channels=[list(range(6))], arrangement="bending")
-    sensors = strut_sensors(tbm)
-    zeta = tb.damping.modal_ratio if damping is None else damping
-    structure = modal_plant(modes, loads, sensors, zeta, n_modes=keep, input_names=["bend"])
-    _, disc = lab_plant(structure, chain, max_mode_hz=float(modes.frequencies_hz[keep - 1]))
-    return disc, sensors, modes
-
-
 # --------------------------------------------------------------------------- updating
 
 
@@ -849,6 +758,84 @@ def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence, know
     return best, accepted, ambiguous
 
 
+def _intervals(known_sigma, dFj, sig, walls, chi2, dof, rep, confidence):
+    """Wall intervals in ln t: from known sigmas (inflated by the Birge ratio when the fit is
+    worse than they say), or from the residual scatter of the fit ``rep``.
+
+    Returns ``(intervals (6, 2) [m], std_log (6,), birge, source)``.
+    """
+    intervals = np.full((6, 2), np.nan)
+    std_log = np.full(6, np.nan)
+    if known_sigma:
+        jl = (dFj / sig[:, None]) * walls[None, :]
+        birge = math.sqrt(chi2 / dof) if dof > 0 else 1.0
+        infl = max(1.0, birge)
+        try:
+            cov = la.inv(jl.T @ jl) * infl**2
+            ok = np.isfinite(cov).all()
+        except la.LinAlgError:
+            ok = False
+        zq = scipy.stats.norm.ppf(0.5 + confidence / 2)
+        for i, n in enumerate(WALL_NAMES):
+            if ok and rep.determined.get(n, True) and n not in rep.at_bound:
+                std_log[i] = math.sqrt(max(cov[i, i], 0.0))
+                intervals[i] = walls[i] * np.exp([-zq * std_log[i], zq * std_log[i]])
+        source = "known sigma"
+    else:
+        birge = math.sqrt(chi2 / dof) if dof > 0 else float("nan")
+        for i, n in enumerate(WALL_NAMES):
+            iv = rep.intervals.get(n)
+            if iv is not None:
+                intervals[i] = iv
+                se = rep.std_errors.get(n)
+                std_log[i] = se if se is not None else np.nan
+        source = "residual scatter"
+    return intervals, std_log, birge, source
+
+
+def _damping_estimate(z_all, zsig_all, used, unres, f, confidence):
+    """One modal damping ratio, the weighted mean of the paired modes' ratios, and its
+    interval; ``(None, None)`` without measured damping."""
+    k = f.size
+    zeta = ziv = None
+    if z_all is not None:
+        zz = z_all[used]
+        # a blend of modes within the bandwidth looks more damped: up to span / 2f
+        zs = np.sqrt((zsig_all[used] if zsig_all is not None else 0.0) ** 2 + (unres / (2 * f)) ** 2)
+        w = 1.0 / zs**2 if np.all(zs > 0) else np.ones(k)
+        zeta = float(np.sum(w * zz) / np.sum(w))
+        scatter = math.sqrt(float(np.sum(w * (zz - zeta) ** 2) / np.sum(w) / max(k - 1, 1)))
+        stated = math.sqrt(1.0 / float(np.sum(w))) if np.all(zs > 0) else 0.0
+        se = max(scatter, stated)
+        tq = scipy.stats.t.ppf(0.5 + confidence / 2, max(k - 1, 1))
+        ziv = (zeta - tq * se, zeta + tq * se)
+    return zeta, ziv
+
+
+def _checked_inputs(measured_freqs_hz, frequency_std_hz, damping, damping_std, shapes, sensors,
+                    prior_range, confidence):
+    """The measured data of :func:`update_walls` as arrays, each mistake named."""
+    f_all = _vector("measured_freqs_hz", measured_freqs_hz, np.size(measured_freqs_hz))
+    k_all = f_all.size
+    known_sigma = frequency_std_hz is not None
+    sig_all = _vector("frequency_std_hz", frequency_std_hz, k_all) if known_sigma else None
+    z_all = _vector("damping", damping, k_all, positive=False) if damping is not None else None
+    zsig_all = (_vector("damping_std", damping_std, k_all) if damping_std is not None else None)
+    if not 0 < prior_range < 1:
+        raise UpdateError(f"prior_range must be in (0, 1), got {prior_range!r}")
+    if not 0 < confidence < 1:
+        raise UpdateError(f"confidence must be in (0, 1), got {confidence!r}")
+    if (shapes is None) != (sensors is None):
+        raise UpdateError("give shapes and sensors together (MAC pairing needs both)")
+    sh_all = None
+    if shapes is not None:
+        sh_all = np.asarray(shapes, complex)
+        if sh_all.ndim != 2 or sh_all.shape != (len(sensors), k_all):
+            raise UpdateError(f"shapes must be (n_sensors={len(sensors)}, n_modes={k_all}), "
+                              f"got {sh_all.shape}")
+    return f_all, sig_all, z_all, zsig_all, sh_all
+
+
 def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_std_hz=None,
                  damping_std=None, shapes=None, sensors=None, tbm=None, n_model_modes: int | None = None,
                  bounds=None, prior_range: float = 0.2, gate: float = 3.0, n_starts: int = 8,
@@ -923,30 +910,20 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         without sensors, fewer modes than can determine the walls, no measured mode
         reachable by the model.
     """
+    # Long: the procedure (gate, stage-1 global fit, unresolved-mode sigma, stage-2 fit)
+    # shares the pairing closures below between its stages; input checks, intervals and
+    # damping are their own functions, the rest would pass a dozen arrays between steps.
     from trussid.fem.sensors import sensor_matrix
     from trussid.testbed.model import build_testbed, wall_basis, wall_modes
     from trussid.geometry.spec import Testbed
     from trussid.plid.greybox import fit_parameters
     from trussid._util.threads import blas_threads
 
-    f_all = _vector("measured_freqs_hz", measured_freqs_hz, np.size(measured_freqs_hz))
+    f_all, sig_all, z_all, zsig_all, sh_all = _checked_inputs(
+        measured_freqs_hz, frequency_std_hz, damping, damping_std, shapes, sensors, prior_range,
+        confidence)
     k_all = f_all.size
-    known_sigma = frequency_std_hz is not None
-    sig_all = _vector("frequency_std_hz", frequency_std_hz, k_all) if known_sigma else None
-    z_all = _vector("damping", damping, k_all, positive=False) if damping is not None else None
-    zsig_all = (_vector("damping_std", damping_std, k_all) if damping_std is not None else None)
-    if not 0 < prior_range < 1:
-        raise UpdateError(f"prior_range must be in (0, 1), got {prior_range!r}")
-    if not 0 < confidence < 1:
-        raise UpdateError(f"confidence must be in (0, 1), got {confidence!r}")
-    if (shapes is None) != (sensors is None):
-        raise UpdateError("give shapes and sensors together (MAC pairing needs both)")
-    sh_all = None
-    if shapes is not None:
-        sh_all = np.asarray(shapes, complex)
-        if sh_all.ndim != 2 or sh_all.shape != (len(sensors), k_all):
-            raise UpdateError(f"shapes must be (n_sensors={len(sensors)}, n_modes={k_all}), "
-                              f"got {sh_all.shape}")
+    known_sigma = sig_all is not None
 
     with blas_threads(threads):  # small dense eigen-solves, thousands of them
         tb = Testbed() if tb_nominal is None else tb_nominal
@@ -1059,47 +1036,10 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         chi2 = float(r @ r)
         dof = max(k - 6, 0)
 
-        # Intervals in ln t.
-        intervals = np.full((6, 2), np.nan)
-        std_log = np.full(6, np.nan)
-        if known_sigma:
-            jl = (dF[j] / sig[:, None]) * walls[None, :]
-            birge = math.sqrt(chi2 / dof) if dof > 0 else 1.0
-            infl = max(1.0, birge)
-            try:
-                cov = la.inv(jl.T @ jl) * infl**2
-                ok = np.isfinite(cov).all()
-            except la.LinAlgError:
-                ok = False
-            zq = scipy.stats.norm.ppf(0.5 + confidence / 2)
-            for i, n in enumerate(WALL_NAMES):
-                if ok and rep.determined.get(n, True) and n not in rep.at_bound:
-                    std_log[i] = math.sqrt(max(cov[i, i], 0.0))
-                    intervals[i] = walls[i] * np.exp([-zq * std_log[i], zq * std_log[i]])
-            source = "known sigma"
-        else:
-            birge = math.sqrt(chi2 / dof) if dof > 0 else float("nan")
-            for i, n in enumerate(WALL_NAMES):
-                iv = rep.intervals.get(n)
-                if iv is not None:
-                    intervals[i] = iv
-                    se = rep.std_errors.get(n)
-                    std_log[i] = se if se is not None else np.nan
-            source = "residual scatter"
+        intervals, std_log, birge, source = _intervals(known_sigma, dF[j], sig, walls, chi2, dof,
+                                                       rep, confidence)
 
-        # Damping: one modal ratio, the weighted mean of the paired modes' ratios.
-        zeta = ziv = None
-        if z_all is not None:
-            zz = z_all[used]
-            # a blend of modes within the bandwidth looks more damped: up to span / 2f
-            zs = np.sqrt((zsig_all[used] if zsig_all is not None else 0.0) ** 2 + (unres / (2 * f)) ** 2)
-            w = 1.0 / zs**2 if np.all(zs > 0) else np.ones(k)
-            zeta = float(np.sum(w * zz) / np.sum(w))
-            scatter = math.sqrt(float(np.sum(w * (zz - zeta) ** 2) / np.sum(w) / max(k - 1, 1)))
-            stated = math.sqrt(1.0 / float(np.sum(w))) if np.all(zs > 0) else 0.0
-            se = max(scatter, stated)
-            tq = scipy.stats.t.ppf(0.5 + confidence / 2, max(k - 1, 1))
-            ziv = (zeta - tq * se, zeta + tq * se)
+        zeta, ziv = _damping_estimate(z_all, zsig_all, used, unres, f, confidence)
 
         # Report: pairs over all measured modes, with nominal frequencies of the same pairs.
         idx_used = np.flatnonzero(used)

@@ -170,7 +170,7 @@ def test_compare_with_the_plant_writes_plots_and_metrics(work, identified):
         assert raw[:8] == b"\x89PNG\r\n\x1a\n" and len(raw) > 20_000
     m = json.loads((out / "metrics.json").read_text())
     assert m["reference_kind"] == "plant" and m["band"] == [20.0, 400.0]
-    assert m["frf_error"]["rms_db"] < 1.0
+    assert m["frf"]["rms_db"] < 1.0 and m["stable"]
     true_f = [row["true_frequency_hz"] for row in m["poles"]]
     np.testing.assert_allclose(true_f, [60.0, 210.0], rtol=1e-9)
 
@@ -182,8 +182,8 @@ def test_compare_with_validation_data(work, identified, capsys):
     m = json.loads(capsys.readouterr().out)
     assert m == json.loads((out / "metrics.json").read_text())
     assert m["reference_kind"] == "data"
-    assert m["simulation_fit"]["against"] == "noise-free outputs (y_clean)"
-    assert m["signal_to_prediction_error"]["overall"] > 20.0
+    assert m["simulation"]["against"] == "noise-free outputs"
+    assert m["prediction"]["overall"] > 20.0
 
 
 # ------------------------------------------------------------------ bad input (subprocess)

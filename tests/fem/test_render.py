@@ -624,27 +624,19 @@ def test_cli_unknown_extension_is_a_one_line_error(deck, tmp_path, capsys, name)
     assert list(tmp_path.iterdir()) == [deck]
 
 
-def test_cli_draws_a_loaded_testbed_with_its_solids_and_labels(testbed):
+def test_cli_draws_a_loaded_testbed_with_its_solids_and_labels(testbed, deck):
     from trussid.cli.commands.render import _decorations_and_labels
+    from trussid.cli.loaders import LoadedStructure, load_structure
 
     tbm, modes, labels, decorations = testbed
-    for loaded in (SimpleNamespace(model=tbm.model, info=tbm), tbm):
-        decs, labs = _decorations_and_labels(loaded, modes)
-        assert sorted(d.name for d in decs) == sorted(d.name for d in decorations)
-        if labels is not None:
-            assert list(labs) == list(labels)
-    decs, labs = _decorations_and_labels(SimpleNamespace(model=tbm.model, info=None), modes)
+    decs, labs = _decorations_and_labels(LoadedStructure(tbm.model, "test", testbed=tbm), modes)
+    assert sorted(d.name for d in decs) == sorted(d.name for d in decorations)
+    assert list(labs) == list(labels)
+    decs, labs = _decorations_and_labels(load_structure(deck), modes)  # a deck: bare beams
     assert decs == () and labs is None
 
 
 def test_cli_renders_the_default_testbed_without_a_model_argument(tmp_path, capsys):
-    from trussid.cli.commands.modes import load_model
-    from trussid._util.errors import UserError
-
-    try:
-        load_model(None)
-    except UserError as exc:
-        pytest.skip(f"trussid cannot load the default testbed yet: {exc}")
     out = tmp_path / "testbed.png"
     assert cli_main(["render", "--mode", "9", "--out", str(out), "--size", "320x240"]) == 0
     from PIL import Image

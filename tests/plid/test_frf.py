@@ -133,3 +133,23 @@ def test_stepped_sine_refuses_unstable_plants_and_bad_frequencies():
     stable = control.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]], 1 / FS)
     with pytest.raises(DataError, match="test frequencies must lie in"):
         stepped_sine(stable, [600.0])
+
+
+def test_frequency_response_by_eigendecomposition_matches_python_control():
+    """The O(n)-per-frequency path agrees with python-control's own evaluation (an n x n
+    solve per frequency), and a defective A falls back to the latter."""
+    import control
+
+    from trussid.plid.frf import frequency_response
+
+    sysc = control.rss(12, 2, 3, strictly_proper=False)
+    sysd = control.c2d(control.ss(sysc.A - 0.1 * np.eye(12), sysc.B, sysc.C, sysc.D), 1 / 1600)
+    f = np.linspace(1, 790, 300)
+    z = np.exp(2j * np.pi * f / 1600)
+    ref = np.moveaxis(np.asarray(sysd(z, squeeze=False)), -1, 0)
+    H = frequency_response(sysd, f)
+    np.testing.assert_allclose(H, ref, rtol=1e-8, atol=1e-12 * np.abs(ref).max())
+    jordan = control.ss([[0.5, 1.0], [0.0, 0.5]], [[0.0], [1.0]], [[1.0, 0.0]], 0, 1.0)
+    zj = np.exp(2j * np.pi * np.array([0.1, 0.2]))
+    np.testing.assert_allclose(frequency_response(jordan, [0.1, 0.2])[:, 0, 0],
+                               1 / (zj - 0.5) ** 2, rtol=1e-12)

@@ -15,7 +15,7 @@ import scipy.signal
 import scipy.stats
 
 from trussid.plid.errors import DataError
-from trussid.plid.greybox import Constraint, fit_greybox, fit_parameters, simulate
+from trussid.plid.greybox import Constraint, fit_greybox, fit_parameters, simulate_continuous
 
 
 @pytest.fixture
@@ -196,14 +196,14 @@ def test_zoh_step_and_foh_ramp_responses_are_exact_at_the_samples():
     T, G, dt = 0.7, 2.0, 0.05
     t = np.arange(200) * dt
     sys = control.tf([G], [T, 1.0])
-    y_step = simulate(sys, t, np.ones_like(t), hold="zoh")[:, 0]
+    y_step = simulate_continuous(sys, t, np.ones_like(t), hold="zoh")[:, 0]
     # the held input u[k] acts over [t_k, t_k+1): y(t_k) = G (1 - exp(-t_k/T))
     np.testing.assert_allclose(y_step, G * (1 - np.exp(-t / T)), atol=1e-12)
-    y_ramp = simulate(sys, t, t, hold="foh")[:, 0]
+    y_ramp = simulate_continuous(sys, t, t, hold="foh")[:, 0]
     exact = G * (t - T + T * np.exp(-t / T))
     np.testing.assert_allclose(y_ramp, exact, atol=1e-10)
     # a held ramp lags by about half a sample
-    y_zoh = simulate(sys, t, t, hold="zoh")[:, 0]
+    y_zoh = simulate_continuous(sys, t, t, hold="zoh")[:, 0]
     assert abs(y_zoh[-1] - exact[-1]) == pytest.approx(G * dt / 2, rel=0.05)
 
 
@@ -213,7 +213,7 @@ def test_initial_state_response_matches_lsim():
     t = np.arange(400) * 0.02
     u = np.sin(t)
     x0 = np.array([0.5, -1.0])
-    y = simulate(control.ss(a, b, c, 0), t, u, x0=x0)[:, 0]
+    y = simulate_continuous(control.ss(a, b, c, 0), t, u, x0=x0)[:, 0]
     _, y_ref, _ = scipy.signal.lsim((a, b, c, [[0.0]]), u, t, X0=x0, interp=False)
     np.testing.assert_allclose(y, y_ref, atol=1e-10)
 

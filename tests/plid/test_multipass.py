@@ -172,8 +172,8 @@ def test_identify_reduced_returns_the_candidate_with_the_best_identification_pre
     assert idn.model.nstates == 4
     assert np.max(np.abs(np.linalg.eigvals(np.asarray(idn.model.A)))) < 1
     # the score is the returned model's one-step ratio with the returned gain, computed as
-    # choose_predictor scores (identification record, first eighth left out)
-    r = prediction_ratio_db(idn.model, u, y, K=idn.K, skip=len(u) // 8)
+    # choose_predictor scores (identification record, after its burn-in)
+    r = prediction_ratio_db(idn.model, u, y, K=idn.K, skip=idn.info["predictor"]["skip"])
     assert r["overall"] == pytest.approx(best["identification_ratio_db"], rel=1e-12)
 
 
@@ -211,3 +211,37 @@ def test_identify_reduced_survives_a_failed_candidate_and_names_total_failure(si
     monkeypatch.setattr(mp, "identify", all_fail)
     with pytest.raises(IdentificationError, match="every candidate failed: direct 6"):
         mp.identify_reduced(u, y, 6, 1 / FS, via=(8,))
+
+
+def test_a_stabilised_candidate_counts_the_poles_reflected_in_itself():
+    """Not in the higher-order PLID pass it was reduced from (review 3.7, first defect)."""
+    import control
+
+    import trussid.plid.multipass as mp
+
+    dt = 1e-3
+    rng = np.random.default_rng(0)
+
+    def pair(f, r):  # a complex pole pair at f Hz and radius r, as a real 2 x 2 block
+        a = 2 * np.pi * f * dt
+        return r * np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+    import scipy.linalg
+
+    A4 = scipy.linalg.block_diag(pair(50, 1.002), pair(120, 0.99))        # one unstable pair
+    A8 = scipy.linalg.block_diag(pair(50, 1.002), pair(120, 1.001), pair(200, 1.003),
+                                 pair(300, 0.99))                        # three unstable pairs
+    model = control.ss(A4, rng.standard_normal((4, 1)), rng.standard_normal((1, 4)), 0, dt)
+    high = control.ss(A8, rng.standard_normal((8, 1)), rng.standard_normal((1, 8)), 0, dt)
+
+    class Pass:  # the higher-order PLID pass the candidate came from
+        K = None
+
+    Pass.model = high
+    c = mp.Candidate("via 8, reduced", model, 0.0, result=Pass)
+    u = rng.standard_normal((2000, 1))
+    y = rng.standard_normal((2000, 1))
+    mp._score(c, u, y, 4)
+    assert c.stable and c.reflected_poles == 2  # one pair, not the pass's three pairs
+    assert np.max(np.abs(np.linalg.eigvals(np.asarray(c.model.A)))) < 1
+    assert c.row(4)["label"] == "via 8, reduced, stabilised"

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from trussid.plid.errors import IdentificationError
-from trussid.plid.order import format_table, order_table, plot_orders
+from trussid.plid.order import format_table, order_table
+from trussid.plots import order_figure, save_figure
 
 FS = 1600.0
 
@@ -48,7 +49,7 @@ def test_table_and_plot(rows, tmp_path):
     assert text.splitlines()[0].startswith("order")
     assert len(text.splitlines()) == 1 + len(rows)
     path = tmp_path / "orders.png"
-    plot_orders(rows, path)
+    save_figure(order_figure(rows), path)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -234,12 +234,14 @@ def test_walls_from_a_plid_model_of_noisy_bending_test_data(nominal, full):
     """Acceptance 4b: a simulated bending SIMO test on perturbed walls, a PLID model, its
     strongest modes with PLID's covariance, updating with MAC pairing."""
     from trussid.plid.experiment import run_experiment
-    from trussid.updating import bending_experiment_plant, modes_from_data, strut_sensors
+    from trussid.testbed.plant import strut_sensors, testbed_plant
+    from trussid.updating import modes_from_data
 
     tb, tbm, _ = nominal
     truth = perturbed(tb, 3)
     true_tbm = build_testbed(tb.with_walls(tuple(truth)))
-    plant, _, modes = bending_experiment_plant(tbm=true_tbm)
+    tp = testbed_plant(tbm=true_tbm, arrangement="bending", sensors="struts")
+    plant, modes = tp.discrete, tp.modes
     n = 16000 if full else 5000
     exp = run_experiment(plant, n, "white", rms=1.0, band=(30.0, 90.0), seed=4, snr_db=40,
                          dac_bits=12, adc_bits=12, adc_full_scale="auto")

@@ -35,7 +35,7 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None):
     try:
         yield Path(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException:  # any failure, Ctrl-C included: remove the temporary file, re-raise
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise

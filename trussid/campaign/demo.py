@@ -48,7 +48,6 @@ Identification data and validation data are separate records with different seed
 from __future__ import annotations
 
 import json
-import math
 import time
 import warnings
 from dataclasses import asdict, dataclass, field, replace
@@ -57,6 +56,7 @@ from pathlib import Path
 import numpy as np
 
 from trussid._util.files import atomic_path
+from trussid._util.jsonio import json_safe
 
 #: Standard gravity [m/s^2], to give sensor noise in g.
 G0 = 9.80665
@@ -195,11 +195,12 @@ def conditioner_steps(y_rms, full_scale: float, target: float, steps=(1.0, 2.0, 
     return out
 
 
-def _drive(settings: DemoSettings, n: int, channels, m: int, seed: int) -> np.ndarray:
+def drive(settings: DemoSettings, plant, n: int, channels, seed: int) -> np.ndarray:
+    """The excitation of the driven ``channels`` (others zero), at the plant's own rate."""
     from trussid.plid.experiment import excitation
 
-    u = np.zeros((n, m))
-    u[:, list(channels)] = excitation(settings.excitation, n, len(channels), 1600.0,
+    u = np.zeros((n, plant.ninputs))
+    u[:, list(channels)] = excitation(settings.excitation, n, len(channels), 1.0 / plant.dt,
                                       settings.excitation_rms, settings.excitation_band, seed)
     return u
 
@@ -209,7 +210,7 @@ def range_conditioners(plant, settings: DemoSettings, channels, seed: int, n_sam
     """Conditioner steps from a noise-free trial run of the experiment (its own seed)."""
     from trussid.plid.experiment import simulate
 
-    trial = _drive(settings, n_samples, channels, plant.ninputs, seed)
+    trial = drive(settings, plant, n_samples, channels, seed)
     rms = np.sqrt(np.mean(simulate(plant, trial) ** 2, axis=0) + noise_v**2)
     return conditioner_steps(rms, full_scale, settings.range_target, settings.gain_steps)
 
@@ -220,9 +221,8 @@ def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels
     """One record with the conditioners at ``steps`` (see the module docstring)."""
     from trussid.plid.experiment import run_experiment
 
-    m = plant.ninputs
     adc_fs = [full_scale / g for g in steps]
-    u = _drive(settings, n_samples, channels, m, seed)
+    u = drive(settings, plant, n_samples, channels, seed)
     exp = run_experiment(plant, n_samples, u=u, seed=seed + 1, sensor_noise_rms=noise_v,
                          dac_bits=bits, adc_bits=bits, dac_full_scale=full_scale,
                          adc_full_scale=np.asarray(adc_fs),
@@ -291,31 +291,33 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     ``benchmarks/results/plid_thesis.md``. The parameter history of the winning PLID pass is
     kept for the convergence plot.
     """
-    from trussid.plid.multipass import identify_reduced
+    from trussid.plid.estimator import PLIDWarning
+    from trussid.plid.metrics import choose_predictor
+    from trussid.plid.multipass import default_via, fit_model
 
     t0 = time.perf_counter()
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        idn = identify_reduced(u, y, order, dt, via=via, progress=progress, log=log,
-                               block_rows=None if block_rows is None else list(block_rows))
+        # The candidates' PLID passes warn when a pass loses positive definiteness; the
+        # recipe handles that (a failed candidate is dropped) and the report lists them.
+        warnings.simplefilter("ignore", PLIDWarning)
+        p = np.asarray(y).reshape(len(y), -1).shape[1]
+        idn = fit_model(u, y, order, dt, start="subspace",
+                        via=default_via(order, p) if via is None else via, progress=progress,
+                        log=log, block_rows=None if block_rows is None else list(block_rows))
     res = idn.result
     model = idn.model
     chosen = idn.info.get("chosen", "")
-    stab = {"applied": chosen.endswith("stabilised"), "reflected_poles": 0}
-    if stab["applied"]:
-        # identify_reduced reflected the candidate's unstable poles in (plid.stabilise).
-        stab["reflected_poles"] = int(np.sum(np.abs(np.linalg.eigvals(
-            np.asarray(res.model.A))) > 1))
+    stab = dict(idn.info.get("stabilised") or {"applied": False, "reflected_poles": 0})
     if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
         # No stable candidate (none was measured on the testbed): reflect the poles outside
-        # the unit circle in (plid.stabilise keeps the magnitude response) so that the model
+        # the unit circle in (plid.stability keeps the magnitude response) so that the model
         # can be simulated, and choose its predictor afresh.
         from trussid.plid.stability import stabilise
 
         st = stabilise(model)
         model = st.model
         stab = {"applied": bool(st.applied), "reflected_poles": int(np.size(st.reflected))}
-        K, K_source, kinfo = choose_predictor(model, u, y, None)
+        K, K_source, kinfo = choose_predictor(model, u, y)
     else:
         K, kinfo = idn.K, idn.info.get("predictor") or {}
         K_source = kinfo.get("chosen", "")
@@ -335,7 +337,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
 
 
 def _history_of_last_pass(idn, u, y, order, dt):
-    from trussid.plid.estimator import PLID
+    from trussid.plid.estimator import PLID, PLIDWarning
 
     last = (idn.info.get("passes") or [{}])[-1]
     est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
@@ -343,145 +345,71 @@ def _history_of_last_pass(idn, u, y, order, dt):
                prior_theta_var=last.get("prior_theta_var", 1e-4), basis=idn.basis,
                history_every=10, progress=False)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+        warnings.simplefilter("ignore", PLIDWarning)  # as in identify_model
         r = est.fit(u, y)
     return r.theta_history, r.history_index
-
-
-def choose_predictor(model, u, y, res=None):
-    """One-step predictor gain for ``model`` chosen on the identification record
-    (:func:`trussid.plid.metrics.choose_predictor`), with the estimator's own gain among the
-    candidates when ``res`` (its :class:`trussid.plid.estimator.PLIDResult`) belongs to ``model``."""
-    from trussid.plid.metrics import choose_predictor as choose
-
-    cands = {}
-    if res is not None and getattr(res, "K", None) is not None:
-        cands["estimator"] = res.K
-    return choose(model, u, y, cands)
 
 
 # --------------------------------------------------------------------------- evaluation
 
 
-def fast_frequency_response(sys, f) -> np.ndarray:
-    """Frequency response (n_freq, p, m) of a discrete model through its eigendecomposition.
+def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings: DemoSettings,
+             name: str, kind: str) -> dict:
+    """All metrics of one model, by :func:`trussid.plid.evaluate.compare` (as ``trussid
+    compare``): validation prediction and simulation, FRF errors against the true plant and
+    the H1 estimate, matched poles."""
+    from trussid.plid.evaluate import compare
 
-    ``C (zI - A)^-1 B = (C V) diag(1 / (z - lambda)) (V^-1 B)``: O(n) per frequency after one
-    eigendecomposition, where python-control solves an n x n system per frequency (10 ms
-    each for the 141-state plant on the shared machine). Falls back to
-    :func:`trussid.plid.frf.frequency_response` when the eigenvectors are ill-conditioned.
-    """
+    model = fit.model
+    val = rval.data
+    cols = list(rid.channels)
+    tcols = truth[:, cols]
+    c = compare(model, tcols, u=val.u[:, cols], y=val.y, y_clean=rval.experiment.y_clean,
+                K=fit.K, gain=fit.K_source, estimate=h1_est, band=settings.frf_band)
+    # H1 itself against the truth: how far the nonparametric estimate is to be trusted.
+    keep = (h1_est.f >= settings.frf_band[0]) & (h1_est.f <= settings.frf_band[1])
+    h1_true = _h1_error(h1_est, tcols, keep)
+    in_band = [r for r in c.poles if r["true_frequency_hz"] is not None
+               and settings.frf_band[0] <= r["true_frequency_hz"] <= settings.frf_band[1]]
+    y_rms = np.sqrt(np.mean(val.y**2, axis=0))
+    p, s, e, eh = c.prediction, c.simulation, c.frf, c.frf_vs_estimate
+    return {
+        "name": name, "kind": kind, "states": c.states, "inputs": c.inputs, "outputs": c.outputs,
+        "input_names": [val.input_names[c_] for c_ in cols], "output_names": list(val.output_names),
+        "signal_to_prediction_error_db": p.overall,
+        "signal_to_prediction_error_db_per_output": p.per_output,
+        "signal_to_prediction_error_db_mean_normalised": p.mean_normalised,
+        "prediction_skip_samples": p.skip,
+        "predictor_gain": p.gain,
+        "frf_max_error_db": e.max_db, "frf_rms_error_db": e.rms_db,
+        "frf_max_error_deg": e.max_deg, "frf_rms_error_deg": e.rms_deg,
+        "frf_error_per_channel": e.per_channel,
+        "frf_band_hz": list(settings.frf_band),
+        "frf_error_vs_h1": {"max_db": eh.max_db, "rms_db": eh.rms_db, "max_deg": eh.max_deg,
+                            "rms_deg": eh.rms_deg},
+        "h1_error_vs_true": h1_true,
+        "simulation_fit_db": s.overall,
+        "simulation_fit_db_per_output": s.per_output,
+        "seconds": fit.seconds, "method": fit.method, "unstable_poles": c.unstable_poles,
+        "stabilised": fit.info.get("stabilised", {}),
+        "poles": c.poles,
+        "poles_in_band_matched": sum(r["frequency_hz"] is not None for r in in_band),
+        "poles_in_band_true": len(in_band),
+        "validation_output_rms_v": y_rms.tolist(),
+        "identification": json_safe(fit.info),
+    }
+
+
+def _h1_error(h1_est, truth, keep) -> dict:
+    """Magnitude/phase error of the H1 estimate against the true plant at its own frequencies."""
     from trussid.plid.frf import frequency_response
 
-    A, B, C, D = (np.asarray(M, dtype=float) for M in (sys.A, sys.B, sys.C, sys.D))
-    f = np.atleast_1d(np.asarray(f, dtype=float))
-    lam, V = np.linalg.eig(A)
-    if np.linalg.cond(V) > 1e8:
-        return frequency_response(sys, f)
-    CV = C @ V
-    ViB = np.linalg.solve(V, B)
-    z = np.exp(2j * np.pi * f * sys.dt)
-    H = np.einsum("ps,fs,sm->fpm", CV, 1.0 / (z[:, None] - lam[None, :]), ViB)
-    return H + D[None, :, :]
-
-
-def _grid(truth, band, n_freq=400):
-    """Linear grid over ``band`` plus the truth's modal frequencies inside it (so that no
-    resonance peak is stepped over), as :func:`trussid.plid.metrics.frf_error` builds it."""
-    from trussid.plid.metrics import modal_parameters
-
-    lo, hi = band
-    fr, _, _ = modal_parameters(truth)
-    grid = np.linspace(max(lo, 1e-9 * hi), hi * (1 - 1e-9), n_freq)
-    return np.unique(np.concatenate([grid, fr[(fr > lo) & (fr < hi)]]))
-
-
-def _frf_db_deg_error(H, H_ref) -> dict:
+    H, H_ref = h1_est.H[keep], frequency_response(truth, h1_est.f[keep])
     with np.errstate(divide="ignore", invalid="ignore"):
         mag = 20 * np.log10(np.abs(H)) - 20 * np.log10(np.abs(H_ref))
         ph = np.degrees(np.angle(H / H_ref))
     return {"max_db": float(np.max(np.abs(mag))), "rms_db": float(np.sqrt(np.mean(mag**2))),
             "max_deg": float(np.max(np.abs(ph))), "rms_deg": float(np.sqrt(np.mean(ph**2)))}
-
-
-def prediction_burn_in(model, K, n_samples: int) -> int:
-    """Samples left out of the prediction ratio while the predictor forgets x0 = 0.
-
-    Until its slowest pole (of ``A - K C``) has decayed by 60 dB, at least 10 samples per
-    state and at most a quarter of the record. (``trussid identify`` uses 10 per state; on
-    the 0.25 %-damped testbed the predictor's slowest pole can take 1000 samples.)
-    """
-    A, C = np.asarray(model.A), np.asarray(model.C)
-    rho = float(np.max(np.abs(np.linalg.eigvals(A - np.asarray(K) @ C))))
-    k = int(np.ceil(np.log(1e-3) / np.log(rho))) if 0 < rho < 1 else n_samples
-    return int(min(max(k, 10 * A.shape[0]), n_samples // 4))
-
-
-def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings: DemoSettings,
-             name: str, kind: str) -> dict:
-    """All metrics of one model (validation prediction, FRF errors, poles, simulation fit)."""
-    with np.errstate(all="ignore"):  # an unstable identified model overflows in simulation
-        return _evaluate(fit, truth, rid, rval, h1_est, settings, name, kind)
-
-
-def _evaluate(fit, truth, rid, rval, h1_est, settings, name, kind):
-    from trussid.plid.metrics import (compare_poles, frf_error, one_step_predict, prediction_ratio_db,
-                              simulation_fit)
-
-    model = fit.model
-    val = rval.data
-    cols = list(rid.channels)
-    uval = val.u[:, cols]
-    skip = prediction_burn_in(model, fit.K, val.n_samples)
-    spe = prediction_ratio_db(model, uval, val.y, K=fit.K, skip=skip)
-    sim = simulation_fit(model, uval, rval.experiment.y_clean, skip=skip)
-    from trussid.plid.frf import FRF
-
-    tcols = truth[:, cols]
-    f = _grid(tcols, settings.frf_band)
-    fe_true = frf_error(model, FRF(f, fast_frequency_response(tcols, f)), settings.frf_band)
-    # H1 was estimated from the driven channels only: already p x len(cols).
-    fe_h1 = frf_error(model, h1_est, settings.frf_band)
-    keep = (h1_est.f >= settings.frf_band[0]) & (h1_est.f <= settings.frf_band[1])
-    h1_true = _frf_db_deg_error(h1_est.H[keep], fast_frequency_response(tcols, h1_est.f[keep]))
-    poles = compare_poles(model, tcols)
-    in_band = [r for r in poles if r["true_frequency_hz"] is not None
-               and settings.frf_band[0] <= r["true_frequency_hz"] <= settings.frf_band[1]]
-    unstable = int(np.sum(np.abs(np.linalg.eigvals(np.asarray(model.A))) >= 1))
-    y_rms = np.sqrt(np.mean(val.y**2, axis=0))
-    return {
-        "name": name, "kind": kind, "states": int(model.nstates), "inputs": int(model.ninputs),
-        "outputs": int(model.noutputs),
-        "input_names": [val.input_names[c] for c in cols], "output_names": list(val.output_names),
-        "signal_to_prediction_error_db": spe["overall"],
-        "signal_to_prediction_error_db_per_output": spe["per_channel"],
-        "signal_to_prediction_error_db_mean_normalised": spe["mean_normalised"],
-        "prediction_skip_samples": skip,
-        "predictor_gain": fit.K_source,
-        "frf_max_error_db": fe_true["max_db"], "frf_rms_error_db": fe_true["rms_db"],
-        "frf_max_error_deg": fe_true["max_deg"], "frf_rms_error_deg": fe_true["rms_deg"],
-        "frf_error_per_channel": fe_true["per_channel"],
-        "frf_band_hz": list(settings.frf_band),
-        "frf_error_vs_h1": {k: fe_h1[k] for k in ("max_db", "rms_db", "max_deg", "rms_deg")},
-        "h1_error_vs_true": {k: h1_true[k] for k in ("max_db", "rms_db", "max_deg", "rms_deg")},
-        "simulation_fit_db": sim["overall_db"],
-        "simulation_fit_db_per_output": sim["per_channel_db"],
-        "seconds": fit.seconds, "method": fit.method, "unstable_poles": unstable,
-        "stabilised": fit.info.get("stabilised", {}),
-        "poles": poles,
-        "poles_in_band_matched": sum(r["frequency_hz"] is not None for r in in_band),
-        "poles_in_band_true": len(in_band),
-        "validation_output_rms_v": y_rms.tolist(),
-        "identification": _json_info(fit.info),
-    }
-
-
-def _json_info(info):
-    try:
-        json.dumps(info, default=float)
-        return info
-    except TypeError:
-        return {k: str(v) for k, v in info.items()}
 
 
 def h1_estimate(record: Record, nperseg: int):
@@ -492,169 +420,81 @@ def h1_estimate(record: Record, nperseg: int):
     return h1(d.u[:, list(record.channels)], d.y, d.fs, nperseg=nperseg)
 
 
-# --------------------------------------------------------------------------- figures
-
-
-def bode_overlay(truth, h1_est, model, cols, output_names, input_names, band, title):
-    """One Bode overlay figure per input column: true plant, H1 estimate, identified model."""
-    from trussid.plid.frf import frequency_response
-    from trussid.plid.metrics import modal_parameters
-    from trussid.plots import bode_figure
-
-    tcols = truth[:, cols]
-    f = np.linspace(band[0], band[1], 1500)
-    fr, _, _ = modal_parameters(tcols)
-    f = np.unique(np.concatenate([f, fr[(fr > band[0]) & (fr < band[1])]]))
-    Ht = fast_frequency_response(tcols, f)
-    Hm = frequency_response(model, f)
-    keep = (h1_est.f >= band[0]) & (h1_est.f <= band[1])
-    figs = []
-    for j, name in enumerate(input_names):
-        curves = [("true plant", f, Ht), (f"H1 estimate ({h1_est.n_averages} averages)",
-                                          h1_est.f[keep], h1_est.H[keep]),
-                  ("identified model", f, Hm)]
-        figs.append(bode_figure(curves, j, name, output_names, title=f"{title}, input {name}"))
-    return figs
-
-
-def pole_zero_figure(model, truth, cols, band, title):
-    """z-plane poles and zeros near the unit circle, and a frequency-damping map.
-
-    Zeros are those of the collocated channel (input channel k to accelerometer k), the
-    transfer function whose zeros interlace its poles; poles are those of the whole model.
-    """
-    import control
-    import matplotlib.pyplot as plt
-
-    from trussid.plid.metrics import modal_parameters
-
-    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12, 5.6))
-    dt = model.dt
-    tcols = truth[:, cols]
-    zp_t = np.linalg.eigvals(np.asarray(tcols.A))
-    zp_m = np.linalg.eigvals(np.asarray(model.A))
-    j = cols[0]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        zz_t = np.asarray(control.zeros(control.ss(tcols.A, tcols.B[:, :1], tcols.C[j:j + 1],
-                                                   tcols.D[j:j + 1, :1], dt)))
-        zz_m = np.asarray(control.zeros(control.ss(model.A, model.B[:, :1], model.C[j:j + 1],
-                                                   model.D[j:j + 1, :1], dt)))
-    th = np.linspace(0, 2 * np.pi * band[1] * dt, 400)
-    ax.plot(np.cos(th), np.sin(th), color="0.6", lw=0.8, label="unit circle (0-%g Hz)" % band[1])
-    ax.plot(zp_t.real, zp_t.imag, "o", mfc="none", color="0.35", ms=8, label="true poles")
-    ax.plot(zz_t.real, zz_t.imag, "s", mfc="none", color="C2", ms=7,
-            label=f"true zeros (ch{j + 1} to acc{j + 1})")
-    ax.plot(zp_m.real, zp_m.imag, "x", color="C3", ms=7, label="identified poles")
-    ax.plot(zz_m.real, zz_m.imag, "+", color="C0", ms=9, label="identified zeros")
-    # The lightly damped modes sit on the unit circle between 0 and the band's edge: zoom.
-    a_hi = 2 * np.pi * band[1] * dt
-    ax.set_xlim(min(np.cos(a_hi), 0.2) - 0.15, 1.08)
-    ax.set_ylim(-0.1, np.sin(min(a_hi, np.pi / 2)) + 0.15)
-    ax.set_aspect("equal")
-    ax.set_xlabel("Re z")
-    ax.set_ylabel("Im z")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower left", fontsize=8)
-    ax.set_title("z-plane, upper half near the unit circle")
-    ft, zt, _ = modal_parameters(tcols)
-    fm, zm, _ = modal_parameters(model)
-    sel_t = (ft > 1) & (ft < band[1])
-    sel_m = (fm > 1) & (fm < band[1])
-    ax2.semilogy(ft[sel_t], np.maximum(zt[sel_t], 1e-5), "o", mfc="none", color="0.35", ms=8,
-                 label="true modes")
-    ax2.semilogy(fm[sel_m], np.clip(zm[sel_m], 1e-5, None), "x", color="C3", ms=7,
-                 label="identified")
-    ax2.set_xlabel("frequency [Hz]")
-    ax2.set_ylabel("damping ratio")
-    ax2.grid(True, which="both", alpha=0.3)
-    ax2.legend(loc="upper right", fontsize=8)
-    ax2.set_title("modes: frequency and damping")
-    fig.suptitle(title)
-    fig.tight_layout()
-    return fig
-
-
-def convergence_figure(fits: dict, fs: float, y_rms: dict):
-    """Innovations (moving RMS relative to the output RMS) and parameter change per sample."""
-    import matplotlib.pyplot as plt
-
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-    for k, (name, fit) in enumerate(fits.items()):
-        e = fit.innovations
-        if e.size:
-            w = 160  # 0.1 s windows
-            nwin = e.shape[0] // w
-            ms = np.mean((e[: nwin * w] ** 2).reshape(nwin, w, -1), axis=1)
-            rel = np.mean(ms / y_rms[name][None, :] ** 2, axis=1)
-            t = (np.arange(nwin) + 0.5) * w / fs
-            a1.plot(t, 10 * np.log10(rel), color=f"C{k}", label=name)
-        h, idx = fit.theta_history, fit.history_index
-        if h.shape[0] >= 2:
-            step = np.diff(idx)
-            change = np.linalg.norm(np.diff(h, axis=0), axis=1) / step
-            scale = max(np.linalg.norm(h[-1]), 1e-300)
-            a2.semilogy(idx[1:] / fs, np.maximum(change / scale, 1e-18), color=f"C{k}",
-                        lw=0.8, label=name)
-    a1.set_ylabel("innovation power / output power [dB]\n(0.1 s windows)")
-    a1.grid(True, alpha=0.3)
-    a1.legend(loc="upper right", fontsize=8)
-    a1.set_title("PLID convergence on the identification records")
-    a2.set_ylabel("|theta_k - theta_(k-10)| / 10 / |theta_final|\nper sample")
-    a2.set_xlabel("time in the record [s]")
-    a2.grid(True, which="both", alpha=0.3)
-    a2.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
-    return fig
-
-
-def trace_figure(model, K, record: Record, title: str, seconds=(2.0, 2.25)):
-    """Measured versus one-step predicted sensor signals on validation data."""
-    import matplotlib.pyplot as plt
-
-    from trussid.plid.metrics import one_step_predict
-
-    d = record.data
-    cols = list(record.channels)
-    yhat = one_step_predict(model, d.u[:, cols], d.y, K=K)
-    k0, k1 = int(seconds[0] * d.fs), int(seconds[1] * d.fs)
-    k0, k1 = min(k0, d.n_samples - 2), min(k1, d.n_samples)
-    t = np.arange(k0, k1) / d.fs
-    p = d.y.shape[1]
-    fig, axes = plt.subplots(p, 1, figsize=(10, 2.3 * p + 0.6), sharex=True, squeeze=False)
-    for i in range(p):
-        ax = axes[i, 0]
-        ax.plot(t, d.y[k0:k1, i], color="0.5", lw=2.2, label="measured (A/D)")
-        ax.plot(t, yhat[k0:k1, i], color="C0", lw=1.0, label="one-step predicted")
-        ax.plot(t, 10 * (d.y - yhat)[k0:k1, i], color="C3", lw=0.8,
-                label="prediction error x 10")
-        ax.set_ylabel(f"{d.output_names[i]} [V]")
-        ax.grid(True, alpha=0.3)
-    axes[0, 0].legend(loc="upper right", fontsize=8, ncol=3)
-    axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(title)
-    fig.tight_layout()
-    return fig
-
-
 # --------------------------------------------------------------------------- the run
 
 
-def json_safe(obj):
-    """Non-finite floats to None, numpy to Python, recursively (JSON holds neither)."""
-    if isinstance(obj, dict):
-        return {str(k): json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_safe(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return json_safe(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if math.isfinite(obj) else None
-    return obj
+def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, dict]:
+    """Each model identified from its identification record, and that record's H1 estimate."""
+    fits, h1s = {}, {}
+    for name, (rid, _) in records.items():
+        cols = list(rid.channels)
+        order = settings.mimo_order if name == "mimo" else settings.simo_order
+        d = rid.data
+        say(f"      {name}: {order} states, {len(cols)} in x {d.n_outputs} out; candidates:")
+        fits[name] = identify_model(d.u[:, cols], d.y, order, d.dt,
+                                    block_rows=settings.block_rows,
+                                    log=lambda msg: say(f"        {msg}"))
+        h1s[name] = h1_estimate(rid, settings.h1_nperseg)
+        say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
+            f"({fits[name].seconds:.1f} s)")
+    return fits, h1s
+
+
+def write_files(out: Path, records: dict, fits: dict, truth) -> dict:
+    """The records (driven channels only) and the models as data and model files."""
+    from trussid.plid.datafile import with_channels, write_data
+    from trussid.plid.modelfile import save_model
+
+    files = {"data": [], "models": []}
+    for name, (rid, rval) in records.items():
+        for rec in (rid, rval):
+            fname = f"data_{name}_{rec.purpose[:3]}.npz"
+            # Only the driven channels: the others are zero and a data file refuses them.
+            write_data(with_channels(rec.data, inputs=[rec.data.input_names[c] for c in
+                                                       rec.channels]), out / fname)
+            files["data"].append(fname)
+        fname = f"model_{name}.npz"
+        cols = list(rid.channels)
+        save_model(out / fname, fits[name].model, K=fits[name].K,
+                   input_names=[rid.data.input_names[c] for c in cols],
+                   output_names=rid.data.output_names)
+        files["models"].append(fname)
+    save_model(out / "plant_true.npz", truth, input_names=list(truth.input_labels),
+               output_names=list(truth.output_labels))
+    files["models"].append("plant_true.npz")
+    return files
+
+
+def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
+                  settings: DemoSettings) -> list:
+    """Bode overlays, pole maps, traces and the convergence plot; their file names."""
+    from trussid import plots
+
+    written = []
+
+    def save(fig, fname):
+        plots.save_figure(fig, out / fname, dpi=100)
+        written.append(fname)
+
+    for name, (rid, rval) in records.items():
+        cols = list(rid.channels)
+        in_names = [rid.data.input_names[c] for c in cols]
+        figs = plots.bode_overlay(truth[:, cols], h1s[name], fits[name].model, in_names,
+                                  rid.data.output_names, settings.plot_band, f"{name}",
+                                  excited=settings.excitation_band)
+        for fig, nm in zip(figs, in_names):
+            save(fig, f"bode_{name}_{nm}.png" if name == "mimo" else f"bode_{name}.png")
+        save(plots.pole_zero_figure(fits[name].model, truth[:, cols], settings.plot_band,
+                                    f"{name}: poles and zeros, identified vs true",
+                                    collocated=cols[0]),
+             f"poles_{name}.png")
+        save(plots.trace_figure(fits[name].model, fits[name].K, rval.data, cols,
+                                f"{name}: validation record, measured vs one-step predicted"),
+             f"trace_{name}.png")
+    y_rms = {name: np.sqrt(np.mean(rid.data.y**2, axis=0)) for name, (rid, _) in
+             records.items()}
+    save(plots.convergence_figure(fits, 1.0 / truth.dt, y_rms), "convergence.png")
+    return written
 
 
 def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
@@ -674,14 +514,6 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
     dict
         The summary (also written as ``summary.json``).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from trussid.plid.datafile import with_channels, write_data
-    from trussid.plid.modelfile import save_model
-
     settings = settings or demo_settings()
     say = progress or (lambda msg: None)
     out = Path(out)
@@ -696,7 +528,6 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
     say("[1/5] testbed -> modes -> plant ...")
     tp = build_plant(settings)
     truth = tp.discrete
-    tb = tp.tbm.testbed
     fs = 1.0 / truth.dt
     timings["plant"] = time.perf_counter() - t0
     f_modes = tp.modes.frequencies_hz
@@ -709,19 +540,10 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
     records = run_experiments(tp, settings, progress=lambda m: say("      " + m))
     timings["experiments"] = time.perf_counter() - t0
 
+    t0 = time.perf_counter()
     say("[3/5] identification (PLID) ...")
-    fits, h1s = {}, {}
-    for name, (rid, rval) in records.items():
-        cols = list(rid.channels)
-        order = settings.mimo_order if name == "mimo" else settings.simo_order
-        d = rid.data
-        say(f"      {name}: {order} states, {len(cols)} in x {d.n_outputs} out; candidates:")
-        fits[name] = identify_model(d.u[:, cols], d.y, order, d.dt,
-                                    block_rows=settings.block_rows,
-                                    log=lambda msg: say(f"        {msg}"))
-        h1s[name] = h1_estimate(rid, settings.h1_nperseg)
-        say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
-            f"({fits[name].seconds:.1f} s)")
+    fits, h1s = identify_records(records, settings, say)
+    timings["identification"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     say("[4/5] evaluation against the true plant, H1 and validation data ...")
@@ -733,54 +555,13 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
 
     t0 = time.perf_counter()
     say(f"[5/5] writing the report in {out}/ ...")
-    files = {"data": [], "models": [], "figures": []}
-    for name, (rid, rval) in records.items():
-        for rec in (rid, rval):
-            fname = f"data_{name}_{rec.purpose[:3]}.npz"
-            # Only the driven channels: the others are zero and a data file refuses them.
-            write_data(with_channels(rec.data, inputs=[rec.data.input_names[c] for c in
-                                                       rec.channels]), out / fname)
-            files["data"].append(fname)
-        fname = f"model_{name}.npz"
-        cols = list(rid.channels)
-        save_model(out / fname, fits[name].model, K=fits[name].K,
-                   input_names=[rid.data.input_names[c] for c in cols],
-                   output_names=rid.data.output_names)
-        files["models"].append(fname)
-    save_model(out / "plant_true.npz", truth, input_names=list(truth.input_labels),
-               output_names=list(truth.output_labels))
-    files["models"].append("plant_true.npz")
-
-    def save(fig, fname):
-        with atomic_path(out / fname) as tmp:
-            fig.savefig(tmp, dpi=100, format="png")
-        plt.close(fig)
-        files["figures"].append(fname)
-
-    try:
-        for name, (rid, rval) in records.items():
-            cols = list(rid.channels)
-            in_names = [rid.data.input_names[c] for c in cols]
-            figs = bode_overlay(truth, h1s[name], fits[name].model, cols, rid.data.output_names,
-                                in_names, settings.plot_band, f"{name}")
-            for fig, nm in zip(figs, in_names):
-                save(fig, f"bode_{name}_{nm}.png" if name == "mimo" else f"bode_{name}.png")
-            save(pole_zero_figure(fits[name].model, truth, cols, settings.plot_band,
-                                  f"{name}: poles and zeros, identified vs true"),
-                 f"poles_{name}.png")
-            save(trace_figure(fits[name].model, fits[name].K, rval,
-                              f"{name}: validation record, measured vs one-step predicted"),
-                 f"trace_{name}.png")
-        y_rms = {name: np.sqrt(np.mean(rid.data.y**2, axis=0)) for name, (rid, _) in
-                 records.items()}
-        save(convergence_figure(fits, fs, y_rms), "convergence.png")
-    finally:
-        plt.close("all")
+    files = write_files(out, records, fits, truth)
+    files["figures"] = write_figures(out, records, fits, h1s, truth, settings)
 
     summary = {
         "format_version": 1,
         "settings": asdict(settings),
-        "plant": plant_summary(tp, settings),
+        "plant": plant_section(tp, settings),
         "experiments": experiment_summary(records, settings),
         "models": models,
         "files": files,
@@ -797,7 +578,8 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
     return summary
 
 
-def plant_summary(tp, settings: DemoSettings) -> dict:
+def plant_section(tp, settings: DemoSettings) -> dict:
+    """The summary's plant: size, rate, modes, transducers, converters and noise."""
     tb = tp.tbm.testbed
     f = tp.modes.frequencies_hz
     acc = tb.accelerometers
@@ -848,11 +630,13 @@ def _f(x, fmt=".2f"):
 
 def report_markdown(s: dict) -> str:
     """The human-readable report (Markdown) from the summary."""
+    # Long: a report template, read best top to bottom in the order of the report.
     st, pl = s["settings"], s["plant"]
     L = ["# trussid demo: PLID on the simulated testbed", ""]
     L += [f"Run: {'quick' if st['quick'] else 'full'}; total {s['timings_s']['total']:.1f} s "
           f"(plant {s['timings_s']['plant']:.1f} s, experiments "
-          f"{s['timings_s']['experiments']:.1f} s, evaluation "
+          f"{s['timings_s']['experiments']:.1f} s, identification "
+          f"{s['timings_s']['identification']:.1f} s, evaluation "
           f"{s['timings_s']['evaluation']:.1f} s).", ""]
     L += ["## Plant", "",
           f"Default testbed, {pl['modes']} modes below Nyquist, modal damping "
@@ -946,5 +730,5 @@ def report_markdown(s: dict) -> str:
 
 
 __all__ = ["DemoSettings", "demo_settings", "build_plant", "run_experiments", "take_record",
-           "conditioner_steps", "identify_model", "choose_predictor", "evaluate",
+           "conditioner_steps", "identify_model", "evaluate",
            "run_demo", "report_markdown", "Identified", "Record"]

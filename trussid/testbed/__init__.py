@@ -20,7 +20,7 @@ _LAZY = {
     "ModeLabels": "labels", "label_testbed_modes": "labels",
     "wall_sensitivities": "sensitivity", "testbed_sensitivities": "sensitivity",
     "LabChain": "chain", "lab_plant": "chain",
-    "TestbedPlant": "plant", "testbed_plant": "plant",
+    "TestbedPlant": "plant", "testbed_plant": "plant", "plant_summary": "plant",
     "testbed_decorations": "render",
 }
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)

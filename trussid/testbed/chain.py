@@ -3,7 +3,8 @@
 Command (D/A, volts) -> smoothing filter (Butterworth) -> power amplifier (gain with a
 low-pass pole) -> PZT actuators -> structure -> sensors (volts) -> A/D, discretised by
 zero-order hold at the sample rate. Each block is optional. Filters are built with
-scipy.signal (analog Butterworth) and composed with python-control.
+scipy.signal (analog Butterworth) and connected by their signal names with
+:func:`control.interconnect` (command ``ch1`` -> electronics -> ``ch1 pzt`` -> structure).
 """
 
 from __future__ import annotations
@@ -110,12 +111,14 @@ def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
     if check_nyquist and max_mode_hz is not None and fs < 2 * max_mode_hz:
         raise ModelError(f"sample rate {fs:g} Hz is below twice the highest kept mode "
                          f"({max_mode_hz:.1f} Hz): keep fewer modes or sample faster")
-    m = structure.ninputs
+    inputs, outputs = list(structure.input_labels), list(structure.output_labels)
     elec = channel_electronics(chain)
-    bank = control.append(*([elec] * m)) if m > 1 else elec
-    cont = control.series(bank, structure)
-    cont = control.ss(cont.A, cont.B, cont.C, cont.D, inputs=list(structure.input_labels),
-                      outputs=list(structure.output_labels), name="plant")
+    blocks = [control.ss(elec.A, elec.B, elec.C, elec.D, inputs=[name], outputs=[f"{name} pzt"],
+                         name=f"electronics {name}") for name in inputs]
+    pzt = control.ss(structure.A, structure.B, structure.C, structure.D,
+                     inputs=[f"{name} pzt" for name in inputs], outputs=outputs, name="structure")
+    cont = control.interconnect([*blocks, pzt], inplist=inputs, outlist=outputs, name="plant")
+    cont = control.ss(cont.A, cont.B, cont.C, cont.D, inputs=inputs, outputs=outputs, name="plant")
     disc = control.c2d(cont, 1.0 / fs, method="zoh")
     if np.any(disc.D != 0):
         disc = _delay_direct_term(disc)

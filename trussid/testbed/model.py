@@ -312,6 +312,8 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
     -------
     TestbedModel
     """
+    # Long: the testbed is built in the order it is assembled in the lab (struts, adapters,
+    # flexures, UDF, base, bungees, sensors), each step adding to the same model and map.
     from trussid.geometry.layout import testbed_layout
     from trussid.geometry.solids import base_rigid_body, udf_rigid_body
     from trussid.geometry.spec import Testbed

@@ -16,9 +16,9 @@ import numpy as np
 from trussid.fem.actuators import Wafer, strain_actuator_loads
 from trussid.fem.assembly import assemble
 from trussid.fem.errors import ModelError
-from trussid.testbed.chain import LabChain, lab_plant
 from trussid.fem.plant import modal_plant, residual_flexibility
 from trussid.fem.sensors import Sensor
+from trussid.testbed.chain import LabChain, lab_plant
 from trussid.testbed.model import TestbedModel, build_testbed, solve_testbed_modes
 
 @dataclass
@@ -121,9 +121,22 @@ def accelerometers(tbm: TestbedModel, quantity: str = "acceleration") -> list[Se
             for k, (n, d) in enumerate(zip(mp.accelerometer_nodes, mp.accelerometer_directions))]
 
 
+def strut_sensors(tbm: TestbedModel, quantity: str = "acceleration",
+                  sensitivity: float = 1.0) -> list[Sensor]:
+    """One lateral sensor per strut, at the strut node nearest mid-span, along the strut's
+    local ``y`` (horizontal, normal to its bipod plane: the plane the anti-phase wafers on
+    the ``+-y`` faces bend). Massless (a non-contact probe, or an accelerometer light
+    enough to neglect): the model is unchanged. Output names ``strut0`` ... ``strut5``."""
+    mp = tbm.map
+    mid = int(np.argmin(np.abs(mp.strut_s - 0.5 * mp.strut_s[-1])))
+    return [Sensor(int(mp.strut_nodes[i, mid]), tuple(mp.strut_frames[i, 1]), quantity, sensitivity,
+                   name=f"strut{i}") for i in range(mp.strut_nodes.shape[0])]
+
+
 def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_rate: float | None = None,
                   quantity: str = "acceleration", chain: LabChain | None = None,
-                  static_correction: bool = False, tbm: TestbedModel | None = None) -> TestbedPlant:
+                  static_correction: bool = False, tbm: TestbedModel | None = None,
+                  arrangement: str = "extension", sensors: str = "udf") -> TestbedPlant:
     """Build the testbed plant.
 
     Parameters
@@ -144,11 +157,23 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
         Add the truncated modes' static displacement (displacement outputs; clamped base).
     tbm : TestbedModel, optional
         A model already built from ``tb``.
+    arrangement : {"extension", "bending"}
+        ``"extension"``: the lab's three channels, each driving the two struts that share a
+        top vertex in extension (inputs ``ch1..ch3``). ``"bending"``: the experiment used
+        for model updating, all six struts' wafer pairs in anti-phase from one channel
+        (input ``bend``), which makes the strut bending modes strong.
+    sensors : {"udf", "struts"}
+        ``"udf"``: the lab's accelerometers at the UDF vertices; ``"struts"``: one lateral
+        sensor per strut (:func:`strut_sensors`), whose shapes say which strut moves.
 
     Returns
     -------
     TestbedPlant
     """
+    if arrangement not in ("extension", "bending"):
+        raise ModelError(f"arrangement must be 'extension' or 'bending', got {arrangement!r}")
+    if sensors not in ("udf", "struts"):
+        raise ModelError(f"sensors must be 'udf' or 'struts', got {sensors!r}")
     if tbm is None:
         tbm = build_testbed(tb)
     tb = tbm.testbed
@@ -163,12 +188,17 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
             raise ModelError(f"n_modes must be >= 1, got {n_modes}")
         modes = solve_testbed_modes(tbm, n_modes=int(n_modes), system=system)
     keep = len(modes.omega)
-    F = channel_loads(tbm)
-    sensors = accelerometers(tbm, quantity)
+    if arrangement == "bending":
+        F = channel_loads(tbm, channels=[list(range(tbm.map.strut_nodes.shape[0]))],
+                          arrangement="bending")
+        names = ["bend"]
+    else:
+        F = channel_loads(tbm)
+        names = [f"ch{k + 1}" for k in range(F.shape[1])]
+    out = accelerometers(tbm, quantity) if sensors == "udf" else strut_sensors(tbm, quantity)
     zeta = tb.damping.modal_ratio if damping is None else damping
     resid = residual_flexibility(system, modes, F, keep) if static_correction else None
-    names = [f"ch{k + 1}" for k in range(F.shape[1])]
-    structure = modal_plant(modes, F, sensors, zeta, n_modes=keep, residual_flexibility=resid,
+    structure = modal_plant(modes, F, out, zeta, n_modes=keep, residual_flexibility=resid,
                             input_names=names)
     cont, disc = lab_plant(structure, chain, max_mode_hz=float(modes.frequencies_hz[keep - 1]))
     wafer = wafer_of(tb)
@@ -178,3 +208,33 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
 
 
 testbed_plant.__test__ = False  # a builder, not a pytest test, despite its name
+
+
+def plant_summary(plant: TestbedPlant) -> dict:
+    """Poles (frequency [Hz], damping), channel peak gains [V/V] and electrical facts.
+
+    Poles of the continuous plant, one per complex pair, from :func:`control.damp`, sorted
+    by frequency; peak gains of the discrete plant over 1 Hz to Nyquist.
+    """
+    wn, zeta, poles = control.damp(plant.continuous, doprint=False)
+    keep = np.imag(poles) >= 0
+    order = np.argsort(wn[keep], kind="stable")
+    wn, zeta = wn[keep][order], zeta[keep][order]
+    fs = plant.chain.sample_rate
+    f = np.linspace(1.0, 0.5 * fs, 4000)
+    H = plant.discrete(np.exp(2j * np.pi * f / fs))  # (p, m, nf)
+    return {
+        "inputs": list(plant.discrete.input_labels),
+        "outputs": list(plant.discrete.output_labels),
+        "states": int(plant.discrete.nstates),
+        "sample_rate_hz": fs,
+        "modes_kept": len(plant.modes.frequencies_hz),
+        "mode_frequencies_hz": [float(x) for x in plant.modes.frequencies_hz],
+        "poles": [{"frequency_hz": float(w / (2 * np.pi)), "damping": float(z)}
+                  for w, z in zip(wn, zeta)],
+        "peak_gain_v_per_v": np.abs(H).max(axis=2).tolist(),
+        "actuator_capacitance_f": plant.capacitance,
+        "actuator_capacitance_thesis_f": plant.tbm.testbed.electrics.actuator_capacitance,
+        "strictly_proper": bool(np.all(plant.discrete.D == 0)),
+        "stable": bool(np.all(np.abs(control.poles(plant.discrete)) < 1)),
+    }

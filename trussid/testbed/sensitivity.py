@@ -54,10 +54,18 @@ def eigenvalue_sensitivities(basis: WallBasis, walls, lam, shapes) -> np.ndarray
     w = basis.check_walls(walls)
     dA, dI = tube_property_derivatives(basis.r_out, w)
     X = np.asarray(shapes, float)
-    # phi^T B phi for every basis matrix B and mode at once: sum over the pattern of
-    # B_rc phi_r phi_c.
-    P = X[basis.rows] * X[basis.cols]  # (nnz, k)
-    qKA, qKI, qMA, qMI = basis.KA @ P, basis.KI @ P, basis.MA @ P, basis.MI @ P  # (6, k)
+    if basis.rows.size == basis.n**2:
+        # A dense (Ritz-reduced) basis: the pattern sum below would take products over all
+        # r^2 entries per mode (20 ms a call at r = 120); dense products take ~1 ms.
+        r = basis.n
+        qKA, qKI, qMA, qMI = (np.einsum("rk,irc,ck->ik", X, np.asarray(B).reshape(-1, r, r), X,
+                                        optimize=True)
+                              for B in (basis.KA, basis.KI, basis.MA, basis.MI))
+    else:
+        # phi^T B phi for every basis matrix B and mode at once: sum over the pattern of
+        # B_rc phi_r phi_c.
+        P = X[basis.rows] * X[basis.cols]  # (nnz, k)
+        qKA, qKI, qMA, qMI = basis.KA @ P, basis.KI @ P, basis.MA @ P, basis.MI @ P  # (6, k)
     lam = np.asarray(lam, float)[None, :]
     d = dA[:, None] * (qKA - lam * qMA) + dI[:, None] * (qKI - lam * qMI)
     return d.T

@@ -1,11 +1,12 @@
 """``trussid compare MODEL.npz REFERENCE --out DIR``: how good is an identified model.
 
 REFERENCE is either a model file (a plant: the truth) or a data file (validation data).
-Against a plant: frequency-response error over a band, pole comparison (Hungarian matching)
-and the simulation fit on a seeded white-noise validation record. Against data: one-step
-signal-to-prediction-error ratio (with the model's K), simulation fit (against the
-noise-free outputs when the file has ``y_clean``, else the measured ones) and the
-frequency-response error against the H1 estimate from the data. Writes into DIR:
+Against a plant: frequency-response error over a band, pole comparison (Hungarian matching),
+one-step prediction and simulation fit on a seeded white-noise record of the plant. Against
+data: one-step signal-to-prediction-error ratio (with the model's K), simulation fit
+(against the noise-free outputs when the file has ``y_clean``, else the measured ones) and
+the frequency-response error against the H1 estimate from the data. All by
+:func:`trussid.plid.evaluate.compare`, as in the demo's report. Writes into DIR:
 ``bode_<input>.png`` (one per input), ``poles.png`` and ``metrics.json``. Everything is
 computed before the first file is written, and each file is written atomically, so a
 mistake leaves no output behind.
@@ -13,19 +14,19 @@ mistake leaves no output behind.
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 
 import numpy as np
 
-from trussid.cli.commands.identify import json_safe, names_arg, pole_table, prediction_burn_in
 from trussid._util.errors import UserError
 from trussid._util.files import atomic_path
-from trussid.plots import bode_figure, pole_map_figure
+from trussid._util.jsonio import dumps, json_safe
+from trussid.cli.commands.identify import names_arg
 
 # plid, python-control and matplotlib are imported inside the functions: they take seconds
-# and `trussid --help` imports every command module.
+# and `trussid --help` imports every command module. The evaluation is
+# trussid.plid.evaluate.compare, as in the demo report.
 
 #: Samples of the seeded white-noise validation record used against a plant reference.
 VALIDATION_SAMPLES = 4000
@@ -93,19 +94,44 @@ def _safe_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name) or "input"
 
 
-def run(args) -> int:
-    import matplotlib
-
-    matplotlib.use("Agg")
+def _load_reference(args, model, meta, kind, ref_path):
+    """The reference plant (or None) and the record ``(u, y, y_clean, K, H1 estimate)``."""
     import control
-    import matplotlib.pyplot as plt
 
     from trussid.plid.datafile import read_data
     from trussid.plid.experiment import run_experiment
-    from trussid.plid.frf import frequency_response, h1
-    from trussid.plid.metrics import (compare_poles, frf_error, modal_parameters, prediction_ratio_db,
-                              simulation_fit)
+    from trussid.plid.frf import h1
     from trussid.plid.modelfile import load_model
+
+    fs = 1.0 / model.dt
+    if kind == "plant":
+        truth, rmeta = load_model(ref_path)
+        if not control.isdtime(truth, strict=True):
+            # A continuous plant is compared through its zero-order-hold equivalent.
+            truth = control.c2d(truth, model.dt, "zoh")
+        elif abs(truth.dt - model.dt) > 1e-9 * model.dt:
+            raise UserError(f"the model samples at {fs:g} Hz but the plant at "
+                            f"{1 / truth.dt:g} Hz")
+        _check_channels(meta, (rmeta["input_names"], rmeta["output_names"]), "plant")
+        val = run_experiment(truth, VALIDATION_SAMPLES, seed=12345)
+        return truth, (val.data.u, val.data.y, val.y_clean, meta["K"], None)
+    data = read_data(ref_path, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
+                     fs=args.fs)
+    if abs(data.fs - fs) > 1e-6 * fs:
+        raise UserError(f"the model samples at {fs:g} Hz but the data at {data.fs:g} Hz")
+    _check_channels(meta, (data.input_names, data.output_names), "data")
+    nperseg = args.nperseg or int(2 ** np.clip(np.floor(np.log2(data.n_samples / 8)), 6, 12))
+    est = h1(data.u, data.y, data.fs, nperseg=int(min(nperseg, data.n_samples)))
+    return None, (data.u, data.y, data.y_clean, meta["K"], est)
+
+
+def run(args) -> int:
+    import control
+
+    from trussid.plid.evaluate import compare, frf_grid
+    from trussid.plid.frf import frequency_response
+    from trussid.plid.modelfile import load_model
+    from trussid.plots import bode_figure, pole_map_figure, save_figure
 
     model, meta = load_model(args.model)
     if not control.isdtime(model, strict=True):
@@ -113,114 +139,78 @@ def run(args) -> int:
                         "discrete (identified) model")
     ref_path = Path(args.reference)
     kind = _reference_kind(ref_path)
-    fs = 1.0 / model.dt
-    nyq = fs / 2
+    nyq = 0.5 / model.dt
     band = tuple(args.band) if args.band else (0.0, nyq)
     if not 0 <= band[0] < band[1] <= nyq * (1 + 1e-9):
         raise UserError(f"--band {band[0]:g} {band[1]:g}: need 0 <= LO < HI <= Nyquist "
                         f"({nyq:g} Hz)")
-    logx = band[0] > 0 and band[1] / band[0] >= 100
+    truth, (u, y, y_clean, K, est) = _load_reference(args, model, meta, kind, ref_path)
+    c = compare(model, truth, u=u, y=y, y_clean=y_clean, K=K, gain="model file",
+                estimate=est, band=band)
     metrics = {"model": str(args.model), "reference": str(ref_path), "reference_kind": kind,
-               "states": model.nstates, "inputs": meta["input_names"],
-               "outputs": meta["output_names"], "fs": fs, "band": list(band)}
-    truth = None
-    if kind == "plant":
-        truth, rmeta = load_model(ref_path)
-        if not control.isdtime(truth, strict=True):
-            # A continuous plant is compared through its zero-order-hold equivalent.
-            truth = control.c2d(truth, model.dt, "zoh")
-            metrics["reference_discretised"] = "zoh"
-        elif abs(truth.dt - model.dt) > 1e-9 * model.dt:
-            raise UserError(f"the model samples at {fs:g} Hz but the plant at "
-                            f"{1 / truth.dt:g} Hz")
-        _check_channels(meta, (rmeta["input_names"], rmeta["output_names"]), "plant")
-        metrics["frf_error"] = frf_error(model, truth, band)
-        metrics["poles"] = compare_poles(model, truth)
-        val = run_experiment(truth, VALIDATION_SAMPLES, seed=12345)
-        metrics["simulation_fit"] = simulation_fit(model, val.data.u, val.y_clean)
-        metrics["simulation_fit"]["against"] = (f"noise-free plant output, {VALIDATION_SAMPLES}"
-                                                "-sample seeded white-noise record")
-        f_lo, f_hi = (band[0] if band[0] > 0 else nyq * 1e-3), band[1] * (1 - 1e-9)
-        f_plot = (np.geomspace(f_lo, f_hi, 1200) if logx else np.linspace(f_lo, f_hi, 800))
-        fr, _, _ = modal_parameters(truth)
-        f_plot = np.unique(np.concatenate([f_plot, fr[(fr > f_plot[0]) & (fr < f_plot[-1])]]))
-        H_ref = frequency_response(truth, f_plot)
-        ref_label, f_ref = "plant", f_plot
-    else:
-        data = read_data(ref_path, inputs=names_arg(args.inputs),
-                         outputs=names_arg(args.outputs), fs=args.fs)
-        if abs(data.fs - fs) > 1e-6 * fs:
-            raise UserError(f"the model samples at {fs:g} Hz but the data at {data.fs:g} Hz")
-        _check_channels(meta, (data.input_names, data.output_names), "data")
-        skip = prediction_burn_in(data.n_samples, model.nstates)
-        metrics["signal_to_prediction_error"] = prediction_ratio_db(
-            model, data.u, data.y, K=meta["K"], skip=skip)
-        metrics["signal_to_prediction_error"]["K"] = ("model file" if meta["K"] is not None
-                                                      else "steady state, default noise")
-        clean = data.y_clean is not None
-        metrics["simulation_fit"] = simulation_fit(model, data.u,
-                                                   data.y_clean if clean else data.y)
-        metrics["simulation_fit"]["against"] = ("noise-free outputs (y_clean)" if clean
-                                                else "measured (noisy) outputs")
-        nperseg = args.nperseg or int(2 ** np.clip(np.floor(np.log2(data.n_samples / 8)), 6, 12))
-        nperseg = int(min(nperseg, data.n_samples))
-        est = h1(data.u, data.y, data.fs, nperseg=nperseg)
-        metrics["frf_error_vs_h1"] = frf_error(model, est, band)
-        metrics["frf_error_vs_h1"]["n_averages"] = est.n_averages
-        metrics["poles"] = pole_table(model)
-        keep = (est.f >= band[0]) & (est.f <= band[1]) & (est.f > 0)
-        f_ref, H_ref, ref_label = est.f[keep], est.H[keep], f"H1 ({est.n_averages} averages)"
-        f_plot = f_ref
-    H_model = frequency_response(model, f_plot)
+               "input_names": meta["input_names"], "output_names": meta["output_names"],
+               "fs": 2 * nyq, "band": list(band), "stable": c.stable,
+               "record": (f"seeded white-noise record of the plant, {VALIDATION_SAMPLES} "
+                          "samples" if kind == "plant" else str(ref_path)),
+               **json_safe(c)}
 
     # ---- figures (built in memory, then written)
-    figs = {}
-    curves = [(ref_label, f_ref, H_ref), ("model", f_plot, H_model)]
-    for j, name in enumerate(meta["input_names"]):
-        figs[f"bode_{_safe_name(name)}.png"] = bode_figure(
-            curves, j, name, meta["output_names"],
-            title=f"Bode overlay, input {name}: model vs {ref_label}",
-            logx=logx)
-    poles = [("plant", truth), ("model", model)] if truth is not None else [("model", model)]
-    figs["poles.png"] = pole_map_figure(poles)
-
+    logx = band[0] > 0 and band[1] / band[0] >= 100
+    if truth is not None:
+        f_lo = band[0] if band[0] > 0 else nyq * 1e-3
+        f_ref = (np.geomspace(f_lo, band[1] * (1 - 1e-9), 1200) if logx
+                 else frf_grid(truth, (f_lo, band[1]), 800))
+        curves = [("plant", f_ref, frequency_response(truth, f_ref))]
+        f_plot = f_ref
+    else:
+        keep = (est.f >= band[0]) & (est.f <= band[1]) & (est.f > 0)
+        f_plot = est.f[keep]
+        curves = [(f"H1 ({est.n_averages} averages)", f_plot, est.H[keep])]
+    curves.append(("model", f_plot, frequency_response(model, f_plot)))
+    figs = {f"bode_{_safe_name(name)}.png": bode_figure(
+        curves, j, name, meta["output_names"],
+        title=f"Bode overlay, input {name}: model vs {curves[0][0]}", logx=logx)
+        for j, name in enumerate(meta["input_names"])}
+    figs["poles.png"] = pole_map_figure([("plant", truth), ("model", model)] if truth is not None
+                                        else [("model", model)])
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")
-    written = []
-    try:
-        for fname, fig in figs.items():
-            with atomic_path(out / fname) as tmp:
-                fig.savefig(tmp, dpi=110, format="png")
-            written.append(fname)
-        with atomic_path(out / "metrics.json") as tmp:
-            tmp.write_text(json.dumps(json_safe(metrics), indent=2) + "\n")
-        written.append("metrics.json")
-    finally:
-        plt.close("all")
+    for fname, fig in figs.items():
+        save_figure(fig, out / fname)
+    with atomic_path(out / "metrics.json") as tmp:
+        tmp.write_text(dumps(metrics))
     if args.json:
-        print(json.dumps(json_safe(metrics), indent=2))
+        print(dumps(metrics), end="")
         return 0
-    print(f"compared {args.model} ({model.nstates} states) with {kind} {ref_path}")
-    if kind == "plant":
-        e = metrics["frf_error"]
-        print(f"FRF error over {band[0]:g}-{band[1]:g} Hz: max {e['max_db']:.3f} dB, "
-              f"RMS {e['rms_db']:.3f} dB; phase max {e['max_deg']:.2f} deg, "
-              f"RMS {e['rms_deg']:.2f} deg")
+    _print_metrics(args, metrics, c, sorted([*figs, "metrics.json"]), out)
+    return 0
+
+
+def _print_metrics(args, metrics, c, written, out) -> None:
+    band = metrics["band"]
+    print(f"compared {args.model} ({c.states} states) with {metrics['reference_kind']} "
+          f"{metrics['reference']}")
+    if not c.stable:
+        print(f"the model is unstable: {c.unstable_poles} pole(s) on or outside the unit "
+              "circle; its simulation diverges")
+    if c.frf is not None:
+        e = c.frf
+        print(f"FRF error over {band[0]:g}-{band[1]:g} Hz: max {e.max_db:.3f} dB, "
+              f"RMS {e.rms_db:.3f} dB; phase max {e.max_deg:.2f} deg, RMS {e.rms_deg:.2f} deg")
         print("poles: true [Hz, damping] -> model [Hz, damping]")
-        for row in metrics["poles"]:
+        for row in c.poles:
             t = ("-" if row["true_frequency_hz"] is None
                  else f"{row['true_frequency_hz']:10.3f} {row['true_damping']:9.5f}")
             mdl = ("-" if row["frequency_hz"] is None
                    else f"{row['frequency_hz']:10.3f} {row['damping']:9.5f}")
             print(f"  {t:>21} -> {mdl}")
-    else:
-        r = metrics["signal_to_prediction_error"]
-        print(f"one-step signal-to-prediction-error ratio: {r['overall']:.2f} dB")
-        e = metrics["frf_error_vs_h1"]
-        print(f"FRF error vs H1 over {band[0]:g}-{band[1]:g} Hz: max {e['max_db']:.3f} dB, "
-              f"RMS {e['rms_db']:.3f} dB")
-    s = metrics["simulation_fit"]
-    print(f"simulation fit ({s['against']}): {s['overall_db']:.2f} dB")
+    if c.frf_vs_estimate is not None:
+        e = c.frf_vs_estimate
+        print(f"FRF error vs {e.reference} over {band[0]:g}-{band[1]:g} Hz: max "
+              f"{e.max_db:.3f} dB, RMS {e.rms_db:.3f} dB")
+    r, s = c.prediction, c.simulation
+    print(f"one-step signal-to-prediction-error ratio ({metrics['record']}; first {r.skip} "
+          f"samples left out): {r.overall:.2f} dB")
+    print(f"simulation fit (against {s.against}): {s.overall:.2f} dB")
     print(f"wrote {', '.join(written)} in {out}")
-    return 0

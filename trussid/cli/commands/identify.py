@@ -3,37 +3,22 @@
 Reads CSV/NPZ/MAT data (:mod:`trussid.plid.datafile`), runs :class:`trussid.plid.estimator.PLID` in batch,
 writes the identified discrete model with its one-step predictor gain K
 (:mod:`trussid.plid.modelfile`) and reports the identified poles and the one-step
-signal-to-prediction-error ratio of the final model on the same data (after a burn-in, see
-:func:`prediction_burn_in`; definitions in :mod:`trussid.plid.metrics`).
+signal-to-prediction-error ratio of the final model on the same data (in-sample, after the
+burn-in of :func:`trussid.plid.metrics.prediction_burn_in`; definitions in
+:mod:`trussid.plid.metrics`). The recipe is :func:`trussid.plid.multipass.fit_model`.
 """
 
 from __future__ import annotations
 
-import json
-import math
 import sys
 import time
-import warnings
 
 import numpy as np
 
+from trussid._util.jsonio import dumps
+
 # plid (and through it python-control and scipy.signal) is imported inside the functions:
 # it takes seconds, and `trussid --help` imports every command module.
-
-
-def json_safe(obj):
-    """Replace non-finite floats (which JSON cannot hold) by None, recursively."""
-    if isinstance(obj, dict):
-        return {k: json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_safe(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.ndarray):
-        return json_safe(obj.tolist())
-    return obj
 
 
 def names_arg(values):
@@ -42,12 +27,6 @@ def names_arg(values):
         return None
     out = [s.strip() for v in values for s in v.split(",") if s.strip()]
     return out or None
-
-
-def prediction_burn_in(n_samples: int, order: int) -> int:
-    """Samples left out of the prediction ratio while the predictor forgets x0 = 0:
-    10 states' worth of samples per state (10 n), at most a tenth of the record."""
-    return int(min(10 * order, n_samples // 10))
 
 
 def via_arg(text, order: int, p: int, start: str):
@@ -71,14 +50,6 @@ def via_arg(text, order: int, p: int, start: str):
         raise DataError(f"--via {text!r}: orders must exceed --order {order} and be "
                         f"multiples of the {p} outputs")
     return orders
-
-
-def pole_table(sys_) -> list[dict]:
-    """Frequency [Hz] and damping of each pole (one per complex pair) of ``sys_``."""
-    from trussid.plid.metrics import modal_parameters
-
-    f, z, _ = modal_parameters(sys_)
-    return [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(f, z)]
 
 
 def add_parser(subparsers):
@@ -131,9 +102,9 @@ def run(args) -> int:
     from trussid.plid.canonical import check_order
     from trussid.plid.datafile import check_enough_samples, read_data
     from trussid.plid.errors import DataError, IdentificationError
-    from trussid.plid.estimator import PLID, PLIDWarning
-    from trussid.plid.metrics import prediction_ratio_db, predictor_gain
+    from trussid.plid.metrics import modal_parameters, prediction_burn_in, prediction_ratio_db
     from trussid.plid.modelfile import save_model
+    from trussid.plid.multipass import fit_model
 
     out = str(args.out)
     if not out.lower().endswith(".npz"):
@@ -147,83 +118,60 @@ def run(args) -> int:
     check_enough_samples(data, n * (m + p), f"an order-{n} model with {m} inputs and "
                          f"{p} outputs")
     start = getattr(args, "start", "plain")
-    form = args.form or ("sqrt" if start == "plain" else "direct")
     via = via_arg(getattr(args, "via", None), n, p, start)
-    progress = None if sys.stderr.isatty() else False
     t0 = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", PLIDWarning)
-        if start == "plain":
-            R_used = 1e-4 if args.R is None else args.R
-            est = PLID(n, form=form, dt=data.dt, Q=args.Q, R=R_used, passes=args.passes,
-                       progress=progress)
-            res = est.fit(data.u, data.y)
-            K = res.K
-        elif via is not None:
-            from trussid.plid.multipass import identify_reduced
-
-            ident = identify_reduced(data.u, data.y, n, data.dt, via=via, start=start,
-                                     form=form, progress=progress,
-                                     log=lambda msg: print(f"  {msg}", file=sys.stderr))
-            res, K = ident.result, ident.K
-            R_used = [float(r) for r in np.atleast_1d(ident.R)]
-        else:
-            from trussid.plid.multipass import identify
-
-            ident = identify(data.u, data.y, n, data.dt, start=start, R=args.R, form=form,
-                             progress=progress)
-            res, K = ident.result, ident.K
-            R_used = [float(r) for r in np.atleast_1d(ident.R)]
+    ident = fit_model(data.u, data.y, n, data.dt, start=start, via=via, form=args.form,
+                      R=args.R, Q=args.Q, passes=args.passes,
+                      progress=None if sys.stderr.isatty() else False,
+                      log=lambda msg: print(f"  {msg}", file=sys.stderr))
     seconds = time.perf_counter() - t0
-    if not res.finite:
-        raise IdentificationError(
-            f"PLID ({form} form) diverged on {data.n_samples} samples: the estimate is "
-            "not finite; try --form sqrt, a larger --Q or --R, or another --order")
-    notes = [str(w.message) for w in caught if issubclass(w.category, PLIDWarning)]
-    # identify_reduced's winner may be a reduction of its (higher-order) PLID pass
-    model = res.model if start == "plain" else ident.model
-    if K is None:
-        K = predictor_gain(model, res.Q + model.B @ res.N @ model.B.T, res.R)
-    skip = prediction_burn_in(data.n_samples, n)
+    model, K = ident.model, ident.K
+    skip = prediction_burn_in(model, K, data.n_samples)
     ratio = prediction_ratio_db(model, data.u, data.y, K=K, skip=skip)
-    poles_z = np.linalg.eigvals(model.A)
-    unstable = int(np.sum(np.abs(poles_z) >= 1))
+    unstable = int(np.sum(np.abs(np.linalg.eigvals(model.A)) >= 1))
     save_model(out, model, K=K, input_names=data.input_names, output_names=data.output_names)
+    freq, damp, _ = modal_parameters(model)
     summary = {
         "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
         "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
-        "start": start, "form": form,
-        "passes": args.passes if start == "plain" else len(ident.info["passes"]),
-        "Q": args.Q if start == "plain" else [p["Q"] for p in ident.info["passes"]],
-        "R": R_used,
-        "seconds": seconds,
-        "K_source": (ident.info.get("predictor") or {}).get("chosen") if via is not None
-        else res.K_source,
+        "start": start, "form": ident.result.form,
+        "passes": len(ident.info["passes"]), "Q": [ps["Q"] for ps in ident.info["passes"]],
+        "R": [float(r) for r in np.atleast_1d(ident.R)],
+        "seconds": seconds, "K_source": ident.info.get("K_source"),
+        # in-sample: scored on the identification data itself
         "signal_to_prediction_error_db": ratio["overall"],
         "signal_to_prediction_error_db_per_output": ratio["per_channel"],
         "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
         "prediction_skip_samples": skip, "unstable_poles": unstable,
-        "poles": pole_table(model), "warnings": notes,
+        "poles": [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(freq, damp)],
+        "warnings": ident.info["warnings"],
     }
     if via is not None:
-        summary["via"] = list(ident.info["via"])
-        summary["chosen"] = ident.info["chosen"]
-        summary["candidates"] = ident.info["candidates"]
-    for note in notes:
+        summary.update(via=list(ident.info["via"]), chosen=ident.info["chosen"],
+                       candidates=ident.info["candidates"])
+    for note in ident.info["warnings"]:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
-        print(json.dumps(json_safe(summary), indent=2))
+        print(dumps(summary), end="")
         return 0
-    print(f"identified an order-{n} model ({m} input(s), {p} output(s)) from "
-          f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s ({form} form, "
-          f"{start} start{'; kept ' + ident.info['chosen'] if via is not None else ''})")
-    print(f"wrote {out}")
-    per = ", ".join(f"{name} {v:.2f}" for name, v in zip(data.output_names, ratio["per_channel"]))
-    print(f"one-step signal-to-prediction-error ratio: {ratio['overall']:.2f} dB ({per}; "
-          f"first {skip} samples left out)")
-    if unstable:
-        print(f"note: {unstable} pole(s) on or outside the unit circle")
-    print("poles (frequency [Hz], damping):")
-    for row in summary["poles"]:
-        print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")
+    _print_summary(summary, via is not None)
     return 0
+
+
+def _print_summary(s: dict, via: bool) -> None:
+    print(f"identified an order-{s['order']} model ({len(s['inputs'])} input(s), "
+          f"{len(s['outputs'])} output(s)) from {s['samples']} samples at {s['fs']:g} Hz in "
+          f"{s['seconds']:.2f} s ({s['form']} form, {s['start']} start"
+          f"{'; kept ' + s['chosen'] if via else ''})")
+    print(f"wrote {s['model']}")
+    per = ", ".join(f"{name} {v:.2f}" for name, v in
+                    zip(s["outputs"], s["signal_to_prediction_error_db_per_output"]))
+    print(f"one-step signal-to-prediction-error ratio on the identification data (in-sample): "
+          f"{s['signal_to_prediction_error_db']:.2f} dB ({per}; first "
+          f"{s['prediction_skip_samples']} samples left out)")
+    if s["unstable_poles"]:
+        print(f"note: the model is unstable: {s['unstable_poles']} pole(s) on or outside the "
+              "unit circle")
+    print("poles (frequency [Hz], damping):")
+    for row in s["poles"]:
+        print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")

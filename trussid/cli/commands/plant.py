@@ -8,12 +8,11 @@ and names, as every model file) and the continuous one beside it (``c_A`` ...).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-import numpy as np
 
 from trussid._util.errors import UserError
+from trussid._util.jsonio import dumps
 
 
 def add_parser(subparsers) -> None:
@@ -35,81 +34,10 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _testbed(path):
-    from trussid.geometry.params_toml import load_testbed
-    from trussid.geometry.spec import Testbed
-
-    if path is None:
-        return Testbed(), "default testbed"
-    p = Path(path)
-    if p.suffix.lower() != ".toml":
-        raise UserError(f"{p}: a plant needs the testbed's actuators and sensors; give a testbed "
-                        f"parameter file (.toml) or no MODEL for the default testbed")
-    return load_testbed(p), str(p)
-
-
-def summary(plant) -> dict:
-    """Poles (frequency, damping), channel gains and electrical facts of a TestbedPlant."""
-    import control
-
-    poles = np.linalg.eigvals(plant.continuous.A)
-    poles = poles[np.imag(poles) >= 0]
-    wn = np.abs(poles)
-    zeta = np.where(wn > 0, -np.real(poles) / np.where(wn > 0, wn, 1), 1.0)
-    order = np.argsort(wn)
-    f = np.linspace(1.0, 0.5 * plant.chain.sample_rate, 4000)
-    H = plant.discrete(np.exp(2j * np.pi * f / plant.chain.sample_rate))  # (p, m, nf)
-    peak = np.abs(H).max(axis=2)
-    return {
-        "inputs": list(plant.discrete.input_labels),
-        "outputs": list(plant.discrete.output_labels),
-        "states": int(plant.discrete.nstates),
-        "sample_rate_hz": plant.chain.sample_rate,
-        "modes_kept": len(plant.modes.frequencies_hz),
-        "mode_frequencies_hz": [float(x) for x in plant.modes.frequencies_hz],
-        "poles": [{"frequency_hz": float(wn[i] / (2 * np.pi)), "damping": float(zeta[i])} for i in order],
-        "peak_gain_v_per_v": peak.tolist(),
-        "actuator_capacitance_f": plant.capacitance,
-        "actuator_capacitance_thesis_f": plant.tbm.testbed.electrics.actuator_capacitance,
-        "strictly_proper": bool(np.all(plant.discrete.D == 0)),
-        "stable": bool(np.all(np.abs(control.poles(plant.discrete)) < 1)),
-    }
-
-
-def bode_plot(plant, out) -> None:
-    """Magnitude and phase of every channel of the discrete plant, written atomically."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from trussid._util.files import atomic_path
-
-    fs = plant.chain.sample_rate
-    f = np.geomspace(1.0, 0.5 * fs, 3000)
-    H = plant.discrete(np.exp(2j * np.pi * f / fs))
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
-    names_in, names_out = plant.discrete.input_labels, plant.discrete.output_labels
-    for i, yo in enumerate(names_out):
-        for j, ui in enumerate(names_in):
-            ax1.semilogx(f, 20 * np.log10(np.abs(H[i, j])), lw=0.9, label=f"{ui} -> {yo}")
-            ax2.semilogx(f, np.degrees(np.unwrap(np.angle(H[i, j]))), lw=0.9)
-    ax1.set_ylabel("magnitude [dB, V/V]")
-    ax2.set_ylabel("phase [deg]")
-    ax2.set_xlabel("frequency [Hz]")
-    ax1.set_title(f"Testbed plant: D/A volts to accelerometer volts, ZOH at {fs:g} Hz")
-    ax1.legend(fontsize=7, ncol=3)
-    for ax in (ax1, ax2):
-        ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    with atomic_path(out) as tmp:
-        fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-
-
 def run(args) -> int:
-    from trussid.testbed.plant import testbed_plant
+    from trussid.cli.loaders import testbed_spec
     from trussid.plid.modelfile import save_model
+    from trussid.testbed.plant import plant_summary, testbed_plant
 
     out = Path(args.out)
     if out.suffix.lower() != ".npz":
@@ -122,17 +50,26 @@ def run(args) -> int:
         raise UserError(f"--damping must be in [0, 1), got {args.damping}")
     if args.fs is not None and not args.fs > 0:
         raise UserError(f"--fs must be positive, got {args.fs}")
-    tb, source = _testbed(args.model)
+    if args.model is not None and Path(args.model).suffix.lower() != ".toml":
+        raise UserError(f"{args.model}: a plant needs the testbed's actuators and sensors; give a "
+                        "testbed parameter file (.toml) or no MODEL for the default testbed")
+    tb = testbed_spec(args.model)
+    source = "default testbed" if args.model is None else str(args.model)
     plant = testbed_plant(tb, n_modes=args.modes, damping=args.damping, sample_rate=args.fs)
     save_model(out, plant.discrete, continuous=plant.continuous,
                extra={"mode_frequencies_hz": plant.modes.frequencies_hz})
     if args.plot:
-        bode_plot(plant, args.plot)
-    s = summary(plant)
+        from trussid.plots import plant_bode_figure, save_figure
+
+        fs = plant.chain.sample_rate
+        save_figure(plant_bode_figure(
+            plant.discrete, f"Testbed plant: D/A volts to accelerometer volts, ZOH at {fs:g} Hz"),
+            args.plot, dpi=120)
+    s = plant_summary(plant)
     s["model"] = source
     s["out"] = str(out)
     if args.json:
-        print(json.dumps(s, indent=2))
+        print(dumps(s), end="")
         return 0
     print(f"plant of the {source}: {len(s['inputs'])} inputs ({', '.join(s['inputs'])}), "
           f"{len(s['outputs'])} outputs ({', '.join(s['outputs'])}), {s['states']} states, "

@@ -1,6 +1,6 @@
 """``trussid render [MODEL] --mode K --out FILE.png|FILE.gif``: draw mode shapes offscreen.
 
-MODEL is read exactly as ``trussid modes`` reads it (:func:`trussid.cli.commands.modes.load_model`).
+MODEL is read exactly as ``trussid modes`` reads it (:func:`trussid.cli.loaders.load_structure`).
 A ``.png`` gets a still of mode K (or, with ``--grid N``, modes 1..N side by side), a
 ``.gif`` one period of mode K's vibration. No display or GPU is needed (:mod:`trussid.fem.render`).
 When the loaded model carries ``decorations`` (solids such as adapters and wafers, see
@@ -50,30 +50,17 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _testbed_of(loaded):
-    """The :class:`trussid.testbed.model.TestbedModel` behind a loaded model, if it is a testbed."""
-    for candidate in (loaded, getattr(loaded, "info", None), getattr(loaded, "testbed", None)):
-        if hasattr(candidate, "map") and hasattr(candidate, "testbed") and hasattr(candidate, "model"):
-            return candidate
-    return None
-
-
 def _decorations_and_labels(loaded, modes):
-    """Solids and mode labels to draw: the loader's own when it gives them; for a testbed,
-    its solids (:func:`trussid.testbed.render.testbed_decorations`) and energy labels (:mod:`trussid.testbed.labels`)."""
+    """Solids and mode labels to draw: for a testbed, its solids
+    (:func:`trussid.testbed.render.testbed_decorations`) and energy labels
+    (:mod:`trussid.testbed.labels`); nothing for a deck."""
+    if loaded.testbed is None:
+        return (), None
+    from trussid.testbed.labels import label_testbed_modes
     from trussid.testbed.render import testbed_decorations
 
-    decorations = getattr(loaded, "decorations", None)
-    labels = getattr(loaded, "labels", None) or getattr(modes, "labels", None)
-    tbm = _testbed_of(loaded)
-    if tbm is not None:
-        if decorations is None:
-            decorations = testbed_decorations(tbm)
-        if labels is None:
-            from trussid.testbed.labels import label_testbed_modes
-
-            labels = label_testbed_modes(tbm, modes).labels
-    return decorations or (), labels
+    return (testbed_decorations(loaded.testbed),
+            label_testbed_modes(loaded.testbed, modes).labels)
 
 
 def run(args) -> int:
@@ -102,12 +89,12 @@ def run(args) -> int:
 
     from trussid.fem.assembly import assemble
     from trussid.fem.modal import solve_modes
-    from trussid.cli.commands.modes import load_model
+    from trussid.cli.loaders import load_structure
 
-    loaded = load_model(args.model)
+    loaded = load_structure(args.model)
     wanted = args.grid if args.grid is not None else args.mode
     system = assemble(loaded.model, autospc=loaded.autospc)
-    tbm = _testbed_of(loaded)
+    tbm = loaded.testbed
     if tbm is not None:
         # as `trussid modes` does: the testbed's own solver keeps its sub-hertz suspension
         # modes, which solve_modes would round to zero

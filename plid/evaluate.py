@@ -1,0 +1,206 @@
+"""The one evaluator of an identified model: ``compare(model, ...) -> Comparison``.
+
+``trussid compare``, the demo report and the benchmarks all call :func:`compare`, so a
+figure means the same thing wherever it is printed: one burn-in rule
+(:func:`trussid.plid.metrics.prediction_burn_in`), one frequency-response evaluator
+(:func:`trussid.plid.frf.frequency_response`), one frequency grid (:func:`frf_grid`), the
+definitions of :mod:`trussid.plid.metrics`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import control
+import numpy as np
+
+from trussid.plid.errors import DataError
+from trussid.plid.frf import FRF, frequency_response
+from trussid.plid.metrics import (compare_poles, default_noise_covariances, frf_error,
+                                  modal_parameters, prediction_burn_in, prediction_ratio_db,
+                                  predictor_gain, simulation_fit)
+
+
+@dataclass(frozen=True)
+class PredictionScore:
+    """One-step signal-to-prediction-error ratios [dB] on a record (:mod:`.metrics`).
+
+    Attributes
+    ----------
+    overall : float
+        The thesis's ratio: signal power over error power, all outputs pooled.
+    per_output : list of float
+    mean_normalised : float
+        ``-10 log10(mean_j MS(e_j) / MS(y_j))``, dominated by the weakest output.
+    skip : int
+        Samples left out at the start (:func:`.metrics.prediction_burn_in`).
+    gain : str
+        Where the predictor gain came from.
+    """
+
+    overall: float
+    per_output: list
+    mean_normalised: float
+    skip: int
+    gain: str
+
+
+@dataclass(frozen=True)
+class SimulationScore:
+    """Free-run simulation from x0 = 0 against a record's outputs [dB and %].
+
+    ``overall`` is the mean-normalised ratio (as :func:`.metrics.simulation_fit`);
+    ``against`` says which outputs (noise-free or measured).
+    """
+
+    overall: float
+    per_output: list
+    nrmse_percent: list
+    skip: int
+    against: str
+
+
+@dataclass(frozen=True)
+class FRFScore:
+    """Magnitude [dB] and phase [deg] error against a reference over ``band`` [Hz]."""
+
+    max_db: float
+    rms_db: float
+    max_deg: float
+    rms_deg: float
+    per_channel: dict
+    band: tuple
+    reference: str
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Everything known about how well ``model`` matches a reference plant and/or a record.
+
+    Attributes
+    ----------
+    states, inputs, outputs : int
+    unstable_poles : int
+        Poles on or outside the unit circle (an unstable model cannot be simulated).
+    prediction : PredictionScore or None
+        On the record (when one was given).
+    simulation : SimulationScore or None
+    frf : FRFScore or None
+        Against the reference plant (when one was given).
+    frf_vs_estimate : FRFScore or None
+        Against a nonparametric estimate (H1) of the record.
+    poles : list of dict
+        Identified poles matched to the reference plant's
+        (:func:`.metrics.compare_poles`), or the model's own poles when there is no plant.
+    """
+
+    states: int
+    inputs: int
+    outputs: int
+    unstable_poles: int
+    prediction: PredictionScore | None = None
+    simulation: SimulationScore | None = None
+    frf: FRFScore | None = None
+    frf_vs_estimate: FRFScore | None = None
+    poles: list = field(default_factory=list)
+
+    @property
+    def stable(self) -> bool:
+        return self.unstable_poles == 0
+
+
+def frf_grid(reference: control.StateSpace, band, n_freq: int = 400) -> np.ndarray:
+    """A linear grid over ``band`` [Hz] plus the reference's modal frequencies inside it, so
+    that no resonance peak is stepped over (as :func:`.metrics.frf_error` builds it)."""
+    lo, hi = (float(b) for b in band)
+    fr, _, _ = modal_parameters(reference)
+    grid = np.linspace(max(lo, 1e-9 * hi), hi * (1 - 1e-9), n_freq)
+    return np.unique(np.concatenate([grid, fr[(fr > lo) & (fr < hi)]]))
+
+
+def _frf_score(model, reference, band, label, n_freq) -> FRFScore:
+    if isinstance(reference, FRF):
+        e = frf_error(model, reference, band)
+    else:
+        f = frf_grid(reference, band, n_freq)
+        e = frf_error(model, FRF(f, frequency_response(reference, f)), band)
+    return FRFScore(e["max_db"], e["rms_db"], e["max_deg"], e["rms_deg"], e["per_channel"],
+                    tuple(e["band"]), label)
+
+
+def compare(model: control.StateSpace, plant: control.StateSpace | None = None, *,
+            u=None, y=None, y_clean=None, K=None, gain: str = "given", estimate: FRF | None = None,
+            band=None, n_freq: int = 400) -> Comparison:
+    """Compare an identified discrete model with a reference plant and/or a record.
+
+    Parameters
+    ----------
+    model : control.StateSpace
+        The identified model (discrete).
+    plant : control.StateSpace, optional
+        The true plant, discrete at the model's rate, with the model's inputs and outputs:
+        gives the FRF error and the matched poles.
+    u, y : array (N, m), (N, p), optional
+        A record (validation data, never the identification record for a fair score):
+        gives the one-step prediction ratio (with ``K``) and the simulation fit.
+    y_clean : array (N, p), optional
+        The record's noise-free outputs, when known (simulated data): the simulation fit is
+        taken against them, otherwise against ``y``.
+    K : array (n, p), optional
+        One-step predictor gain; default: the steady-state gain of default noise
+        covariances (:func:`.metrics.one_step_predict`).
+    gain : str
+        Where ``K`` came from, for the report.
+    estimate : FRF, optional
+        A nonparametric estimate (H1 of the record) to compare the model with.
+    band : (float, float), optional
+        FRF band [Hz]; default 0 to Nyquist.
+    n_freq : int
+        Size of the FRF grid against the plant.
+
+    Returns
+    -------
+    Comparison
+    """
+    if not control.isdtime(model, strict=True):
+        raise DataError("compare needs a discrete (identified) model, dt > 0")
+    nyq = 0.5 / model.dt
+    band = (0.0, nyq) if band is None else tuple(float(b) for b in band)
+    unstable = int(np.sum(np.abs(np.linalg.eigvals(np.asarray(model.A))) >= 1)) \
+        if model.nstates else 0
+    prediction = simulation = frf = frf_est = None
+    if u is not None and y is not None:
+        u = np.asarray(u, dtype=float).reshape(len(u), -1)
+        y = np.asarray(y, dtype=float).reshape(len(y), -1)
+        if K is None:  # the default gain, made here so that the burn-in is its own
+            K = predictor_gain(model, *default_noise_covariances(model, u, y))
+            gain = "steady state, default noise"
+        with np.errstate(all="ignore"):  # an unstable model overflows; it is reported as such
+            skip = prediction_burn_in(model, K, u.shape[0])
+            r = prediction_ratio_db(model, u, y, K=K, skip=skip)
+            prediction = PredictionScore(r["overall"], r["per_channel"], r["mean_normalised"],
+                                         skip, gain)
+            clean = y_clean is not None
+            s = simulation_fit(model, u, y_clean if clean else y, skip=skip)
+        simulation = SimulationScore(s["overall_db"], s["per_channel_db"], s["nrmse_percent"], skip,
+                                     "noise-free outputs" if clean else "measured (noisy) outputs")
+    if plant is not None:
+        if not control.isdtime(plant, strict=True):
+            plant = control.c2d(plant, model.dt, "zoh")
+        elif abs(plant.dt - model.dt) > 1e-9 * model.dt:
+            raise DataError(f"the model samples at {1 / model.dt:g} Hz but the plant at "
+                            f"{1 / plant.dt:g} Hz")
+        frf = _frf_score(model, plant, band, "plant", n_freq)
+        poles = compare_poles(model, plant)
+    else:
+        fr, z, _ = modal_parameters(model)
+        poles = [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(fr, z)]
+    if estimate is not None:
+        frf_est = _frf_score(model, estimate, band,
+                             f"H1 ({estimate.n_averages} averages)" if estimate.n_averages else "estimate",
+                             n_freq)
+    return Comparison(int(model.nstates), int(model.ninputs), int(model.noutputs), unstable,
+                      prediction, simulation, frf, frf_est, poles)
+
+
+__all__ = ["Comparison", "PredictionScore", "SimulationScore", "FRFScore", "compare", "frf_grid"]
