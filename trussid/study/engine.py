@@ -106,7 +106,7 @@ def evaluate_chunk(evaluate: str, options: dict, names: list[str], chunk: list) 
         ctx_error = None
         try:
             ctx = ev.context(options)
-        except Exception as exc:  # a bad testbed or plant fails every point with the reason
+        except Exception as exc:  # any error building the testbed or plant: every point fails with it
             ctx, ctx_error = None, exc
         for point, values in chunk:
             params = dict(zip(names, values))
@@ -117,7 +117,7 @@ def evaluate_chunk(evaluate: str, options: dict, names: list[str], chunk: list) 
                     raise ctx_error
                 row.update(ev.point(ctx, params, options))
                 row["status"], row["error"] = "ok", ""
-            except Exception as exc:
+            except Exception as exc:  # whatever a point raises (numerics, fits): a failed row
                 text = str(exc).strip().splitlines()
                 row["status"] = "failed"
                 row["error"] = f"{type(exc).__name__}: {text[0] if text else ''}"
@@ -219,7 +219,7 @@ def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None
             for fut in as_completed(list(futures)):
                 try:
                     rows = fut.result()
-                except Exception as exc:
+                except Exception as exc:  # KilledWorker, CancelledError, ...: Dask's many types
                     # Dask gave up on the chunk (its workers kept dying, KilledWorker):
                     # leave it unsaved so that a rerun retries it.
                     run.lost += futures[fut]
@@ -227,7 +227,7 @@ def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None
                     continue
                 saved(rows)
                 fut.release()
-        except BaseException:
+        except BaseException:  # Ctrl-C included: cancel the queued chunks, then re-raise
             client.cancel(list(futures))
             raise
     finally:

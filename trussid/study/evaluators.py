@@ -175,7 +175,7 @@ class ModesEvaluator(Evaluator):
         if options["testbed"]:
             try:
                 _testbed_of(options)
-            except Exception as exc:  # the testbed's own message names the parameter
+            except Exception as exc:  # ParameterError, ModelError...: the testbed's message names the item
                 raise StudyError(f"{where}: [evaluate] testbed: {exc}") from None
 
     def columns(self, options):
@@ -400,6 +400,7 @@ class IdentifyEvaluator(Evaluator):
     def point(self, ctx, params, options):
         import time
 
+        from trussid.plid.estimator import PLIDWarning
         from trussid.plid.multipass import identify, identify_reduced
         from trussid.plid.subspace import n4sid
         from trussid.study.plants import record
@@ -427,35 +428,37 @@ class IdentifyEvaluator(Evaluator):
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             # the fits' convergence warnings are about one record; the scores say how it went
-            warnings.simplefilter("ignore")
+            warnings.simplefilter("ignore", PLIDWarning)
             if p["method"] == "plid-reduced":
                 ident = identify_reduced(u, y, n, dt)
             else:
                 ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1])
-        out = _score(ident.model, case, val, time.perf_counter() - t0, opts)
+        out = _score(ident.model, case, val, time.perf_counter() - t0, opts, K=ident.K)
         out["block_rows"] = ident.info.get("subspace", {}).get("block_rows") or -1
         return out
 
 
-def _score(model, case, val, seconds, opts) -> dict:
-    from trussid.plid.metrics import compare_poles, frf_error, simulation_fit
+def _score(model, case, val, seconds, opts, K=None) -> dict:
+    """The row of one fit, from :func:`trussid.plid.evaluate.compare` (the evaluator of
+    ``trussid compare``, the demo and the benchmarks) on the validation record."""
+    from trussid.plid.evaluate import compare
 
-    e = frf_error(model, case.plant, band=tuple(opts["band"]))
-    stable = bool(np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) < 1)
-    sim = simulation_fit(model, val.data.u, val.y_clean)["overall_db"] if stable else float("nan")
+    c = compare(model, case.plant, u=val.data.u, y=val.data.y, y_clean=val.y_clean, K=K,
+                band=tuple(opts["band"]))
     lo, hi = opts["mode_band"]
     fe, de = [], []
-    for r in compare_poles(model, case.plant):
+    for r in c.poles:
         tf = r["true_frequency_hz"]
         if tf is None or r["frequency_hz"] is None or not lo < tf < hi:
             continue
         fe.append(abs(r["frequency_error_percent"]))
         de.append(abs(r["damping"] - r["true_damping"]) / r["true_damping"] * 100)
     nan = float("nan")
-    return {"max_db": float(e["max_db"]), "rms_db": float(e["rms_db"]), "sim_db": float(sim),
+    return {"max_db": float(c.frf.max_db), "rms_db": float(c.frf.rms_db),
+            "sim_db": float(c.simulation.overall) if c.stable else nan,
             "freq_err_max_pct": max(fe) if fe else nan, "damp_err_max_pct": max(de) if de else nan,
             "damp_err_median_pct": float(np.median(de)) if de else nan, "fit_seconds": float(seconds),
-            "stable": stable, "block_rows": -1}
+            "stable": bool(c.stable), "block_rows": -1}
 
 
 EVALUATORS = {e.name: e for e in (ModesEvaluator(), SensitivitiesEvaluator(), PlantEvaluator(),
