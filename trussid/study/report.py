@@ -16,6 +16,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from matplotlib.figure import Figure
 
 from trussid._util.files import atomic_path
@@ -31,7 +32,7 @@ def _varied(spec, df, numeric=True):
     for a in spec.parameters:
         if a.fixed or a.name not in df:
             continue
-        if numeric and not np.issubdtype(df[a.name].dtype, np.number):
+        if numeric and not pd.api.types.is_numeric_dtype(df[a.name]):
             continue
         out.append(a.name)
     return out
