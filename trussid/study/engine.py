@@ -198,10 +198,12 @@ def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None
         if client is None:
             if scheduler is None:
                 n = (os.cpu_count() or 1) if workers is None else int(workers)
-                # silence_logs: the nanny's warnings (a slow worker shutdown on a loaded
-                # machine) are not the user's business; errors still show.
+                # silence_logs: Dask's own log lines about its processes (a slow worker
+                # shutdown on a loaded machine; after Ctrl-C, workers losing the scheduler
+                # they were heartbeating to) are not the user's business: what matters
+                # reaches the user as failed rows, lost chunks or an exception.
                 own_cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.ERROR)
+                                           dashboard_address=None, silence_logs=logging.CRITICAL)
                 own_client = client = Client(own_cluster)
             else:
                 own_client = client = Client(scheduler)
