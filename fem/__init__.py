@@ -19,6 +19,7 @@ _LAZY = {
     "Wafer": "actuators", "strain_actuator_loads": "actuators",
     "Sensor": "sensors", "sensor_matrix": "sensors",
     "modal_plant": "plant", "residual_flexibility": "plant",
+    "IOSpec": "iospec", "read_io": "iospec", "io_loads": "iospec", "io_plant": "iospec",
     "Decoration": "render", "decorations_from_solids": "render", "mode_scene": "render",
     "render_mode": "render", "render_mode_gif": "render", "render_mode_grid": "render",
 }

@@ -187,6 +187,21 @@ def _zero(diag: np.ndarray, dofs: np.ndarray, rel: float = 1e-12) -> np.ndarray:
     return out
 
 
+def _check_unique_element_ids(model) -> None:
+    """Element ids (beams and springs share one id space, as NASTRAN's elements do) must be
+    unique: a repeated id makes every message that names an element ambiguous."""
+    b_ids = np.asarray(model.beams.ids, dtype=np.int64)
+    s_ids = np.asarray(model.springs.ids, dtype=np.int64)
+    ids = np.concatenate([b_ids, s_ids])
+    if ids.size < 2:
+        return
+    uniq, counts = np.unique(ids, return_counts=True)
+    if (counts > 1).any():
+        dup = int(uniq[counts > 1][0])
+        kinds = (["beam"] * int((b_ids == dup).sum())) + (["spring"] * int((s_ids == dup).sum()))
+        raise ModelError(f"element {dup} is defined more than once ({' and '.join(kinds)})")
+
+
 def assemble(model, autospc: bool = False) -> System:
     """Assemble and constrain a :class:`trussid.fem.Model`.
 
@@ -213,6 +228,7 @@ def assemble(model, autospc: bool = False) -> System:
     if len(node_ids) == 0:
         raise ModelError("the model has no nodes")
     model.index_of(node_ids[:1], what="the node list")  # duplicate node ids are an error
+    _check_unique_element_ids(model)
     n = model.n_dof
     Kb, Mb, db = beam_matrices(model)
     ks, ds = spring_matrices(model)

@@ -1,8 +1,8 @@
 """The testbed parameter set: every number of the reference truss, named, in SI.
 
 The reference structure is the piezo-actuated 3-D truss of Vallone (1997), "System
-identification and control of a 3D truss structure using PLID and LQG" (``shared/seeds``),
-described in ``shared/docs/testbed.md``. The thesis is in inches and pounds; every default
+identification and control of a 3D truss structure using PLID and LQG" (the thesis, not distributed),
+described in ``docs/testbed.md``. The thesis is in inches and pounds; every default
 here is converted to SI (1 in = 0.0254 m, 1 lb = 0.45359237 kg) and tagged with its source:
 
 - **thesis**: stated in the thesis text (section and figure given);

@@ -228,6 +228,54 @@ class Experiment:
         return int(sum(sum(v) for v in self.clipping.values()))
 
 
+def experiment_memory_bytes(plant: control.StateSpace, n_samples: int) -> int:
+    """Peak memory [bytes] :func:`run_experiment` needs, roughly, for ``n_samples``.
+
+    ``control.forced_response`` keeps the whole state trajectory (n_states x N doubles) and
+    its time and output arrays; the experiment holds about ten N x (m + p) arrays besides
+    (excitation, quantised and noisy copies, ``y_clean``).
+    """
+    n, m, p = plant.nstates, plant.ninputs, plant.noutputs
+    return int(8 * n_samples * (2 * n + 2 + 10 * (m + p)))
+
+
+def available_memory_bytes() -> int | None:
+    """Memory the system can still give this process [bytes] (Linux ``MemAvailable``), or
+    None when it cannot be told."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        import os
+
+        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_memory(plant: control.StateSpace, n_samples: int, available: int | None = None):
+    """Refuse (DataError) a record whose simulation would not fit in memory.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+    n_samples : int
+    available : int, optional
+        Bytes available (default :func:`available_memory_bytes`).
+    """
+    need = experiment_memory_bytes(plant, n_samples)
+    have = available_memory_bytes() if available is None else available
+    if have is not None and need > have:
+        raise DataError(
+            f"{n_samples} samples of a {plant.nstates}-state plant need about "
+            f"{need / 2**30:.3g} GiB of memory, but {have / 2**30:.3g} GiB are available; "
+            f"use at most {int(have / need * n_samples):d} samples")
+
+
 def _per_channel(value, count: int, what: str) -> np.ndarray:
     arr = np.broadcast_to(np.asarray(value, dtype=float), (count,)).copy()
     if np.any(~np.isfinite(arr)) or np.any(arr < 0):
@@ -281,11 +329,15 @@ def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: s
         raise DataError("the plant must be discrete-time (dt > 0); discretise it first")
     if snr_db is not None and sensor_noise_rms is not None:
         raise DataError("give either snr_db or sensor_noise_rms, not both")
+    from trussid.plid.stability import require_stable
+
+    require_stable(plant, "the plant", "a simulation of it diverges")
     fs = 1.0 / plant.dt
     m, p = plant.ninputs, plant.noutputs
     streams = np.random.default_rng(seed).spawn(3)
     if u is None:
         n = int(n_samples)
+        check_memory(plant, n)
         command = excitation(excitation_kind, n, m, fs, rms, band, streams[0])
     else:
         command = np.asarray(u, dtype=float)
@@ -336,4 +388,4 @@ def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: s
 
 
 __all__ = ["excitation", "quantize", "lsb", "simulate", "run_experiment", "Experiment",
-           "EXCITATIONS"]
+           "EXCITATIONS", "experiment_memory_bytes", "available_memory_bytes", "check_memory"]

@@ -112,6 +112,14 @@ def h1(u, y, fs: float, nperseg: int = 1024, window="hann", noverlap=None) -> FR
     """
     f, Suu, Suy, Syy, n_avg = _spectra(u, y, fs, nperseg, window, noverlap)
     m = Suu.shape[1]
+    if n_avg < m:
+        # S_uu is a sum of n_avg rank-one terms: singular whatever the inputs are. Say so,
+        # rather than blame the inputs (the audit's B88: 20 samples, 3 inputs).
+        n = as_2d(u, "u").shape[0]
+        raise DataError(f"{n} samples give {n_avg} Welch segment(s) of "
+                        f"{min(nperseg, n)} samples, but an H1 estimate with {m} inputs "
+                        f"needs at least {m} (many more for a usable one): give a longer "
+                        "record or shorter segments")
     # S_uy = S_uu H^T (scipy convention), hence H^T = S_uu^-1 S_uy per frequency.
     try:
         Ht = np.linalg.solve(Suu, Suy)

@@ -13,6 +13,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import warnings
+
 import control
 import numpy as np
 
@@ -123,6 +125,12 @@ def save_model(path, sys: control.StateSpace, K=None, input_names=None, output_n
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
+    # Writing an unstable model is allowed (a user may want to inspect it), but never silently.
+    from trussid.plid.stability import UnstableModelWarning, check_stability
+
+    st = check_stability(sys)
+    if st.unstable.size:
+        warnings.warn(st.message(f"model {path}"), UnstableModelWarning, stacklevel=2)
     return path
 
 
@@ -156,7 +164,9 @@ def load_model(path, which: str = "auto"):
         With the channel names as its input/output labels.
     meta : dict
         ``K`` (ndarray or None), ``dt``, ``input_names``, ``output_names``,
-        ``format_version``, ``has_continuous`` and ``extra`` (dict of other arrays).
+        ``format_version``, ``has_continuous``, ``extra`` (dict of other arrays) and
+        ``stability`` (:class:`trussid.plid.stability.Stability` of the returned model;
+        its ``message(...)`` is the one line to show a user, None when stable).
     """
     path = Path(path)
     source = str(path)
@@ -214,8 +224,13 @@ def load_model(path, which: str = "auto"):
                             f"{cC.shape[0]} outputs, the main model {m} and {p}")
         meta["K"] = None
         meta["dt"] = 0.0
-        return control.ss(cA, cB, cC, cD, inputs=in_names, outputs=out_names), meta
-    return control.ss(A, B, C, D, dt, inputs=in_names, outputs=out_names), meta
+        sys = control.ss(cA, cB, cC, cD, inputs=in_names, outputs=out_names)
+    else:
+        sys = control.ss(A, B, C, D, dt, inputs=in_names, outputs=out_names)
+    from trussid.plid.stability import check_stability
+
+    meta["stability"] = check_stability(sys)
+    return sys, meta
 
 
 __all__ = ["save_model", "load_model", "is_model_file", "FORMAT_VERSION"]

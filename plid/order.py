@@ -25,7 +25,7 @@ import numpy as np
 
 from trussid.plid.canonical import check_order
 from trussid.plid._validate import as_2d
-from trussid.plid.errors import DataError
+from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.frf import frequency_response
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.metrics import (default_noise_covariances, one_step_predict, prediction_burn_in,
@@ -44,6 +44,7 @@ class OrderRow:
     unstable_poles: int
     seconds: float
     model: object
+    error: str = ""               # why this order gave no model (then prediction_db is nan)
 
 
 def _split(u, y, holdout):
@@ -55,7 +56,7 @@ def _split(u, y, holdout):
 
 def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float = 0.3,
                 band=None, method: str = "plid", n_freq: int = 400,
-                block_rows=None) -> list[OrderRow]:
+                block_rows=None, progress: bool | None = None) -> list[OrderRow]:
     """Identify at each order and tabulate prediction error and FRF change.
 
     Parameters
@@ -75,6 +76,9 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
         N4SID prior only (quicker).
     block_rows : int or list, optional
         N4SID block rows (default: :func:`trussid.plid.subspace.subspace_prior` tries several).
+    progress : bool or None
+        A tqdm bar over the orders (None: shown for more than one order; each is a full
+        identification, seconds to minutes).
     """
     from trussid.plid.multipass import identify
     from trussid.plid.subspace import subspace_prior
@@ -98,20 +102,29 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
     lo, hi = band if band is not None else (0.01 * fs, 0.49 * fs)
     f = np.linspace(lo, hi, n_freq)
     rows, H_prev = [], None
-    for n in orders:
+    from tqdm.auto import tqdm
+
+    show = progress if progress is not None else len(orders) > 1
+    for n in tqdm(orders, disable=not show, unit="order", desc="order table"):
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             # A PLID pass that loses positive definiteness warns; the table lists its
             # model (unstable poles and all) rather than stopping.
             warnings.simplefilter("ignore", PLIDWarning)
-            if method == "plid":
-                ident = identify(u, y, n, dt, block_rows=block_rows)
-                model, K = ident.model, ident.K
-            elif method == "subspace":
-                model, _ = subspace_prior(u, y, n, dt, block_rows=block_rows)
-                K = None
-            else:
+            if method not in ("plid", "subspace"):
                 raise DataError(f"method must be 'plid' or 'subspace', got {method!r}")
+            try:
+                if method == "plid":
+                    ident = identify(u, y, n, dt, block_rows=block_rows, progress=False)
+                    model, K = ident.model, ident.K
+                else:
+                    model, _ = subspace_prior(u, y, n, dt, block_rows=block_rows)
+                    K = None
+            except IdentificationError as exc:
+                # one order that cannot be fitted must not cost the whole table
+                rows.append(OrderRow(n, float("nan"), None, 0, time.perf_counter() - t0,
+                                     None, str(exc)))
+                continue
         sec = time.perf_counter() - t0
         if K is None:
             Qd, Rd = default_noise_covariances(model, u, y)
@@ -139,6 +152,9 @@ def format_table(rows) -> str:
     """A plain-text table of :func:`order_table` rows."""
     out = ["order  prediction [dB]  FRF change [dB]  unstable  seconds"]
     for r in rows:
+        if r.error:
+            out.append(f"{r.order:5d}  failed: {r.error}")
+            continue
         ch = "-" if r.frf_change_db is None else f"{r.frf_change_db:.3f}"
         out.append(f"{r.order:5d}  {r.prediction_db:15.2f}  {ch:>15s}  {r.unstable_poles:8d}"
                    f"  {r.seconds:7.1f}")

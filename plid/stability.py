@@ -29,7 +29,109 @@ import numpy as np
 
 from trussid.plid.errors import IdentificationError
 
-__all__ = ["StabiliseResult", "stabilise"]
+__all__ = ["StabiliseResult", "stabilise", "Stability", "check_stability", "UnstableModelWarning",
+           "require_stable"]
+
+
+class UnstableModelWarning(UserWarning):
+    """Issued when an unstable model is written (:func:`trussid.plid.modelfile.save_model`)."""
+
+
+@dataclass
+class Stability:
+    """Outcome of :func:`check_stability`.
+
+    Attributes
+    ----------
+    stable : bool
+        Every pole strictly inside the unit circle (discrete) or the left half-plane
+        (continuous), by more than ``tol``.
+    unstable : ndarray (complex)
+        Poles outside: ``|z| > 1 + tol`` (discrete) or ``Re s > tol |s|`` (continuous).
+    marginal : ndarray (complex)
+        Poles on the boundary within ``tol`` (integrators, undamped modes).
+    max_radius : float
+        Largest ``|z|`` (discrete) or largest ``Re s`` [1/s] (continuous).
+    discrete : bool
+    dt : float
+        Sampling interval [s] (0 for a continuous model).
+    """
+
+    stable: bool
+    unstable: np.ndarray
+    marginal: np.ndarray
+    max_radius: float
+    discrete: bool
+    dt: float
+
+    def _describe(self, poles) -> str:
+        parts = []
+        # one entry per conjugate pair, the least stable first
+        key = np.abs(poles) if self.discrete else poles.real
+        for p in poles[np.argsort(-key)]:
+            if p.imag < -1e-12 * max(abs(p), 1.0):
+                continue
+            if self.discrete:
+                f = abs(np.angle(p)) / (2 * np.pi * self.dt)
+                parts.append(f"|z| = {abs(p):.6g} at {f:.4g} Hz")
+            else:
+                parts.append(f"Re s = {p.real:.4g} 1/s at {abs(p.imag) / (2 * np.pi):.4g} Hz")
+            if len(parts) == 3:
+                break
+        return "; ".join(parts)
+
+    def message(self, what: str = "the model") -> str | None:
+        """One line saying that (and where) ``what`` is unstable, or None when it is not."""
+        if self.unstable.size:
+            where = "outside the unit circle" if self.discrete else "in the right half-plane"
+            return (f"{what} is unstable: {self.unstable.size} pole(s) {where} "
+                    f"({self._describe(self.unstable)})")
+        if self.marginal.size:
+            where = "on the unit circle" if self.discrete else "on the imaginary axis"
+            return (f"{what} is marginally stable: {self.marginal.size} pole(s) {where} "
+                    f"({self._describe(self.marginal)})")
+        return None
+
+
+def check_stability(sys, tol: float = 1e-9) -> Stability:
+    """Stability of a state-space model from the eigenvalues of its ``A``.
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        Discrete (``dt > 0``) or continuous (``dt = 0``).
+    tol : float
+        Relative margin that counts as "on the boundary" (marginal).
+
+    Returns
+    -------
+    Stability
+    """
+    A = np.asarray(sys.A, dtype=float)
+    poles = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
+    discrete = bool(control.isdtime(sys, strict=True))
+    dt = float(sys.dt) if discrete and sys.dt is not True else 0.0
+    if discrete:
+        r = np.abs(poles)
+        bad, edge = r > 1 + tol, np.abs(r - 1) <= tol
+        worst = float(r.max(initial=0.0))
+    else:
+        scale = np.maximum(np.abs(poles), 1.0)
+        bad, edge = poles.real > tol * scale, np.abs(poles.real) <= tol * scale
+        worst = float(poles.real.max(initial=-np.inf))
+    return Stability(bool(not bad.any() and not edge.any()), poles[bad].astype(complex),
+                     poles[edge].astype(complex), worst, discrete, dt)
+
+
+def require_stable(sys, what: str = "the model", purpose: str | None = None) -> Stability:
+    """Raise :class:`IdentificationError` if ``sys`` is unstable (marginal is accepted).
+
+    ``purpose`` completes the message, e.g. ``"a simulation of it diverges"``.
+    """
+    st = check_stability(sys)
+    if st.unstable.size:
+        raise IdentificationError(st.message(what) + (f"; {purpose}" if purpose else ""))
+    return st
 
 
 @dataclass

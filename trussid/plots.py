@@ -141,8 +141,11 @@ def bode_overlay(truth, estimate, model, input_names, output_names, band, title,
     return figs
 
 
-def pole_zero_figure(model, truth, band, title, collocated: int = 0):
+def pole_zero_figure(model, truth, band, title, collocated: int = 0, excited=None):
     """z-plane poles and zeros near the unit circle, and a frequency-damping map.
+
+    The frequency-damping map runs to Nyquist, so that lightly damped poles outside the
+    band are seen too; ``excited`` (Hz) is shaded there.
 
     Zeros are those of the collocated channel (the first input to output ``collocated``),
     the transfer function whose zeros interlace its poles; poles are those of the whole
@@ -179,8 +182,12 @@ def pole_zero_figure(model, truth, band, title, collocated: int = 0):
     ax.set_title("z-plane, upper half near the unit circle")
     ft, zt, _ = modal_parameters(tcols)
     fm, zm, _ = modal_parameters(model)
-    sel_t = (ft > 1) & (ft < band[1])
-    sel_m = (fm > 1) & (fm < band[1])
+    nyq = 0.5 / dt
+    sel_t = (ft > 1) & (ft <= nyq)
+    sel_m = (fm > 1) & (fm <= nyq)
+    if excited is not None:
+        ax2.axvspan(*excited, color="C2", alpha=0.08, lw=0, label="excited band")
+    ax2.set_xlim(0, nyq)
     ax2.semilogy(ft[sel_t], np.maximum(zt[sel_t], 1e-5), "o", mfc="none", color="0.35", ms=8,
                  label="true modes")
     ax2.semilogy(fm[sel_m], np.clip(zm[sel_m], 1e-5, None), "x", color="C3", ms=7,

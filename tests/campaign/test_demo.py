@@ -279,3 +279,48 @@ def test_demo_campaign_simo_models_and_the_thesis_prediction_ratio(tmp_path, ful
     for m in simo:
         assert m["states"] == 30 and (m["inputs"], m["outputs"]) == (1, 3)
         assert m["signal_to_prediction_error_db"] >= 46.0, m["name"]
+
+
+@pytest.mark.slow
+def test_report_sections_say_what_each_model_lacks_from_the_summary(report):
+    """Issue 19, acceptance 2: every section of report.md checked against summary.json."""
+    out, summary, _ = report
+    text = (out / "report.md").read_text()
+    s = json.loads((out / "summary.json").read_text())
+    pv = s["provenance"]
+    # provenance: version, commit (or 'unknown'), seed, command line, machine, date
+    assert "## Provenance" in text
+    for value in (pv["trussid_version"], pv["commit"] or "unknown", f"seed {pv['seed']}",
+                  pv["machine"], pv["date_utc"]):
+        assert str(value) in text
+    assert pv["seed"] == s["settings"]["seed"]
+    lacks = text.split("## What the models lack, and what they add")[1].split("\n## ")[0]
+    for m in s["models"]:
+        mc = m["modes_check"]
+        block = lacks.split(f"**{m['name']}**")[1].split("\n**")[0]
+        # every true structural mode in the band is either found or listed as missing
+        assert mc["found"] + len(mc["missing"]) == mc["total"] == len(mc["true_modes_in_band"])
+        assert f"found {mc['found']} of the {mc['total']} true structural modes" in block
+        for f in mc["missing"]:
+            assert f"{f:.2f} Hz" in block
+        # filter poles are excluded from the modes: every counted one has modal damping
+        assert all(r["true_damping"] <= 0.5 for r in mc["true_modes_in_band"])
+        # spurious and lightly damped poles anywhere are tabulated
+        for e in mc["spurious"] + mc["lightly_damped"]:
+            assert f"| {e['frequency_hz']:.2f} | {100 * e['damping']:.3f} |" in block
+        # coherence of the H1 estimate, in and above the excited band
+        assert f"{m['h1_coherence']['mean_in_excited_band'][0]:.3f}" in block
+        # phase error and simulation fit in the models table, scores labelled as validation
+        line = next(l for l in text.splitlines() if l.startswith(f"| {m['name']} |"))
+        assert f"{m['frf_rms_error_deg']:.1f}" in line and f"{m['simulation_fit_db']:.2f}" in line
+    assert "SPE, validation [dB]" in text and "simulation fit, validation [dB]" in text
+    assert "identification record (in-sample)" in text
+    assert "not the headline SPE" in text  # the convergence plot says what it shows
+
+
+@pytest.mark.slow
+def test_demo_refuses_an_existing_report_directory_without_force(report, capsys):
+    out, _, _ = report
+    code = main(["demo", "--quick", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "exists; give --force to replace it" in err

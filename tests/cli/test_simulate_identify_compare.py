@@ -83,12 +83,13 @@ def test_simulate_counts_clipping_in_its_report(work, capsys):
     out = work / "clipped.csv"
     assert main(["simulate", str(work / "plant.npz"), "--out", str(out), "--samples", "500",
                  "--bits", "12", "--full-scale", "1.0", "--rms", "1.0"]) == 0
-    stdout = capsys.readouterr().out
+    captured = capsys.readouterr()
+    stdout = captured.out
     d = read_data(out)
     expected = int(np.sum(np.abs(d.u[:, 0]) >= 1.0 - 2 / 4096))  # samples at the end codes
     assert f"D/A: 12 bits, +-1 V; clipped samples: {expected} of 500" in stdout
     assert expected > 100  # a 1 V-rms Gaussian exceeds +-1 V in a third of the samples
-    assert "warning: the converters clipped" in stdout
+    assert "trussid simulate: warning: the converters clipped" in captured.err
 
 
 def test_simulate_warns_when_outputs_drown_in_quantisation_and_auto_ranges(tmp_path, capsys):
@@ -98,8 +99,8 @@ def test_simulate_warns_when_outputs_drown_in_quantisation_and_auto_ranges(tmp_p
     out = tmp_path / "d.npz"
     assert main(["simulate", str(tiny), "--out", str(out), "--samples", "300",
                  "--bits", "12"]) == 0
-    stdout = capsys.readouterr().out
-    assert "warning: output acc1 has RMS" in stdout and "under 4 A/D LSB" in stdout
+    stderr = capsys.readouterr().err
+    assert "warning: output acc1 has RMS" in stderr and "under 4 A/D LSB" in stderr
     assert not read_data(out).y.any()  # all zero: the warning was deserved
     assert main(["simulate", str(tiny), "--out", str(out), "--samples", "300", "--bits", "12",
                  "--adc-full-scale", "auto"]) == 0

@@ -235,3 +235,21 @@ def test_duplicate_node_id_is_named():
     m.add_nodes([2], [[5.0, 0, 0]])
     with pytest.raises(ModelError, match=r"node 2 is defined more than once"):
         assemble(m)
+
+
+def test_duplicate_element_ids_are_refused_at_assembly():
+    """Audit A07: add_beams([1, 1], ...) used to solve; NASTRAN refuses repeated EIDs."""
+    m = Model()
+    m.add_nodes([1, 2, 3], [[0, 0, 0], [0.5, 0, 0], [1.0, 0, 0]])
+    m.add_beams([1, 1], [[1, 2], [2, 3]], TUBE, ALUMINIUM, orient=[0, 1, 0])
+    m.fix(1)
+    with pytest.raises(ModelError, match=r"element 1 is defined more than once \(beam and beam\)"):
+        assemble(m)
+
+
+def test_a_spring_may_not_reuse_a_beam_id():
+    m = two_beams()
+    m.add_springs([12], [[3, -1]], k=[1e3] * 6)
+    with pytest.raises(ModelError, match=r"element 12 is defined more than once \(beam and "
+                                         r"spring\)"):
+        assemble(m)

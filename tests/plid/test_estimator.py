@@ -236,3 +236,17 @@ def test_further_passes_refine_a_short_record(modal_plant, simulate, rng):
     three = PLID(4, R=1e-2, passes=3).fit(u, y)
     assert _rel(three.theta, theta_true) < 0.5 * _rel(one.theta, theta_true)
     assert three.innovations.shape == (1000, 1) and three.n_samples == 1000
+
+
+def test_progress_is_shown_for_fits_expected_to_take_more_than_a_few_seconds():
+    """Audit B78: an order-36 3 x 3 fit on 8000 samples (tens of seconds) and an order-300
+    fit sat silent; the bar used to start at 20000 samples whatever the order."""
+    from trussid.plid.estimator import PLID
+
+    big = PLID(36, form="direct", dt=1 / 1600)
+    big._start(3, 3)            # 216 parameters
+    assert big._slow(8000)      # 8000 x 216^2 = 3.7e8 > PLID.PROGRESS_WORK
+    small = PLID(4, dt=1e-3)
+    small._start(1, 2)          # 12 parameters: 2000 samples take milliseconds
+    assert not small._slow(2000)
+    assert small._slow(10**6)

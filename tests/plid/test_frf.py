@@ -135,6 +135,17 @@ def test_stepped_sine_refuses_unstable_plants_and_bad_frequencies():
         stepped_sine(stable, [600.0])
 
 
+def test_h1_with_fewer_segments_than_inputs_names_the_record_length_not_the_inputs():
+    """Audit B88: 20 samples of 3 independent inputs were reported as 'linearly dependent'."""
+    from trussid.plid.errors import DataError
+
+    rng = np.random.default_rng(0)
+    u, y = rng.standard_normal((20, 3)), rng.standard_normal((20, 3))
+    with pytest.raises(DataError, match=r"20 samples give 1 Welch segment\(s\) of 20 samples, "
+                                        r"but an H1 estimate with 3 inputs needs at least 3"):
+        h1(u, y, 1000.0, nperseg=64)
+
+
 def test_frequency_response_by_eigendecomposition_matches_python_control():
     """The O(n)-per-frequency path agrees with python-control's own evaluation (an n x n
     solve per frequency), and a defective A falls back to the latter."""

@@ -213,6 +213,31 @@ def test_identify_reduced_survives_a_failed_candidate_and_names_total_failure(si
         mp.identify_reduced(u, y, 6, 1 / FS, via=(8,))
 
 
+# ------------------------------------------------ bad data named before any library sees it
+
+
+@pytest.mark.parametrize("case, match", [
+    ("short_y", "u has 2000 samples but y has 1500"),           # audit A13 (numpy's concat)
+    ("nan_y", r"y at sample 7 \(column 1\) is not finite"),  # A14 (nfoursid 'nulls')
+    ("dt_zero", "dt .* must be a positive number of seconds, got 0"),  # A18 (ZeroDivision)
+])
+@pytest.mark.parametrize("fn", ["identify", "identify_reduced"])
+def test_identify_names_bad_data_itself(case, match, fn):
+    from trussid.plid import multipass
+    from trussid.plid.errors import DataError
+
+    rng = np.random.default_rng(0)
+    u, y, dt = rng.standard_normal((2000, 1)), rng.standard_normal((2000, 2)), 1 / FS
+    if case == "short_y":
+        y = y[:1500]
+    elif case == "nan_y":
+        y[7, 1] = np.nan
+    else:
+        dt = 0
+    with pytest.raises(DataError, match=match):
+        getattr(multipass, fn)(u, y, 4, dt)
+
+
 def test_a_stabilised_candidate_counts_the_poles_reflected_in_itself():
     """Not in the higher-order PLID pass it was reduced from (review 3.7, first defect)."""
     import control

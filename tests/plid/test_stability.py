@@ -79,3 +79,66 @@ def test_mimo_keeps_order_stable_part_and_the_unstable_modes_own_magnitude():
 def test_continuous_model_is_refused():
     with pytest.raises(IdentificationError, match="discrete"):
         stabilise(control.ss([[1.0]], [[1.0]], [[1.0]], 0))
+
+
+# ------------------------------------------------------------ checking (issue 19)
+
+from trussid.plid.stability import UnstableModelWarning, check_stability, require_stable  # noqa: E402
+
+
+def _modal(radius, f_hz=50.0, dt=1e-3):
+    """One mode at ``f_hz`` with pole radius ``radius`` (discrete, 1 input, 1 output)."""
+    th = 2 * np.pi * f_hz * dt
+    A = radius * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    return control.ss(A, [[1.0], [0.0]], [[0.0, 1.0]], [[0.0]], dt)
+
+
+def test_check_stability_names_the_unstable_pole_radius_and_frequency():
+    st = check_stability(_modal(1.02))
+    assert not st.stable and st.unstable.size == 2 and st.max_radius == pytest.approx(1.02)
+    msg = st.message("model m.npz")
+    # one line; the pair is reported once, at its frequency (eigenvalue angle / (2 pi dt))
+    assert msg.startswith("model m.npz is unstable: 2 pole(s) outside the unit circle")
+    assert "|z| = 1.02 at 50 Hz" in msg and "\n" not in msg
+
+
+def test_stable_marginal_and_continuous_models_are_told_apart():
+    assert check_stability(_modal(0.99)).stable
+    assert check_stability(_modal(0.99)).message() is None
+    marginal = check_stability(_modal(1.0))
+    assert not marginal.stable and marginal.unstable.size == 0 and marginal.marginal.size == 2
+    assert "marginally stable" in marginal.message()
+    # continuous: a right-half-plane pole at s = +3 1/s
+    sc = control.ss([[3.0, 0], [0, -1.0]], [[1.0], [1.0]], [[1.0, 1.0]], [[0.0]])
+    st = check_stability(sc)
+    assert st.unstable.size == 1 and "right half-plane" in st.message()
+    assert "Re s = 3 1/s" in st.message()
+
+
+def test_require_stable_refuses_an_unstable_model_with_the_purpose():
+    require_stable(_modal(0.5))  # no error
+    with pytest.raises(IdentificationError, match="the plant is unstable.*a simulation of it "
+                                                  "diverges"):
+        require_stable(_modal(1.5), "the plant", "a simulation of it diverges")
+
+
+def test_model_files_report_stability_on_load_and_warn_on_save(tmp_path):
+    from trussid.plid.modelfile import load_model, save_model
+
+    with pytest.warns(UnstableModelWarning, match="is unstable"):
+        save_model(tmp_path / "bad.npz", _modal(1.05))
+    _, meta = load_model(tmp_path / "bad.npz")
+    assert not meta["stability"].stable and meta["stability"].unstable.size == 2
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a stable model is written without a word
+        save_model(tmp_path / "good.npz", _modal(0.9))
+    assert load_model(tmp_path / "good.npz")[1]["stability"].stable
+
+
+def test_run_experiment_refuses_an_unstable_plant():
+    from trussid.plid.experiment import run_experiment
+
+    with pytest.raises(IdentificationError, match="unstable"):
+        run_experiment(_modal(1.5), 100, seed=1)

@@ -9,7 +9,7 @@ Plain functions over plain data, in the order ``trussid demo`` runs them::
     metrics  = evaluate(fit, truth, validation, h1)      prediction, FRF, poles
     write_report(out, ...)                               report.md, PNGs, summary.json, files
 
-The experiment reproduces the thesis's campaign (``shared/docs/testbed.md``): one SIMO
+The experiment reproduces the thesis's campaign (``docs/testbed.md``): one SIMO
 model per actuator channel, from a record in which only that channel is driven (1 input,
 3 accelerometers, 30 states), and one MIMO model from a record with all three channels
 driven by independent signals (3 x 3, ``mimo_order`` states).
@@ -373,6 +373,15 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
                and settings.frf_band[0] <= r["true_frequency_hz"] <= settings.frf_band[1]]
     y_rms = np.sqrt(np.mean(val.y**2, axis=0))
     p, s, e, eh = c.prediction, c.simulation, c.frf, c.frf_vs_estimate
+    lo_x, hi_x = settings.excitation_band
+    inside = (h1_est.f >= max(lo_x, h1_est.f[1])) & (h1_est.f <= hi_x)
+    above = h1_est.f > hi_x
+    coherence = {
+        "excited_band_hz": [lo_x, hi_x],
+        "mean_in_excited_band": h1_est.coherence[inside].mean(axis=0).tolist(),
+        "mean_above_excited_band": (h1_est.coherence[above].mean(axis=0).tolist()
+                                    if above.any() else None),
+    }
     return {
         "name": name, "kind": kind, "states": c.states, "inputs": c.inputs, "outputs": c.outputs,
         "input_names": [val.input_names[c_] for c_ in cols], "output_names": list(val.output_names),
@@ -396,8 +405,132 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
         "poles_in_band_matched": sum(r["frequency_hz"] is not None for r in in_band),
         "poles_in_band_true": len(in_band),
         "validation_output_rms_v": y_rms.tolist(),
+        "h1_coherence": coherence,
+        "modes_check": mode_audit(c.poles, settings.frf_band, settings.excitation_band),
         "identification": json_safe(fit.info),
     }
+
+
+#: A true or identified pole with a damping ratio above this is not a structural mode (the
+#: plant's filter and amplifier poles are real: damping 1).
+MODE_DAMPING_MAX = 0.5
+#: Relative frequency error within which an identified mode counts as the true one found.
+FOUND_TOLERANCE = 0.05
+#: Identified modes below this damping ratio are listed wherever they are (a controller
+#: designed on the model would respect them).
+LIGHT_DAMPING = 0.01
+
+
+def mode_audit(poles: list, band, excited) -> dict:
+    """What a model lacks and what it adds, from matched poles (:func:`plid.metrics.compare_poles`).
+
+    Parameters
+    ----------
+    poles : list of dict
+        ``true_frequency_hz``, ``true_damping``, ``frequency_hz``, ``damping`` per row (true
+        pole with its match, or an unmatched identified pole with the true fields None).
+    band : (float, float)
+        The band [Hz] in which every true mode should be found (the FRF band).
+    excited : (float, float)
+        The excitation band [Hz] (identified poles outside it are flagged).
+
+    Returns
+    -------
+    dict
+        ``true_modes_in_band``: every true structural mode (damping <= MODE_DAMPING_MAX) in
+        ``band`` with ``found`` (matched within FOUND_TOLERANCE in frequency) and the
+        identified frequency and damping; ``missing``: the frequencies not found;
+        ``filter_poles_in_band``: true poles that are not modes (excluded from the count);
+        ``spurious``: identified modes with no true structural mode within
+        FOUND_TOLERANCE, anywhere; ``lightly_damped``: identified modes with damping below
+        LIGHT_DAMPING anywhere, each with ``spurious`` and ``in_excited_band``.
+    """
+    lo, hi = band
+    true_modes = sorted({(r["true_frequency_hz"], r["true_damping"]) for r in poles
+                         if r["true_frequency_hz"] is not None
+                         and r["true_damping"] <= MODE_DAMPING_MAX})
+    f_true = np.array([f for f, _ in true_modes]) if true_modes else np.zeros(0)
+    rows, filters = [], 0
+    for r in poles:
+        ft = r["true_frequency_hz"]
+        if ft is None or not lo <= ft <= hi:
+            continue
+        if r["true_damping"] > MODE_DAMPING_MAX:
+            filters += 1
+            continue
+        fi = r["frequency_hz"]
+        found = (fi is not None and r["damping"] <= MODE_DAMPING_MAX
+                 and abs(fi - ft) <= FOUND_TOLERANCE * ft)
+        rows.append({"true_frequency_hz": ft, "true_damping": r["true_damping"],
+                     "found": bool(found), "frequency_hz": fi if found else None,
+                     "damping": r["damping"] if found else None})
+
+    def nearest(f):
+        if not f_true.size:
+            return None, None
+        k = int(np.argmin(np.abs(f_true - f)))
+        return float(f_true[k]), float(abs(f_true[k] - f) / max(f_true[k], 1e-12))
+
+    identified, spurious, light = [], [], []
+    for r in poles:
+        fi = r["frequency_hz"]
+        if fi is None or r["damping"] > MODE_DAMPING_MAX:
+            continue
+        near, rel = nearest(fi)
+        entry = {"frequency_hz": fi, "damping": r["damping"], "nearest_true_hz": near,
+                 "spurious": bool(near is None or rel > FOUND_TOLERANCE),
+                 "in_excited_band": bool(excited[0] <= fi <= excited[1])}
+        identified.append(entry)
+        if entry["spurious"]:
+            spurious.append(entry)
+        if r["damping"] < LIGHT_DAMPING:
+            light.append(entry)
+    key = lambda e: e["frequency_hz"]  # noqa: E731
+    return {"band_hz": [lo, hi], "excited_band_hz": list(excited),
+            "true_modes_in_band": rows,
+            "found": sum(r["found"] for r in rows), "total": len(rows),
+            "missing": [r["true_frequency_hz"] for r in rows if not r["found"]],
+            "filter_poles_in_band": filters,
+            "spurious": sorted(spurious, key=key), "lightly_damped": sorted(light, key=key),
+            "rules": {"structural_damping_max": MODE_DAMPING_MAX,
+                      "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING}}
+
+
+def provenance(settings: "DemoSettings", command: str | None = None) -> dict:
+    """Who made the report, how and where: trussid version, source commit (when the package
+    runs from a git checkout), seed, command line, machine, load and date (UTC)."""
+    import os
+    import platform
+    import subprocess
+
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        trussid_version = version("trussid")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        trussid_version = None
+    commit = None
+    src = Path(__file__).resolve().parents[1]
+    try:  # a checkout knows its commit; an installed wheel does not (then None)
+        res = subprocess.run(["git", "-C", str(src), "rev-parse", "HEAD"], capture_output=True,
+                             text=True, timeout=5)
+        if res.returncode == 0:
+            commit = res.stdout.strip()
+            dirty = subprocess.run(["git", "-C", str(src), "status", "--porcelain",
+                                    "--untracked-files=no"], capture_output=True, text=True,
+                                   timeout=5).stdout.strip()
+            commit += " (with uncommitted changes)" if dirty else ""
+    except (OSError, subprocess.SubprocessError):
+        pass
+    try:
+        load = list(os.getloadavg())
+    except OSError:
+        load = None
+    return {"trussid_version": trussid_version, "commit": commit, "seed": settings.seed,
+            "command": command, "machine": platform.node(), "platform": platform.platform(),
+            "cpus": os.cpu_count(), "python": platform.python_version(),
+            "load_average_start": load,
+            "date_utc": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}
 
 
 def _h1_error(h1_est, truth, keep) -> dict:
@@ -486,7 +619,7 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
             save(fig, f"bode_{name}_{nm}.png" if name == "mimo" else f"bode_{name}.png")
         save(plots.pole_zero_figure(fits[name].model, truth[:, cols], settings.plot_band,
                                     f"{name}: poles and zeros, identified vs true",
-                                    collocated=cols[0]),
+                                    collocated=cols[0], excited=settings.excitation_band),
              f"poles_{name}.png")
         save(plots.trace_figure(fits[name].model, fits[name].K, rval.data, cols,
                                 f"{name}: validation record, measured vs one-step predicted"),
@@ -497,30 +630,46 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
     return written
 
 
-def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
+def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
+             force: bool = False, command: str | None = None) -> dict:
     """Run the whole campaign and write the report directory ``out``.
 
     Parameters
     ----------
     out : path-like
-        Report directory (created; files in it are replaced atomically).
+        Report directory. It is written as a whole (into a temporary sibling, renamed at
+        the end: :func:`trussid._util.files.atomic_directory`), so an interruption leaves
+        the previous ``out`` untouched, or none. Its parent must exist.
     settings : DemoSettings, optional
         Default :func:`demo_settings` ``()``.
     progress : callable or None
         Called with one line per stage.
+    force : bool
+        Replace an existing ``out``; without it an existing ``out`` is refused at once
+        (before any computation).
+    command : str, optional
+        The command line that asked for the report (recorded in its provenance).
 
     Returns
     -------
     dict
         The summary (also written as ``summary.json``).
     """
+    from trussid._util.errors import UserError
+    from trussid._util.files import atomic_directory
+
     settings = settings or demo_settings()
     say = progress or (lambda msg: None)
     out = Path(out)
     if out.exists() and not out.is_dir():
-        from trussid._util.errors import UserError
-
         raise UserError(f"--out {out} exists and is not a directory")
+    if out.exists() and not force:
+        raise UserError(f"--out {out} exists; give --force to replace it (it is replaced "
+                        "only once the new report is complete)")
+    if not out.resolve().parent.is_dir():
+        raise UserError(f"--out {out}: the directory {out.resolve().parent} does not exist "
+                        "(it is not created for you)")
+    prov = provenance(settings, command)
     t_start = time.perf_counter()
     timings = {}
 
@@ -555,11 +704,21 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
 
     t0 = time.perf_counter()
     say(f"[5/5] writing the report in {out}/ ...")
+    with atomic_directory(out, force=force) as tmp:
+        summary = _write_report(tmp, tp, records, fits, h1s, truth, settings, models, timings,
+                                prov, t0, t_start)
+    say(f"      done in {timings['total']:.1f} s")
+    return summary
+
+
+def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings, prov, t0,
+                  t_start) -> dict:
+    """Every file of the report into ``out`` (the temporary directory); the summary."""
     files = write_files(out, records, fits, truth)
     files["figures"] = write_figures(out, records, fits, h1s, truth, settings)
-
     summary = {
         "format_version": 1,
+        "provenance": prov,
         "settings": asdict(settings),
         "plant": plant_section(tp, settings),
         "experiments": experiment_summary(records, settings),
@@ -574,7 +733,6 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print) -> dict:
         tmp.write_text(json.dumps(summary, indent=2) + "\n")
     with atomic_path(out / "report.md") as tmp:
         tmp.write_text(report_markdown(summary))
-    say(f"      done in {timings['total']:.1f} s")
     return summary
 
 
@@ -633,6 +791,7 @@ def report_markdown(s: dict) -> str:
     # Long: a report template, read best top to bottom in the order of the report.
     st, pl = s["settings"], s["plant"]
     L = ["# trussid demo: PLID on the simulated testbed", ""]
+    L += provenance_lines(s.get("provenance") or {})
     L += [f"Run: {'quick' if st['quick'] else 'full'}; total {s['timings_s']['total']:.1f} s "
           f"(plant {s['timings_s']['plant']:.1f} s, experiments "
           f"{s['timings_s']['experiments']:.1f} s, identification "
@@ -674,19 +833,30 @@ def report_markdown(s: dict) -> str:
           "weakest output: in a SIMO record the two accelerometers away from the driven "
           "vertex are limited by sensor noise to 38-50 dB). FRF errors are against the "
           f"true plant over {st['frf_band'][0]:g}-{st['frf_band'][1]:g} Hz.", "",
-          "| model | kind | states | in x out | SPE [dB] | SPE per output [dB] | "
-          "SPE mean-normalised [dB] | FRF max [dB] | FRF RMS [dB] | H1 vs true RMS [dB] | "
-          "modes matched (in band) | seconds |",
-          "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+          "Every score in this table is on the **validation** record (a separate record "
+          "with its own seed), never on the record the model was fitted to; the simulation "
+          "fit runs the model from the inputs alone (no measured outputs fed back), "
+          "against the noise-free outputs. Phase errors are against the true plant, "
+          "magnitude and phase separately. \"Modes found\" counts the true structural "
+          "modes in the FRF band (the filter poles excluded) matched within "
+          "5 % in frequency; the next section lists the rest.", "",
+          "| model | kind | states | in x out | SPE, validation [dB] | SPE per output [dB] | "
+          "SPE mean-normalised [dB] | simulation fit, validation [dB] | FRF max / RMS [dB] | "
+          "phase max / RMS [deg] | H1 vs true RMS [dB] | modes found (in band) | seconds |",
+          "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for m in s["models"]:
+        mc = m.get("modes_check") or {}
         L.append(f"| {m['name']} | {m['kind']} | {m['states']} | {m['inputs']} x "
                  f"{m['outputs']} | {_f(m['signal_to_prediction_error_db'])} | "
                  f"{', '.join(_f(v, '.1f') for v in m['signal_to_prediction_error_db_per_output'])}"
                  f" | {_f(m['signal_to_prediction_error_db_mean_normalised'])} | "
-                 f"{_f(m['frf_max_error_db'])} | {_f(m['frf_rms_error_db'])} | "
+                 f"{_f(m.get('simulation_fit_db'))} | "
+                 f"{_f(m['frf_max_error_db'])} / {_f(m['frf_rms_error_db'])} | "
+                 f"{_f(m.get('frf_max_error_deg'), '.1f')} / {_f(m.get('frf_rms_error_deg'), '.1f')} | "
                  f"{_f(m['h1_error_vs_true']['rms_db'])} | "
-                 f"{m['poles_in_band_matched']} / {m['poles_in_band_true']} | "
+                 f"{mc.get('found', '-')} / {mc.get('total', '-')} | "
                  f"{m['seconds']:.1f} |")
+    L += lacks_lines(s)
     L += ["", "## How each model was identified", "",
           "`plid.multipass.identify_reduced`: PLID at the model's order and at higher "
           "orders reduced to it (input-weighted balanced truncation, then one PLID pass); "
@@ -697,7 +867,7 @@ def report_markdown(s: dict) -> str:
         ident = m.get("identification") or {}
         rows = ident.get("candidates") or []
         L += [f"**{m['name']}**: {m.get('method', '')}", "",
-              "| candidate | one-step, identification record [dB] | seconds |",
+              "| candidate | one-step, identification record (in-sample) [dB] | seconds |",
               "| --- | --- | --- |"]
         for r in rows:
             mark = " (kept)" if r.get("label") == ident.get("chosen") else ""
@@ -722,13 +892,83 @@ def report_markdown(s: dict) -> str:
                 L.append(f"| {r['true_frequency_hz']:.2f} | {r['true_damping']:.5f} | "
                          f"{_f(r['frequency_hz'])} | {_f(r['damping'], '.5f')} |")
         L.append("")
-    L += ["### Convergence", "", "![convergence](convergence.png)", ""]
+    L += ["### Convergence", "", "![convergence](convergence.png)", "",
+          "The top panel is the *mean-normalised* one-step ratio of each model's last PLID "
+          "pass on its identification record (in-sample), not the headline SPE of the table "
+          "above.", ""]
     L += ["## Files", "", "Data: " + ", ".join(s["files"]["data"]), "",
           "Models: " + ", ".join(s["files"]["models"]), "",
           "All metrics: `summary.json`.", ""]
     return "\n".join(L)
 
 
+def provenance_lines(pv: dict) -> list:
+    """The report's provenance paragraph."""
+    if not pv:
+        return []
+    load = pv.get("load_average_start")
+    return ["## Provenance", "",
+            f"trussid {pv.get('trussid_version')}, commit {pv.get('commit') or 'unknown'}; "
+            f"seed {pv.get('seed')}; command `{pv.get('command') or '(from Python)'}`; "
+            f"machine {pv.get('machine')} ({pv.get('platform')}, {pv.get('cpus')} CPUs, Python "
+            f"{pv.get('python')}), load average "
+            f"{'-' if not load else ', '.join(f'{v:.2f}' for v in load)} at the start; "
+            f"{pv.get('date_utc')}. The seconds below depend on that load.", ""]
+
+
+def lacks_lines(s: dict) -> list:
+    """What each model lacks (true modes missing) and adds (spurious or lightly damped
+    poles anywhere, reflected poles), and the H1 coherence."""
+    # Long: one report section, read top to bottom.
+    L = ["", "## What the models lack, and what they add", ""]
+    for m in s["models"]:
+        mc = m.get("modes_check")
+        if not mc:
+            continue
+        lo, hi = mc["band_hz"]
+        xlo, xhi = mc["excited_band_hz"]
+        L += [f"**{m['name']}**: found {mc['found']} of the {mc['total']} true structural "
+              f"modes in {lo:g}-{hi:g} Hz ({mc['filter_poles_in_band']} filter/amplifier "
+              "poles in the band are not counted)."]
+        if mc["missing"]:
+            L += [f"Missing ({len(mc['missing'])}): "
+                  + ", ".join(f"{f:.2f} Hz" for f in mc["missing"]) + "."]
+        else:
+            L += ["Missing: none."]
+        st = m.get("stabilised") or {}
+        if st.get("applied"):
+            L += [f"Stabilised: {st.get('reflected_poles', 0)} unstable pole(s) reflected into "
+                  "the unit circle (magnitude kept, phase changed)."]
+        if m.get("unstable_poles"):
+            L += [f"**Unstable**: {m['unstable_poles']} pole(s) on or outside the unit circle."]
+        rows = {(e["frequency_hz"], e["damping"]): e for e in mc["spurious"] + mc["lightly_damped"]}
+        L += [""]
+        if rows:
+            L += ["Spurious modes (no true mode within 5 %) and lightly damped modes "
+                  f"(damping under {100 * mc['rules']['light_damping_below']:g} %), anywhere "
+                  f"up to Nyquist (excited band {xlo:g}-{xhi:g} Hz):", "",
+                  "| identified f [Hz] | damping [%] | nearest true mode [Hz] | spurious | "
+                  "in excited band |", "| --- | --- | --- | --- | --- |"]
+            for (f, z), e in sorted(rows.items()):
+                near = "-" if e["nearest_true_hz"] is None else f"{e['nearest_true_hz']:.2f}"
+                L.append(f"| {f:.2f} | {100 * z:.3f} | {near} | "
+                         f"{'yes' if e['spurious'] else 'no'} | "
+                         f"{'yes' if e['in_excited_band'] else '**no**'} |")
+        else:
+            L += ["No spurious or lightly damped identified modes."]
+        coh = m.get("h1_coherence")
+        if coh:
+            above = coh.get("mean_above_excited_band")
+            L += ["", f"H1 multiple coherence, mean per output: "
+                  + ", ".join(f"{v:.3f}" for v in coh["mean_in_excited_band"])
+                  + f" in the excited band {xlo:g}-{xhi:g} Hz"
+                  + ("; " + ", ".join(f"{v:.3f}" for v in above)
+                     + " above it, where the H1 estimate is noise (shaded band in the Bode "
+                       "plots)" if above else "") + "."]
+        L += [""]
+    return L
+
+
 __all__ = ["DemoSettings", "demo_settings", "build_plant", "run_experiments", "take_record",
            "conditioner_steps", "identify_model", "evaluate",
-           "run_demo", "report_markdown", "Identified", "Record"]
+           "run_demo", "report_markdown", "Identified", "Record", "mode_audit", "provenance"]

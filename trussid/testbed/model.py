@@ -5,7 +5,7 @@ plus a :class:`TestbedMap` that says which nodes, elements and springs are what 
 plant can put PZT loads on the adapter elements and sensors on the accelerometer nodes, and
 the renderer can attach solids to nodes).
 
-Model (see ``shared/docs/testbed.md``)
+Model (see ``docs/testbed.md``)
 --------------------------------------
 - **Struts**: 2-node frame elements along each strut (:mod:`trussid.geometry.layout` numbering and
   local axes: element local ``y`` is the strut's ``y``, horizontal and normal to its bipod

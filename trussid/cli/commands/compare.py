@@ -15,6 +15,7 @@ mistake leaves no output behind.
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -150,6 +151,7 @@ def run(args) -> int:
     metrics = {"model": str(args.model), "reference": str(ref_path), "reference_kind": kind,
                "input_names": meta["input_names"], "output_names": meta["output_names"],
                "fs": 2 * nyq, "band": list(band), "stable": c.stable,
+               "stability": meta["stability"].message(f"the model {args.model}"),
                "record": (f"seeded white-noise record of the plant, {VALIDATION_SAMPLES} "
                           "samples" if kind == "plant" else str(ref_path)),
                **json_safe(c)}
@@ -192,8 +194,9 @@ def _print_metrics(args, metrics, c, written, out) -> None:
     print(f"compared {args.model} ({c.states} states) with {metrics['reference_kind']} "
           f"{metrics['reference']}")
     if not c.stable:
-        print(f"the model is unstable: {c.unstable_poles} pole(s) on or outside the unit "
-              "circle; its simulation diverges")
+        # stderr, as every warning; the numbers below are printed but flagged
+        print(f"trussid compare: warning: {metrics['stability']}; its simulation diverges, "
+              "so the simulation fit below is meaningless", file=sys.stderr)
     if c.frf is not None:
         e = c.frf
         print(f"FRF error over {band[0]:g}-{band[1]:g} Hz: max {e.max_db:.3f} dB, "
@@ -212,5 +215,6 @@ def _print_metrics(args, metrics, c, written, out) -> None:
     r, s = c.prediction, c.simulation
     print(f"one-step signal-to-prediction-error ratio ({metrics['record']}; first {r.skip} "
           f"samples left out): {r.overall:.2f} dB")
-    print(f"simulation fit (against {s.against}): {s.overall:.2f} dB")
+    print(f"simulation fit (against {s.against}): "
+          + (f"{s.overall:.2f} dB" if c.stable else "none: the model is unstable"))
     print(f"wrote {', '.join(written)} in {out}")

@@ -31,6 +31,9 @@ def add_parser(subparsers):
                    "shorter records")
     p.add_argument("--seed", type=int, metavar="S",
                    help="seed of the campaign (default 1997)")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing report directory (only once the new report is "
+                   "complete: an interrupted run leaves the old one as it was)")
     p.set_defaults(func=run)
     return p
 
@@ -45,7 +48,11 @@ def run(args) -> int:
     def say(msg):
         print(f"[{time.perf_counter() - t0:6.1f} s] {msg}", flush=True)
 
-    summary = run_demo(args.out, settings, progress=say)
+    import shlex
+
+    summary = run_demo(args.out, settings, progress=say, force=args.force,
+                       command="trussid " + " ".join(
+                           shlex.quote(a) for a in getattr(args, "argv", sys.argv[1:])))
     print()
     print(f"report: {args.out}/report.md (figures, summary.json, data and model files "
           f"beside it)")

@@ -54,7 +54,7 @@ def add_parser(subparsers) -> None:
         "dc-motor",
         help="DC motor speed response: T, G, then J, b, R, k",
         description="Identify a DC motor from its speed response (armature inductance "
-        "neglected): first the time constant T and gain G of G/(T s + 1) (63.2 %% rule "
+        "neglected): first the time constant T and gain G of G/(T s + 1) (63.2 % rule "
         "start, least-squares refinement over any input), then the damping b, resistance "
         "R and motor constant k, with the inertia J given. With only J given the data "
         "cannot determine b, R and k (only T = J R/(b R + k^2) and G = k/(b R + k^2)); "

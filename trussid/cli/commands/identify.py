@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import sys
 import time
+import warnings
 
 import numpy as np
 
+from trussid._util.errors import UserError
 from trussid._util.jsonio import dumps
 
 # plid (and through it python-control and scipy.signal) is imported inside the functions:
@@ -60,9 +62,19 @@ def add_parser(subparsers):
         "PLID, and write it as a model file with its one-step predictor gain. Noise "
         "covariances are in units of the data scaled to unit RMS per channel.")
     p.add_argument("data", metavar="DATA", help="data file: .csv, .npz or .mat")
-    p.add_argument("--order", type=int, required=True, metavar="N",
-                   help="model order (number of states; a multiple of the number of outputs)")
-    p.add_argument("--out", required=True, metavar="MODEL.npz", help="output model file")
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--order", type=int, metavar="N",
+                      help="model order (number of states; a multiple of the number of outputs)")
+    what.add_argument("--orders", metavar="LO:HI:STEP",
+                      help="order selection instead of one model: identify at each order "
+                      "LO, LO+STEP, ... HI (multiples of the number of outputs) on the first "
+                      "70 %% of the record, score the one-step prediction on the last 30 %% "
+                      "(validation) and the FRF change from the previous order "
+                      "(plid.order_table); --out TABLE.csv gets the table and TABLE.png the "
+                      "plot. The order the data support is where the prediction stops "
+                      "rising and the change drops to the noise level")
+    p.add_argument("--out", required=True, metavar="MODEL.npz",
+                   help="output model file (with --orders: the table, .csv)")
     p.add_argument("--fs", type=float, metavar="HZ",
                    help="sampling frequency, if the file has neither fs nor a time column")
     p.add_argument("--inputs", nargs="+", metavar="NAME",
@@ -98,6 +110,79 @@ def add_parser(subparsers):
     return p
 
 
+def orders_arg(text: str, p: int) -> list[int]:
+    """``--orders LO:HI:STEP`` (or a comma list) as a list of orders, each checked."""
+    from trussid.plid.errors import DataError
+
+    try:
+        if ":" in text:
+            parts = [int(v) for v in text.split(":")]
+            if len(parts) == 2:
+                parts.append(p)
+            lo, hi, step = parts
+            if step < 1 or lo < 1 or hi < lo:
+                raise ValueError
+            orders = list(range(lo, hi + 1, step))
+        else:
+            orders = sorted({int(v) for v in text.split(",") if v.strip()})
+    except ValueError:
+        raise DataError(f"--orders {text!r}: give LO:HI:STEP (e.g. 12:60:6) or a comma "
+                        "list of positive orders") from None
+    bad = [n for n in orders if n < 1 or n % p]
+    if not orders or bad:
+        raise DataError(f"--orders {text!r}: every order must be a positive multiple of the "
+                        f"{p} outputs (not {bad[0] if bad else 'none'})")
+    if len(orders) > 100:
+        raise DataError(f"--orders {text!r}: {len(orders)} orders; give at most 100")
+    return orders
+
+
+def run_orders(args, data) -> int:
+    """``--orders``: the order table (CSV) and its plot (PNG)."""
+    from pathlib import Path
+
+    from trussid.plid.datafile import check_enough_samples
+    from trussid.plid.order import format_table, order_table
+    from trussid.plots import order_figure, save_figure
+    from trussid._util.files import atomic_path
+
+    out = Path(args.out)
+    if out.suffix.lower() != ".csv":
+        raise UserError(f"--out {out}: with --orders the table is written as .csv (and the "
+                        "plot beside it as .png)")
+    m, p = data.n_inputs, data.n_outputs
+    orders = orders_arg(args.orders, p)
+    n = max(orders)
+    check_enough_samples(data, int(np.ceil(n * (m + p) / 0.7)),
+                         f"an order-{n} model with {m} inputs and {p} outputs on 70 % of "
+                         "the record")
+    rows = order_table(data.u, data.y, orders, data.dt,
+                       progress=None if sys.stderr.isatty() else False)
+    lines = ["order,prediction_db_validation,frf_change_db,unstable_poles,seconds,error"]
+    for r in rows:
+        ch = "" if r.frf_change_db is None else f"{r.frf_change_db:.6g}"
+        err = '"' + r.error.replace('"', "'") + '"' if r.error else ""
+        lines.append(f"{r.order},{r.prediction_db:.6g},{ch},{r.unstable_poles},{r.seconds:.3f},"
+                     f"{err}")
+    ok = [r for r in rows if not r.error]
+    if not ok:
+        raise UserError("no order could be identified: " + "; ".join(
+            f"order {r.order}: {r.error}" for r in rows))
+    fig = order_figure(ok)
+    fig.axes[0].set_title(f"order selection: {Path(args.data).name}; prediction on the "
+                          "last 30 % (validation)", fontsize=10)
+    fig.tight_layout()
+    png = out.with_suffix(".png")
+    with atomic_path(out) as tmp:
+        tmp.write_text("\n".join(lines) + "\n")
+    save_figure(fig, png)
+    print(f"order selection on {data.n_samples} samples at {data.fs:g} Hz: identified on the "
+          "first 70 %, one-step prediction scored on the last 30 % (validation)")
+    print(format_table(rows))
+    print(f"wrote {out} and {png}")
+    return 0
+
+
 def run(args) -> int:
     from trussid.plid.canonical import check_order
     from trussid.plid.datafile import check_enough_samples, read_data
@@ -105,8 +190,15 @@ def run(args) -> int:
     from trussid.plid.metrics import modal_parameters, prediction_burn_in, prediction_ratio_db
     from trussid.plid.modelfile import save_model
     from trussid.plid.multipass import fit_model
+    from trussid.plid.stability import UnstableModelWarning, check_stability
 
     out = str(args.out)
+    if getattr(args, "orders", None) is not None:
+        if not out.lower().endswith(".csv"):
+            raise DataError(f"--out {out}: with --orders the table is written as .csv (and "
+                            "the plot beside it as .png)")
+        return run_orders(args, read_data(args.data, inputs=names_arg(args.inputs),
+                                          outputs=names_arg(args.outputs), fs=args.fs))
     if not out.lower().endswith(".npz"):
         raise DataError(f"--out {out}: model files are .npz")
     if args.order < 1:
@@ -128,8 +220,13 @@ def run(args) -> int:
     model, K = ident.model, ident.K
     skip = prediction_burn_in(model, K, data.n_samples)
     ratio = prediction_ratio_db(model, data.u, data.y, K=K, skip=skip)
-    unstable = int(np.sum(np.abs(np.linalg.eigvals(model.A)) >= 1))
-    save_model(out, model, K=K, input_names=data.input_names, output_names=data.output_names)
+    stability = check_stability(model)
+    unstable = int(stability.unstable.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnstableModelWarning)  # said below, in one line
+        save_model(out, model, K=K, input_names=data.input_names,
+                   output_names=data.output_names)
+    stability_note = stability.message(f"the identified model {out}")
     freq, damp, _ = modal_parameters(model)
     summary = {
         "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
@@ -144,12 +241,13 @@ def run(args) -> int:
         "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
         "prediction_skip_samples": skip, "unstable_poles": unstable,
         "poles": [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(freq, damp)],
-        "warnings": ident.info["warnings"],
+        "warnings": ident.info["warnings"] + ([stability_note] if stability_note else []),
+        "stable": stability.stable, "stability": stability_note,
     }
     if via is not None:
         summary.update(via=list(ident.info["via"]), chosen=ident.info["chosen"],
                        candidates=ident.info["candidates"])
-    for note in ident.info["warnings"]:
+    for note in summary["warnings"]:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
         print(dumps(summary), end="")
@@ -169,9 +267,6 @@ def _print_summary(s: dict, via: bool) -> None:
     print(f"one-step signal-to-prediction-error ratio on the identification data (in-sample): "
           f"{s['signal_to_prediction_error_db']:.2f} dB ({per}; first "
           f"{s['prediction_skip_samples']} samples left out)")
-    if s["unstable_poles"]:
-        print(f"note: the model is unstable: {s['unstable_poles']} pole(s) on or outside the "
-              "unit circle")
     print("poles (frequency [Hz], damping):")
     for row in s["poles"]:
         print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")

@@ -1,4 +1,5 @@
-"""``trussid plant [MODEL] --out PLANT.npz``: the control-ready plant of a testbed.
+"""``trussid plant [MODEL] --out PLANT.npz``: the control-ready plant of a testbed, or of any
+NASTRAN deck with ``--io IO.toml`` (actuators and sensors, :mod:`trussid.fem.iospec`).
 
 The plant runs from the D/A command volts of each actuator channel, through the smoothing
 filter, the power amplifier and the PZT actuators, to the accelerometer volts, discretised
@@ -22,13 +23,21 @@ def add_parser(subparsers) -> None:
         "strain actuators (3 channels, each driving the two struts that share a top vertex), "
         "accelerometers at the UDF corners, the lab's smoothing filter, amplifier and converters, "
         "discretised by zero-order hold. MODEL is a testbed parameter file (.toml) or omitted for "
-        "the default testbed.")
-    p.add_argument("model", nargs="?", metavar="MODEL", help="testbed parameter file (.toml)")
+        "the default testbed. For any other frame, give a NASTRAN deck and --io IO.toml, which "
+        "lists force/moment actuators at nodes, PZT strain actuators over elements and "
+        "displacement/velocity/acceleration sensors at nodes (format: trussid.fem.iospec; "
+        "example: examples/decks/frame_io.toml); that plant is in the deck's units, without "
+        "the testbed's lab chain.")
+    p.add_argument("model", nargs="?", metavar="MODEL",
+                   help="testbed parameter file (.toml), or a NASTRAN deck with --io")
+    p.add_argument("--io", metavar="IO.toml", default=None,
+                   help="actuators and sensors of a NASTRAN deck (required for a deck)")
     p.add_argument("--out", required=True, metavar="PLANT.npz", help="output model file (.npz)")
     p.add_argument("--fs", type=float, default=None, metavar="HZ", help="sample rate (default: the testbed's, 1600 Hz)")
     p.add_argument("--modes", type=int, default=None, metavar="N", help="modes kept (default: all below the Nyquist frequency)")
     p.add_argument("--damping", type=float, default=None, metavar="Z",
-                   help="modal damping ratio (default: the testbed's, 0.0025)")
+                   help="modal damping ratio (default: the testbed's, 0.0025; with --io the "
+                   "file's [plant] damping, else 0.02)")
     p.add_argument("--plot", default=None, metavar="BODE.png", help="also write a Bode plot")
     p.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
     p.set_defaults(func=run)
@@ -50,12 +59,27 @@ def run(args) -> int:
         raise UserError(f"--damping must be in [0, 1), got {args.damping}")
     if args.fs is not None and not args.fs > 0:
         raise UserError(f"--fs must be positive, got {args.fs}")
+    if args.io is not None:
+        return run_io(args, out)
     if args.model is not None and Path(args.model).suffix.lower() != ".toml":
-        raise UserError(f"{args.model}: a plant needs the testbed's actuators and sensors; give a "
-                        "testbed parameter file (.toml) or no MODEL for the default testbed")
+        raise UserError(f"{args.model}: a plant needs actuators and sensors: give them with "
+                        "--io IO.toml for a NASTRAN deck, or a testbed parameter file (.toml), "
+                        "or no MODEL for the default testbed")
     tb = testbed_spec(args.model)
     source = "default testbed" if args.model is None else str(args.model)
     plant = testbed_plant(tb, n_modes=args.modes, damping=args.damping, sample_rate=args.fs)
+    ch = plant.chain
+    above = [f"{name} ({fc:g} Hz)" for name, fc in
+             (("the smoothing filter", ch.smoothing_cutoff), ("the low-pass", ch.lowpass_cutoff))
+             if fc >= 0.5 * ch.sample_rate]
+    if above:  # audit B35: a 100 Hz plant silently kept filters it cannot represent
+        import sys
+
+        many = len(above) > 1
+        print(f"trussid plant: warning: at {ch.sample_rate:g} Hz the corner{'s' * many} of "
+              f"{' and '.join(above)} lie{'' if many else 's'} above the Nyquist frequency "
+              f"({0.5 * ch.sample_rate:g} Hz): the discrete plant cannot show "
+              f"{'it' if len(above) == 1 else 'them'}", file=sys.stderr)
     save_model(out, plant.discrete, continuous=plant.continuous,
                extra={"mode_frequencies_hz": plant.modes.frequencies_hz})
     if args.plot:
@@ -86,4 +110,56 @@ def run(args) -> int:
     for name, row in zip(s["outputs"], s["peak_gain_v_per_v"]):
         print(f"  {name:8s}" + "".join(f"{g:12.4g}" for g in row))
     print(f"\nwrote {out}" + (f" and {args.plot}" if args.plot else ""))
+    return 0
+
+
+def run_io(args, out: Path) -> int:
+    """``trussid plant DECK --io IO.toml``: the generic plant of any deck (fem.iospec)."""
+    import control
+    import numpy as np
+
+    from trussid.cli.loaders import BULK_SUFFIXES, deck_structure
+    from trussid.fem.iospec import io_plant, read_io
+    from trussid.plid.modelfile import save_model
+
+    if args.model is None or Path(args.model).suffix.lower() not in BULK_SUFFIXES:
+        raise UserError(f"--io needs a NASTRAN deck ({', '.join(BULK_SUFFIXES)}) as MODEL, got "
+                        f"{args.model or 'none'}")
+    spec = read_io(args.io)
+    if args.plot and (args.fs or spec.fs) is None:
+        raise UserError("--plot draws the discrete plant: give a sample rate (--fs HZ or "
+                        f"[plant] fs in {args.io})")
+    loaded = deck_structure(Path(args.model))
+    sc, sd, modes, n = io_plant(loaded.model, spec, n_modes=args.modes, damping=args.damping,
+                                fs=args.fs, autospc=loaded.autospc)
+    main = sd if sd is not None else sc
+    save_model(out, main, continuous=sc if sd is not None else None,
+               extra={"mode_frequencies_hz": np.asarray(modes.frequencies_hz[:n])})
+    if args.plot:
+        from trussid.plots import plant_bode_figure, save_figure
+
+        save_figure(plant_bode_figure(
+            sd, f"Plant of {Path(args.model).name} with {Path(args.io).name}"), args.plot, dpi=120)
+    f = np.asarray(modes.frequencies_hz[:n])
+    poles = control.poles(main)
+    stable = bool(np.all(np.abs(poles) < 1) if sd is not None else np.all(np.real(poles) < 0))
+    s = {"model": str(args.model), "io": str(args.io), "out": str(out),
+         "inputs": list(main.input_labels), "outputs": list(main.output_labels),
+         "states": int(main.nstates), "sample_rate_hz": args.fs or spec.fs,
+         "modes_kept": n, "mode_frequencies_hz": f.tolist(),
+         "damping": args.damping if args.damping is not None else (spec.damping or 0.02),
+         "stable": stable, "notes": loaded.notes}
+    if args.json:
+        print(dumps(s), end="")
+        return 0
+    rate = (f"ZOH at {s['sample_rate_hz']:g} Hz" if sd is not None
+            else "continuous only (give --fs or [plant] fs for a discrete plant)")
+    print(f"plant of {args.model} with {args.io}: {len(s['inputs'])} input(s) "
+          f"({', '.join(s['inputs'])}), {len(s['outputs'])} output(s) "
+          f"({', '.join(s['outputs'])}), {s['states']} states, {rate}")
+    print(f"modes kept: {n} ({f[0]:.4g} to {f[-1]:.4g} Hz), damping {s['damping']:g}; "
+          f"units: the deck's")
+    for note in loaded.notes:
+        print(note)
+    print(f"wrote {out}" + (f" and {args.plot}" if args.plot else ""))
     return 0

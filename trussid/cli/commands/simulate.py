@@ -9,6 +9,7 @@ noise-free outputs, which ``trussid compare`` uses for the simulation-error metr
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 
@@ -17,6 +18,19 @@ import numpy as np
 # take seconds, and `trussid --help` imports every command module.
 EXCITATIONS = ("white", "prbs", "chirp", "multisine")
 SUFFIXES = (".csv", ".npz", ".mat")
+
+
+def count_arg(text: str) -> int:
+    """A sample count: an integer, also written as ``1e6`` or ``1_000_000``."""
+    import argparse
+
+    try:
+        value = float(text.replace("_", ""))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not np.isfinite(value) or value != int(value):
+        raise argparse.ArgumentTypeError(f"not a whole number of samples: {text!r}")
+    return int(value)
 
 
 def add_parser(subparsers):
@@ -29,7 +43,7 @@ def add_parser(subparsers):
     p.add_argument("plant", metavar="PLANT.npz", help="model file with a discrete plant")
     p.add_argument("--out", required=True, metavar="DATA",
                    help="output data file: .csv, .npz or .mat")
-    p.add_argument("--samples", type=int, default=4000, metavar="N",
+    p.add_argument("--samples", type=count_arg, default=4000, metavar="N",
                    help="number of samples (default 4000)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
     p.add_argument("--excitation", choices=EXCITATIONS, default="white",
@@ -62,8 +76,9 @@ def add_parser(subparsers):
 def run(args) -> int:
     from trussid.plid.datafile import write_data
     from trussid.plid.errors import DataError
-    from trussid.plid.experiment import run_experiment
+    from trussid.plid.experiment import check_memory, run_experiment
     from trussid.plid.modelfile import load_model
+    from trussid.plid.stability import require_stable
 
     out = args.out
     if not str(out).lower().endswith(SUFFIXES):
@@ -81,6 +96,8 @@ def run(args) -> int:
     if args.samples < 2:
         raise DataError(f"--samples must be at least 2, got {args.samples}")
     plant, meta = load_model(args.plant, which="discrete")
+    require_stable(plant, f"the plant {args.plant}", "a simulation of it diverges")
+    check_memory(plant, args.samples)
     exp = run_experiment(plant, args.samples, args.excitation, rms=args.rms, band=args.band,
                          seed=args.seed, snr_db=args.snr_db, sensor_noise_rms=args.noise_rms,
                          input_noise_rms=args.input_noise_rms, dac_bits=args.bits,
@@ -125,10 +142,12 @@ def run(args) -> int:
             detail = ", ".join(f"{n} {c}" for n, c in zip(names, counts))
             print(f"{name}: {args.bits} bits, {ranges[name]}; clipped samples: "
                   f"{sum(counts)} of {d.n_samples * len(counts)} ({detail})")
+        # Warnings go to stderr, as in every other command.
         if exp.clipped_total:
-            print("warning: the converters clipped; lower --rms or raise --full-scale")
+            print("trussid simulate: warning: the converters clipped; lower --rms or raise "
+                  "--full-scale", file=sys.stderr)
         for name, r, q in under:
-            print(f"warning: output {name} has RMS {r:.3g} V, under 4 A/D LSB ({q:.3g} V): "
-                  "the record is mostly quantisation; use --adc-full-scale auto or a "
-                  "smaller range")
+            print(f"trussid simulate: warning: output {name} has RMS {r:.3g} V, under 4 A/D "
+                  f"LSB ({q:.3g} V): the record is mostly quantisation; use "
+                  "--adc-full-scale auto or a smaller range", file=sys.stderr)
     return 0
