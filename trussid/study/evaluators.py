@@ -429,10 +429,11 @@ class IdentifyEvaluator(Evaluator):
         with warnings.catch_warnings():
             # the fits' convergence warnings are about one record; the scores say how it went
             warnings.simplefilter("ignore", PLIDWarning)
+            # progress=False: the study's own bar counts points; one per fit would garble it
             if p["method"] == "plid-reduced":
-                ident = identify_reduced(u, y, n, dt)
+                ident = identify_reduced(u, y, n, dt, progress=False)
             else:
-                ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1])
+                ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1], progress=False)
         out = _score(ident.model, case, val, time.perf_counter() - t0, opts, K=ident.K)
         out["block_rows"] = ident.info.get("subspace", {}).get("block_rows") or -1
         return out
