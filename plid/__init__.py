@@ -23,6 +23,8 @@ _LAZY = {
     "prediction_ratio_db": "metrics", "frf_error": "metrics", "compare_poles": "metrics",
     "simulation_fit": "metrics", "one_step_predict": "metrics", "predictor_gain": "metrics",
     "modal_parameters": "metrics", "choose_predictor": "metrics",
+    "best_predictor": "metrics", "refine_predictor_gain": "metrics",
+    "output_error_fit": "subspace", "direct_term_test": "subspace",
     "fit_parameters": "greybox", "fit_greybox": "greybox", "Constraint": "greybox",
     "identify_dc_motor": "dcmotor",
 }

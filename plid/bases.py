@@ -229,21 +229,82 @@ def basis_for(n: int, p: int, fs: float, freqs_hz, radius: float = 0.97,
 
     Partition layout: each output owns ``nu = n / p`` states, ``nu // 2`` rotation blocks
     (the lowest ``p (nu // 2)`` of ``freqs_hz`` are used, dealt out in turn) plus one real
-    pole just below ``radius`` when ``nu`` is odd. Dense layout: ``n / 2`` blocks."""
+    pole just below ``radius`` when ``nu`` is odd; with one state per output the basis is
+    real poles alone. Dense layout: ``n / 2`` blocks.
+
+    Raises
+    ------
+    IdentificationError
+        For the partition layout when ``p`` does not divide ``n``: with unequal shares of
+        states per output, ``A = F + Abar C`` with a fixed ``C`` no longer represents a
+        generic order-``n`` model (the observer form would need free entries in ``C``, and
+        the state equation would no longer be linear in the parameters).
+    """
     if layout == "partition":
+        if int(n) != n or n < 1:
+            raise IdentificationError(f"order must be a positive integer, got {n!r}")
         if n % p:
-            raise IdentificationError(f"order {n} is not a multiple of the {p} outputs")
-        nu = n // p
-        nrot = (nu // 2) * p
+            lo, hi = (n // p) * p, -(-n // p) * p
+            raise IdentificationError(
+                f"order {n} is not a multiple of the {p} outputs: PLID's observer form "
+                f"(A = F + Abar C, C fixed) gives every output n/p states"
+                + (f"; try order {lo} or {hi}" if lo else f"; try order {hi}"))
+        nus = [n // p] * p
+        need = [nu // 2 for nu in nus]
+        nrot = sum(need)
         f = np.sort(np.asarray(freqs_hz, dtype=float))[:nrot]
         if f.size < nrot:
             raise IdentificationError(f"need {nrot} basis frequencies, got {f.size}")
-        b = rotation_basis(f, fs, p, radius, "partition")
-        return _with_real_poles(b, nu % 2, radius)
+        if nrot:
+            if np.any(f <= 0) or np.any(f >= fs / 2):
+                raise IdentificationError(
+                    f"basis frequencies must lie in (0, fs/2 = {fs / 2:g}) Hz")
+            if np.any(np.diff(f) <= 0):
+                raise IdentificationError("basis frequencies must be distinct")
+        if not 0 < radius < 1:
+            raise IdentificationError(f"basis radius must be in (0, 1), got {radius}")
+        # deal the sorted frequencies out in turn to the outputs that still need blocks
+        groups, left, k = [[] for _ in range(p)], list(need), 0
+        while k < nrot:
+            for i in range(p):
+                if left[i] and k < nrot:
+                    groups[i].append(k)
+                    left[i] -= 1
+                    k += 1
+        w = 2 * np.pi * f / fs
+        return _assemble_partition(w, groups, [nu % 2 for nu in nus], radius, p)
     f = np.sort(np.asarray(freqs_hz, dtype=float))[: n // 2]
     if n % 2:
         raise IdentificationError("the dense layout needs an even order")
     return rotation_basis(f, fs, p, radius, "dense")
+
+
+def _assemble_partition(w, groups, reals, radius, p):
+    """Rotation blocks ``groups[i]`` (indices into ``w``) and ``reals[i]`` real poles per
+    output i; ``C`` row i sums the first component of each of output i's blocks."""
+    blocks, owner = [], []
+    for i, g in enumerate(groups):
+        for k in g:
+            blocks.append(_rot(radius, w[k]))
+            owner.append(i)
+    nrot = 2 * len(blocks)
+    n_real = int(sum(reals))
+    n = nrot + n_real
+    F = np.zeros((n, n))
+    C = np.zeros((p, n))
+    for b, (blk, i) in enumerate(zip(blocks, owner)):
+        F[2 * b:2 * b + 2, 2 * b:2 * b + 2] = blk
+        C[i, 2 * b] = 1.0
+    # distinct real poles keep (F, C) observable: spread them slightly below the radius
+    vals = radius * (1 - 0.02 * np.arange(1, n_real + 1))
+    s = nrot
+    for i, r in enumerate(reals):
+        for _ in range(r):
+            F[s, s] = vals[s - nrot]
+            C[i, s] = 1.0
+            s += 1
+    name = f"rotation r={radius:g}" + (f" +{n_real} real" if n_real else "")
+    return ObserverBasis(F, C, name)
 
 
 # ----------------------------------------------------------------------------- conversion

@@ -163,8 +163,10 @@ class PLID:
     Parameters
     ----------
     order : int
-        Number of states n; a multiple of the number of outputs (uniform observability
-        index), else :class:`IdentificationError` suggesting the nearest valid orders.
+        Number of states n. With the default shift basis a multiple of the number of
+        outputs (uniform observability index), else :class:`IdentificationError`
+        suggesting the nearest valid orders; a given ``basis`` fixes the structure (any
+        order from the number of outputs up with :func:`plid.bases.basis_for`).
     form : {"sqrt", "direct"}
         Square-root (default; keeps the covariance positive definite on long, low-noise
         runs) or direct covariance form.
@@ -256,6 +258,14 @@ class PLID:
         self._k = 0
         self._first_bad = None
 
+    def _check_outputs(self, p: int) -> None:
+        """The default shift basis needs an order that is a multiple of ``p``; a given
+        basis (any order, e.g. :func:`plid.bases.basis_for`) must have ``p`` outputs."""
+        if self.basis is None:
+            check_order(self.order, p)
+        elif self.basis.p != p:
+            raise IdentificationError(f"basis has {self.basis.p} outputs but the data has {p}")
+
     def _problem(self, m: int, p: int, decay: float = 1.0) -> Problem:
         basis = self.basis if self.basis is not None else ObserverBasis.shift(
             check_order(self.order, p) * p, p)
@@ -333,7 +343,7 @@ class PLID:
         _check_finite(u, "u")
         _check_finite(y, "y")
         m, p = u.shape[1], y.shape[1]
-        check_order(self.order, p)
+        self._check_outputs(p)
         q = self.order * (m + p)
         if u.shape[0] < q:
             raise DataError(f"{u.shape[0]} samples are fewer than the {q} parameters of an "
@@ -408,7 +418,7 @@ class PLID:
         if not (np.all(np.isfinite(u_k)) and np.all(np.isfinite(y_k))):
             raise DataError(f"non-finite value in sample {self._k}")
         if self._st is None:
-            check_order(self.order, y_k.size)
+            self._check_outputs(y_k.size)
             self._su = _scale(self.u_scale, None, "u_scale", u_k.size)
             self._sy = _scale(self.y_scale, None, "y_scale", y_k.size)
             self._start(u_k.size, y_k.size)

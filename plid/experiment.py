@@ -184,8 +184,10 @@ def _lsb_report(bits, full_scale):
 def simulate(plant: control.StateSpace, u: np.ndarray, x0=None) -> np.ndarray:
     """Response of a discrete ``plant`` to inputs ``u`` (N x m) from x0 (default 0); (N x p).
 
-    Uses ``control.forced_response`` (compiled per-sample recursion is not available in
-    python-control or scipy; their loops are the library choice here).
+    A plain state recursion with ``B u`` and the output map applied to whole arrays:
+    ``control.forced_response`` (scipy's ``dlsim``) does the same recursion with two
+    products and more Python work per sample, about 10x slower, and identification
+    scores many candidate models with it.
     """
     if not control.isdtime(plant, strict=True):
         raise DataError("the plant must be discrete-time (dt > 0); discretise it first")
@@ -194,8 +196,16 @@ def simulate(plant: control.StateSpace, u: np.ndarray, x0=None) -> np.ndarray:
     if u.shape[1] != plant.ninputs:
         raise DataError(f"plant has {plant.ninputs} inputs but the input data has "
                         f"{u.shape[1]} columns")
-    res = control.forced_response(plant, U=u.T, X0=0 if x0 is None else x0)
-    return np.atleast_2d(res.outputs).reshape(plant.noutputs, -1).T.copy()
+    A, B, C, D = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))
+    n = A.shape[0]
+    Bu = u @ B.T
+    X = np.empty((u.shape[0], n))
+    x = np.zeros(n) if x0 is None else np.broadcast_to(np.asarray(x0, float), (n,)).copy()
+    At = np.ascontiguousarray(A.T)
+    for k in range(u.shape[0]):
+        X[k] = x
+        x = x @ At + Bu[k]
+    return X @ C.T + u @ D.T
 
 
 @dataclass

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything trussid needs on a fresh Debian/Ubuntu machine: the system libraries
 # VTK needs to render offscreen (no X server, no GPU), then the package itself.
-# Usage: bash scripts/setup.sh [test|bench]   (extras to install beside the package)
+# Usage: bash scripts/setup.sh [test|bench|docs]   (extras to install beside the package;
+# test includes docs: the suite builds the documentation site)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 extras="${1:-}"

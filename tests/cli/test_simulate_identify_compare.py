@@ -196,10 +196,34 @@ def test_simulate_missing_plant_fails_cleanly(tmp_path):
     assert_clean_failure(res, "simulate", out, match="no such model file")
 
 
-def test_identify_order_not_multiple_of_outputs_fails_cleanly(work, simulated, tmp_path):
+def test_identify_order_not_multiple_of_outputs_fails_cleanly_in_the_shift_basis(work, simulated,
+                                                                                tmp_path):
     out = tmp_path / "m.npz"
-    res = run("identify", work / "data.npz", "--order", 3, "--out", out)
+    res = run("identify", work / "data.npz", "--order", 3, "--out", out, "--start", "plain")
     assert_clean_failure(res, "identify", out, match="try order 2 or 4")
+
+
+def test_identify_reaches_an_order_not_multiple_of_outputs_by_reduction(work, simulated, tmp_path):
+    out = tmp_path / "m3.npz"
+    res = run("identify", work / "data.npz", "--order", 3, "--out", out, "--json")
+    assert res.returncode == 0, res.stderr
+    summary = json.loads(res.stdout)
+    assert "reduced to 3 states" in summary["structure"]
+    assert load_model(out)[0].nstates == 3
+
+
+def test_identify_json_says_whether_it_estimated_a_direct_term(work, simulated, tmp_path):
+    # the simulated plant is strictly proper (D = 0): auto keeps D = 0, --direct yes forces it
+    out = tmp_path / "md.npz"
+    auto = json.loads(run("identify", work / "data.npz", "--order", 4, "--out", out,
+                          "--json").stdout)
+    assert auto["direct_term"]["mode"] == "auto" and not auto["direct_term"]["estimated"]
+    assert auto["direct_term"]["test"]["held_out_nmse_with"] > 0
+    assert isinstance(auto["K_source"], str)
+    forced = json.loads(run("identify", work / "data.npz", "--order", 4, "--out", out,
+                            "--direct", "yes", "--json").stdout)
+    assert forced["direct_term"]["estimated"] and forced["direct_term"]["mode"] is True
+    assert np.shape(load_model(out)[0].D) == (2, 1)
 
 
 def test_compare_model_and_data_of_different_sizes_fails_cleanly(work, tmp_path):

@@ -162,3 +162,55 @@ def test_optimal_predictor_errors_are_white_with_state_noise(plant, rng):
 def test_prediction_needs_matching_sizes(plant, rng):
     with pytest.raises(DataError, match="the model has 2 outputs but the data has 3"):
         prediction_ratio_db(plant, rng.standard_normal((10, 1)), rng.standard_normal((10, 3)))
+
+
+def _innovations_plant(rng):
+    """x+ = A x + B u + K e, y = C x + e: a known noise model (two lightly damped modes)."""
+    from trussid.plid.metrics import predictor_gain
+
+    A = np.zeros((4, 4))
+    for i, (r, w) in enumerate([(0.97, 0.3), (0.95, 1.1)]):
+        A[2 * i:2 * i + 2, 2 * i:2 * i + 2] = r * np.array([[np.cos(w), -np.sin(w)],
+                                                             [np.sin(w), np.cos(w)]])
+    B = rng.standard_normal((4, 1))
+    C = rng.standard_normal((2, 4))
+    W = rng.standard_normal((4, 4))
+    # a steady-state Kalman gain of some state noise: its predictor A - K C is stable
+    K = predictor_gain(control.ss(A, B, C, np.zeros((2, 1)), 1.0), 0.05 * W @ W.T, np.eye(2))
+    return A, B, C, K
+
+
+def _innovations_data(A, B, C, K, n_samples, rng):
+    u = rng.standard_normal((n_samples, 1))
+    e = 0.5 * rng.standard_normal((n_samples, 2))
+    x = np.zeros(4)
+    y = np.empty((n_samples, 2))
+    for k in range(n_samples):
+        y[k] = C @ x + e[k]
+        x = A @ x + B @ u[k] + K @ e[k]
+    return u, y
+
+
+def test_least_squares_gain_refinement_recovers_a_known_noise_model(rng):
+    from trussid.plid.metrics import refine_predictor_gain
+
+    A, B, C, K = _innovations_plant(rng)
+    u, y = _innovations_data(A, B, C, K, 6000, rng)
+    model = control.ss(A, B, C, np.zeros((2, 1)), 1.0)
+    gains = refine_predictor_gain(model, u, y)          # from a long autoregression
+    assert gains
+    assert np.linalg.norm(gains[-1] - K) < 0.1 * np.linalg.norm(K)
+
+
+def test_best_predictor_is_never_worse_than_simulation_and_near_the_true_gain(rng):
+    from trussid.plid.metrics import best_predictor
+
+    A, B, C, K = _innovations_plant(rng)
+    u, y = _innovations_data(A, B, C, K, 4000, rng)
+    model = control.ss(A, B, C, np.zeros((2, 1)), 1.0)
+    K_best, label, info = best_predictor(model, u, y)
+    sc = info["identification_ratio_db"]
+    assert sc[label] == max(sc.values()) >= sc["none (free-run simulation)"]
+    skip = u.shape[0] // 8
+    truth = prediction_ratio_db(model, u, y, K=K, skip=skip)["mean_normalised"]
+    assert sc[label] > truth - 0.05          # as good as the true noise model, to 0.05 dB

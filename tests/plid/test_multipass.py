@@ -270,3 +270,65 @@ def test_a_stabilised_candidate_counts_the_poles_reflected_in_itself():
     assert c.stable and c.reflected_poles == 2  # one pair, not the pass's three pairs
     assert np.max(np.abs(np.linalg.eigvals(np.asarray(c.model.A)))) < 1
     assert c.row(4)["label"] == "via 8, reduced, stabilised"
+
+
+# ---- direct term, predictor gain and orders (issue 16) --------------------------------------
+
+
+def test_identify_recovers_an_accelerometers_direct_term_within_the_noise():
+    from tests.plid.plants import accelerometer_plant, record
+
+    plant = accelerometer_plant()
+    u, y = record(plant, 2500, 40, seed=11)
+    ident = identify(u, y, 6, plant.dt)
+    d = ident.info["direct"]
+    assert d["estimated"] and d["mode"] == "auto"
+    err = np.abs(np.asarray(ident.model.D) - plant.D)
+    # within four least-squares standard errors, and small against D itself
+    assert np.all(err <= 4 * np.asarray(d["D_std"]) + 1e-12)
+    assert np.abs(ident.model.D - plant.D).max() < 0.02 * np.abs(plant.D).max()
+
+
+def test_identify_chooses_no_direct_term_for_a_strictly_proper_plant(simo):
+    u, y = data(simo, 2000, snr_db=40, seed=12)
+    ident = identify(u, y, 6, 1 / FS)
+    assert not ident.info["direct"]["estimated"]
+    assert not np.any(ident.model.D)
+    test = ident.info["direct"]["test"]
+    assert test["held_out_nmse_with"] > (1 - test["margin"]) * test["held_out_nmse_without"]
+
+
+def test_identify_can_be_told_to_estimate_or_omit_D(simo):
+    u, y = data(simo, 2000, snr_db=40, seed=13)
+    assert identify(u, y, 6, 1 / FS, direct=True).info["direct"]["estimated"]
+    assert not identify(u, y, 6, 1 / FS, direct=False).info["direct"]["estimated"]
+    with pytest.raises(IdentificationError, match="direct"):
+        identify(u, y, 6, 1 / FS, direct="sometimes")
+
+
+def test_returned_predictor_is_never_worse_than_free_run_simulation_on_the_identification_data():
+    from tests.plid.plants import accelerometer_plant, record
+
+    plant = accelerometer_plant(seed=5)
+    u, y = record(plant, 2000, 30, seed=14)
+    ident = identify(u, y, 4, plant.dt)          # under-modelled: K has work to do
+    scores = ident.info["predictor"]["identification_ratio_db"]
+    chosen = ident.info["predictor"]["chosen"]
+    assert scores[chosen] >= scores["none (free-run simulation)"]
+    assert scores[chosen] == max(scores.values())
+
+
+@pytest.mark.parametrize("order", [1, 3, 5])
+def test_orders_that_are_not_multiples_of_the_outputs_are_identified_by_reduction(simo, order):
+    u, y = data(simo, 1200, snr_db=40, seed=15)
+    ident = identify(u, y, order, 1 / FS)
+    assert ident.model.nstates == order
+    assert "reduced to" in ident.info["structure"]
+    assert np.max(np.abs(np.linalg.eigvals(ident.model.A))) < 1
+    assert ident.K.shape == (order, 2)
+
+
+def test_order_equal_to_the_outputs_uses_a_real_pole_basis(simo):
+    u, y = data(simo, 1200, snr_db=40, seed=16)
+    ident = identify(u, y, 2, 1 / FS)
+    assert ident.model.nstates == 2 and "real" in ident.basis.name

@@ -104,6 +104,11 @@ def add_parser(subparsers):
                    "one-step prediction on the data (plid.multipass.identify_reduced; "
                    "what trussid demo uses: for a structure with more significant modes "
                    "than N/2). --start subspace or scratch only")
+    p.add_argument("--direct", choices=("auto", "yes", "no"), default=None,
+                   help="direct term D (feed-through): auto (default for --start subspace or "
+                   "scratch) decides on the data by a held-out output-error test, and the "
+                   "report says what it chose; yes / no force it. --via defaults to no "
+                   "(strictly proper candidates); --start plain has none")
     p.add_argument("--json", action="store_true",
                    help="print poles and the prediction ratio as JSON")
     p.set_defaults(func=run)
@@ -206,14 +211,19 @@ def run(args) -> int:
     data = read_data(args.data, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
                      fs=args.fs)
     n, m, p = args.order, data.n_inputs, data.n_outputs
-    check_order(n, p)
+    start = getattr(args, "start", "plain")
+    if start == "plain":   # the shift basis; the recipes handle any order (by reduction)
+        check_order(n, p)
+    direct_opt = getattr(args, "direct", None)
+    if direct_opt is not None and start == "plain":
+        raise DataError("--direct works with --start subspace or scratch, not plain")
+    direct = {"auto": "auto", "yes": True, "no": False, None: None}[direct_opt]
     check_enough_samples(data, n * (m + p), f"an order-{n} model with {m} inputs and "
                          f"{p} outputs")
-    start = getattr(args, "start", "plain")
     via = via_arg(getattr(args, "via", None), n, p, start)
     t0 = time.perf_counter()
     ident = fit_model(data.u, data.y, n, data.dt, start=start, via=via, form=args.form,
-                      R=args.R, Q=args.Q, passes=args.passes,
+                      R=args.R, Q=args.Q, passes=args.passes, direct=direct,
                       progress=None if sys.stderr.isatty() else False,
                       log=lambda msg: print(f"  {msg}", file=sys.stderr))
     seconds = time.perf_counter() - t0
@@ -244,6 +254,10 @@ def run(args) -> int:
         "warnings": ident.info["warnings"] + ([stability_note] if stability_note else []),
         "stable": stability.stable, "stability": stability_note,
     }
+    if "direct" in ident.info:
+        summary["direct_term"] = ident.info["direct"]
+    if "structure" in ident.info:
+        summary["structure"] = ident.info["structure"]
     if via is not None:
         summary.update(via=list(ident.info["via"]), chosen=ident.info["chosen"],
                        candidates=ident.info["candidates"])
@@ -262,6 +276,16 @@ def _print_summary(s: dict, via: bool) -> None:
           f"{s['seconds']:.2f} s ({s['form']} form, {s['start']} start"
           f"{'; kept ' + s['chosen'] if via else ''})")
     print(f"wrote {s['model']}")
+    if "structure" in s:
+        print(f"structure: {s['structure']}")
+    if "direct_term" in s:
+        d = s["direct_term"]
+        t = d.get("test")
+        why = (f" (held-out output error {t['held_out_nmse_with']:.3g} with D against "
+               f"{t['held_out_nmse_without']:.3g} without)" if t else "")
+        print(f"direct term D: {'estimated' if d['estimated'] else 'none (D = 0)'}"
+              f"{' (' + str(d['mode']) + ')' if d['mode'] != 'auto' else ''}{why}")
+    print(f"predictor gain K: {s['K_source']}")
     per = ", ".join(f"{name} {v:.2f}" for name, v in
                     zip(s["outputs"], s["signal_to_prediction_error_db_per_output"]))
     print(f"one-step signal-to-prediction-error ratio on the identification data (in-sample): "

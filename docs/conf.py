@@ -1,0 +1,132 @@
+"""Sphinx configuration of the trussid documentation site.
+
+Build (from the repository root)::
+
+    python -m sphinx -W -b html docs docs/_build/html
+
+The API reference is generated from the docstrings (numpydoc); the examples in
+``examples/`` are run by sphinx-gallery, which keeps their figures.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import pkgutil
+import sys
+from pathlib import Path
+
+from sphinx.pycode import ModuleAnalyzer
+
+import trussid
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(DOCS))  # for the gallery's argv helper, _gallery_argv.py
+
+project = "trussid"
+author = "trussid contributors"
+copyright = "2026, trussid contributors"  # noqa: A001 - Sphinx's name
+release = version = trussid.__version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "myst_parser",
+    "sphinx_gallery.gen_gallery",
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+exclude_patterns = ["_build", "**.ipynb_checkpoints", "auto_examples/*.ipynb",
+                    "auto_examples/*.py", "auto_examples/*.zip"]
+templates_path = ["_templates"]
+root_doc = "index"
+
+# API reference: one page per public name of each subpackage's __all__.
+autosummary_generate = True
+autosummary_ignore_module_all = False
+autosummary_imported_members = True  # the exports live in submodules
+autodoc_default_options = {"members": False}
+API_MODULES = ("trussid.fem", "trussid.plid", "trussid.geometry", "trussid.testbed",
+               "trussid.plots", "trussid.updating", "trussid.campaign")
+
+
+def _constants(name: str) -> list[dict]:
+    """The values in a module's ``__all__`` (materials, unit factors), with their doc.
+
+    autosummary sorts a module's members into classes, functions and exceptions; a
+    constant re-exported from a submodule falls in none of them, and autodoc would show
+    the docstring of its type (``float``). The module template lists these itself, with
+    the ``#:`` comment of the submodule that defines the value.
+    """
+    module = importlib.import_module(name)
+    docs = {}
+    if hasattr(module, "__path__"):
+        for info in pkgutil.iter_modules(module.__path__, name + "."):
+            analyzer = ModuleAnalyzer.for_module(info.name)
+            docs.update({attr: " ".join(lines).strip()
+                         for (_, attr), lines in analyzer.find_attr_docs().items()})
+    out = []
+    for n in getattr(module, "__all__", ()):
+        value = getattr(module, n)
+        if not (inspect.isclass(value) or callable(value) or inspect.ismodule(value)):
+            out.append({"name": n, "value": repr(value), "doc": docs.get(n, "")})
+    return out
+
+
+autosummary_context = {"constants": {name: _constants(name) for name in API_MODULES}}
+autodoc_typehints = "none"  # numpydoc sections carry the types and units
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_xref_param_type = False
+
+myst_heading_anchors = 3
+
+# The examples: run at build time unless they take minutes; figures kept.
+sphinx_gallery_conf = {
+    "examples_dirs": [str(ROOT / "examples")],
+    "gallery_dirs": ["auto_examples"],
+    "filename_pattern": r".*\.py$",
+    "ignore_pattern": r"__init__\.py",
+    "reset_argv": "_gallery_argv.reset_argv",
+    "within_subsection_order": "FileNameSortKey",
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "plot_gallery": "True",
+    "matplotlib_animations": False,
+    "show_memory": False,
+    # Run every example on every build: sphinx-gallery would otherwise skip an example
+    # whose file is unchanged, and a library change that breaks it would go unseen.
+    "run_stale_examples": True,
+}
+
+html_theme = "alabaster"
+html_title = f"trussid {release}"
+html_static_path: list[str] = []
+html_theme_options = {
+    "description": "Beam FE, control-ready plants and PLID identification for piezo-actuated trusses",
+    "fixed_sidebar": True,
+    "page_width": "1180px",  # room for the examples' code lines (up to ~100 characters)
+    "body_max_width": "none",
+}
+
+
+def _skip_foreign(app, what, name, obj, skip, options):
+    """Leave out names a module merely imports (matplotlib's Figure in trussid.plots).
+
+    Modules with an ``__all__`` list only its names; this matters for those without one,
+    where autosummary would otherwise document every imported class and function. Class
+    members always belong to trussid, so the rule leaves them alone.
+    """
+    module = getattr(obj, "__module__", None)
+    if isinstance(module, str):
+        if not module.startswith("trussid.") or module.startswith("trussid._util"):
+            return True
+    return None
+
+
+def setup(app):
+    app.connect("autodoc-skip-member", _skip_foreign)
