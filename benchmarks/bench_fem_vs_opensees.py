@@ -1,18 +1,21 @@
-"""FE benchmark: trussid against OpenSeesPy on the same structures (issue 2, acceptance item 9).
+"""FE benchmark: trussid against OpenSeesPy (and plain scipy) on the same structures (issues 2, 18).
 
 Usage::
 
     python benchmarks/bench_fem_vs_opensees.py [--sizes small|all] [--repeat 3]
-        [--tools trussid,opensees] [--json OUT.json]
+        [--tools trussid,opensees,scipy] [--json OUT.json] [--md OUT.md]
 
 For every structure of :data:`fem_models.SIZES` (a truss boom of triangular section of
-~1.5e4 and ~1.5e5 DOF, a cubic lattice frame of ~3e3 and ~3e4 DOF; ``--sizes small`` runs
-the smaller of each) and every tool, the lowest 20 modes are computed ``--repeat`` times,
+~1.5e4 and ~1.5e5 DOF, a cubic lattice frame of ~3e3, ~3e4 and ~1.4e5 DOF; ``--sizes
+small`` runs the smaller boom and lattice) and every tool (plain scipy only on
+:data:`SCIPY_CASES`), the lowest 20 modes are computed ``--repeat`` times,
 each run in a fresh child process, and the best run is reported. Phases timed
 (``time.perf_counter``):
 
 - trussid: *setup* = the spec arrays -> :class:`trussid.fem.Model`; *assembly* =
   :func:`trussid.fem.assembly.assemble`; *modes* = :func:`trussid.fem.modal.solve_modes` (20 modes).
+- scipy: trussid's setup and assembly, then *modes* = ``scipy.sparse.linalg.eigsh(K, 20,
+  M, sigma=0)`` with scipy's own shift-invert (SuperLU with its defaults).
 - OpenSeesPy: *setup* = the ``node``/``fix``/``geomTransf``/``element`` calls; *modes* =
   ``ops.eigen`` (20 modes), which forms K and M itself, so OpenSees' assembly is inside its
   modes time and cannot be timed apart from the Python side.
@@ -46,6 +49,10 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from fem_models import SIZES, SMALL, opensees_env, spec_from_name  # noqa: E402
+from results_io import RESULTS, finish, stamp, write_json  # noqa: E402
+
+#: Cases on which plain scipy (``eigsh`` shift-invert on its default SuperLU) is timed too.
+SCIPY_CASES = ("lattice-1.4e5",)
 
 N_MODES = 20
 #: OpenSeesPy settings per structure kind: the fastest combination that gives the right answer,
@@ -115,9 +122,35 @@ def worker_opensees(case: str, n_modes: int, solver: str, system: str | None, nu
             "n_dof": spec.n_free_dof, "base_mb": base, "frequencies_hz": np.sort(f).tolist()}
 
 
+def worker_scipy(case: str, n_modes: int) -> dict:
+    """Plain scipy: trussid's assembly, then ``eigsh(K, M=M, sigma=0)`` with scipy's own
+    shift-invert operator (``splu`` with its defaults: COLAMD ordering, partial pivoting)."""
+    import scipy.sparse.linalg as sla
+
+    from trussid.fem.assembly import assemble
+
+    from fem_models import to_trussid
+
+    base = _rss_mb()
+    spec = spec_from_name(case)
+    c0, t0 = time.process_time(), time.perf_counter()
+    model = to_trussid(spec)
+    t1 = time.perf_counter()
+    system = assemble(model)
+    t2 = time.perf_counter()
+    lam = sla.eigsh(system.K.tocsc(), k=n_modes, M=system.M.tocsc(), sigma=0.0, which="LM",
+                    return_eigenvectors=False)
+    t3 = time.perf_counter()
+    f = np.sqrt(np.maximum(np.sort(lam), 0.0)) / (2 * np.pi)
+    return {"setup": t1 - t0, "assembly": t2 - t1, "modes": t3 - t2, "cpu": time.process_time() - c0,
+            "n_dof": int(system.n_dof), "base_mb": base, "frequencies_hz": f.tolist()}
+
+
 def _worker_main(args) -> int:
     if args.worker == "trussid":
         out = worker_trussid(args.case, args.modes, args.method)
+    elif args.worker == "scipy":
+        out = worker_scipy(args.case, args.modes)
     else:
         out = worker_opensees(args.case, args.modes, args.os_solver or "-genBandArpack",
                               args.os_system, args.os_numberer)
@@ -171,6 +204,7 @@ def run_worker(tool: str, case: str, n_modes: int = N_MODES, timeout: float = 60
         err.seek(0)
         stdout, stderr = out.read(), err.read()
     result = {"tool": tool, "case": case, "wall": wall, "blas_threads": blas_threads, "settings": o, "peak_mb": usage.ru_maxrss / 1024.0,
+              "cpu_rusage": usage.ru_utime + usage.ru_stime,  # the child's CPU, also when killed
               "load_before": load_before, "load_after": os.getloadavg()[0]}
     lines = [ln for ln in stdout.splitlines() if ln.startswith("RESULT ")]
     if timed_out:
@@ -250,16 +284,46 @@ def markdown(results: dict, info: dict) -> str:
                 f"| {case} | {r['n_dof']} | {tool} | {_fmt(r['setup'])} | {asm} | {_fmt(r['modes'])} | "
                 f"{_fmt(r['assembly'] + r['modes'])} | {_fmt(r['total'])} | {_fmt(r['cpu'])} | {r['peak_mb']:.0f} ({r['base_mb']:.0f}) | "
                 f"{', '.join(map(str, r['totals']))} | {r['load_before']:.2f} |")
-        t, o = per_tool.get("trussid"), per_tool.get("opensees")
-        if t and o and t["status"] == "ok" and o["status"] == "ok":
+        t = per_tool.get("trussid")
+        for tool, label in (("opensees", "OpenSees"), ("scipy", "scipy")):
+            o = per_tool.get(tool)
+            if not (t and o and t["status"] == "ok" and o["status"] == "ok"):
+                continue
             ft, fo = np.asarray(t["frequencies_hz"]), np.asarray(o["frequencies_hz"])
             k = min(len(ft), len(fo))
             dev = np.max(np.abs(ft[:k] - fo[:k]) / fo[:k])
             lines.append(
-                f"| {case} | | **OpenSees / trussid** | {o['setup'] / t['setup']:.1f}x | | | "
-                f"**{o['modes'] / (t['assembly'] + t['modes']):.1f}x** | **{o['total'] / t['total']:.1f}x** | {o['cpu'] / t['cpu']:.1f}x | "
+                f"| {case} | | **{label} / trussid** | {o['setup'] / max(t['setup'], 1e-9):.1f}x | | | "
+                f"**{(o['assembly'] + o['modes']) / (t['assembly'] + t['modes']):.1f}x** | **{o['total'] / t['total']:.1f}x** | {o['cpu'] / t['cpu']:.1f}x | "
                 f"{o['peak_mb'] / t['peak_mb']:.2f}x | max rel. freq. diff {dev:.1e} | |")
     return "\n".join(lines)
+
+
+def readme_tables(results: dict, st: dict) -> dict:
+    """The README's FE table: per case, trussid against each comparator (best runs)."""
+    rows = []
+    for case, per_tool in results.items():
+        t = per_tool.get("trussid")
+        if not t or t["status"] != "ok":
+            continue
+        for tool, r in per_tool.items():
+            name = tool if not r.get("settings") else f"OpenSeesPy ({r['settings']['system']})"
+            name = {"trussid": "trussid", "scipy": "scipy eigsh shift-invert"}.get(tool, name)
+            if r["status"] != "ok":
+                rows.append([case, r.get("n_dof", t["n_dof"]), name, r["status"], "", f"{r['peak_mb']:.0f}", "",
+                             f"{r['load_before']:.1f}", st["commit"]])
+                continue
+            speed = "" if tool == "trussid" else f"{(r['assembly'] + r['modes']) / (t['assembly'] + t['modes']):.1f}x"
+            rows.append([case, r["n_dof"], name, f"{r['assembly'] + r['modes']:.2f}", f"{r['cpu']:.2f}",
+                         f"{r['peak_mb']:.0f}", speed, f"{r['load_before']:.1f}", st["commit"]])
+    return {"fem": {"columns": ["structure", "DOF", "tool", "assembly + 20 modes s", "CPU s", "peak MB",
+                                "tool / trussid time", "load (1-min)", "commit"],
+                    "rows": rows,
+                    "notes": (f"`python benchmarks/bench_fem_vs_opensees.py --sizes all`, {st['date_utc']}, "
+                              f"{st['machine']['nproc']} cores ({st['machine']['cpu']}), shared and loaded; "
+                              "best of up to 3 runs (runs over 2 min are not repeated), each in a fresh "
+                              "process; peak MB is that process's peak RSS, imports included. "
+                              "Details: benchmarks/results/fem_vs_opensees.md.")}}
 
 
 def sweep_opensees(case: str, timeout: float, repeat: int) -> list[dict]:
@@ -285,15 +349,20 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--sizes", choices=("small", "all"), default="small")
     p.add_argument("--cases", default=None, help="comma-separated cases (keys of SIZES or boom:<n>/lattice:<n>)")
     p.add_argument("--repeat", type=int, default=3)
-    p.add_argument("--tools", default="trussid,opensees")
-    p.add_argument("--timeout", type=float, default=600.0, help="per run [s]")
-    p.add_argument("--json", default=None, help="also write all runs to this JSON file")
+    p.add_argument("--tools", default="trussid,opensees,scipy",
+                   help="comma-separated; scipy runs only on --scipy-cases")
+    p.add_argument("--scipy-cases", default=",".join(SCIPY_CASES),
+                   help="cases on which plain scipy shift-invert is also timed")
+    p.add_argument("--timeout", type=float, default=1800.0, help="per run [s]")
+    p.add_argument("--json", default=None, help="write the stamped results to this JSON file "
+                   "(default with --sizes all: benchmarks/results/fem_vs_opensees.json)")
+    p.add_argument("--md", default=None, help="also write the markdown table to this file")
     p.add_argument("--blas-threads", type=int, default=None,
                    help="set OPENBLAS_NUM_THREADS and OMP_NUM_THREADS in both tools' processes")
     p.add_argument("--sweep-opensees", default=None, metavar="CASE",
                    help="time OpenSeesPy's linear-system/numberer options on CASE and exit")
     # worker mode (internal)
-    p.add_argument("--worker", choices=("trussid", "opensees"), help=argparse.SUPPRESS)
+    p.add_argument("--worker", choices=("trussid", "opensees", "scipy"), help=argparse.SUPPRESS)
     p.add_argument("--case", help=argparse.SUPPRESS)
     p.add_argument("--modes", type=int, default=N_MODES, help=argparse.SUPPRESS)
     p.add_argument("--method", default="auto", help="trussid solve_modes method")
@@ -305,6 +374,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.worker:
         return _worker_main(args)
     info = machine_info()
+    st = stamp()
     if args.sweep_opensees:
         rows = sweep_opensees(args.sweep_opensees, args.timeout, args.repeat)
         if args.json:
@@ -319,6 +389,8 @@ def main(argv: list[str] | None = None) -> int:
     for case in cases:
         results[case] = {}
         for tool in tools:
+            if tool == "scipy" and case not in args.scipy_cases.split(","):
+                continue
             runs = []
             for i in range(args.repeat):
                 r = run_worker(tool, case, timeout=args.timeout, method=args.method, opensees=opensees,
@@ -333,9 +405,19 @@ def main(argv: list[str] | None = None) -> int:
             results[case][tool] = best_of(runs)
             all_runs += runs
     info["loadavg_end"] = os.getloadavg()
-    print(markdown(results, info))
-    if args.json:
-        Path(args.json).write_text(json.dumps({"machine": info, "opensees": opensees, "runs": all_runs}, indent=1))
+    md = markdown(results, info)
+    print(md)
+    out = args.json or (str(RESULTS / "fem_vs_opensees.json") if args.sizes == "all" and not args.cases else None)
+    if out:
+        write_json(Path(out), {"stamp": finish(st), "machine": info, "opensees": opensees,
+                               "results": results, "runs": all_runs, "tables": readme_tables(results, st)})
+    if args.md:
+        Path(args.md).write_text(md + "\n")
+    # A trussid run that failed is a crash of the code under test: fail the command.
+    bad = [case for case, per_tool in results.items() if per_tool.get("trussid", {}).get("status", "ok") != "ok"]
+    if bad:
+        print(f"trussid failed on: {', '.join(bad)}", file=sys.stderr)
+        return 1
     return 0
 
 

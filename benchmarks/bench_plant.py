@@ -37,24 +37,44 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=20)
     ap.add_argument("--out", default=None, help="append a markdown row to this file")
+    ap.add_argument("--json", default=None, help="write the stamped results (README table) here")
+    ap.add_argument("--quick", action="store_true", help="3 repeats (CI)")
     args = ap.parse_args()
+    if args.quick:
+        args.repeat = 3
+    import sys
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from results_io import finish, stamp, write_json
+
+    st = stamp()
 
     from trussid.testbed.plant import testbed_plant
 
     first = time.perf_counter()
     plant = testbed_plant()                        # includes imports' first-use costs
     first = time.perf_counter() - first
-    times = []
+    times, cpu = [], []
     for _ in range(args.repeat):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         plant = testbed_plant()
         times.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
     best, median = min(times), statistics.median(times)
     row = (f"| {time.strftime('%Y-%m-%d %H:%M')} | {plant.discrete.nstates} states, "
            f"{len(plant.modes.omega)} modes | {first:.3f} | {best:.3f} | {median:.3f} | "
            f"{'yes' if best < 0.1 else 'no'} | {machine()} |")
     print("first call [s], best [s], median [s]:", f"{first:.3f} {best:.3f} {median:.3f}")
     print(row)
+    if args.json:
+        write_json(args.json, {"stamp": finish(st), "tables": {"plant": {
+            "columns": ["testbed plant build (modes included)", "best of %d (wall)" % args.repeat, "median (wall)",
+                        "best CPU", "first call", "load (1-min)", "commit"],
+            "rows": [[f"{plant.discrete.nstates} states, {len(plant.modes.omega)} modes", f"{1e3 * best:.0f} ms",
+                      f"{1e3 * median:.0f} ms", f"{1e3 * min(cpu):.0f} ms", f"{first:.2f} s",
+                      f"{os.getloadavg()[0]:.1f}", st["commit"]]],
+            "notes": f"`python benchmarks/bench_plant.py`, {st['date_utc']}, one BLAS thread; the first call "
+                     "pays imports and first-use costs."}}})
     if args.out:
         path = Path(args.out)
         if not path.exists():

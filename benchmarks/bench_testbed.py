@@ -54,7 +54,15 @@ def main(argv=None) -> int:
     p.add_argument("--rebuild-designs", type=int, default=40, help="designs timed with the rebuild paths")
     p.add_argument("--repeat", type=int, default=5)
     p.add_argument("--out", default=None, help="also write the results as Markdown here")
+    p.add_argument("--json", default=None, help="write the stamped results (README table) here")
+    p.add_argument("--quick", action="store_true", help="20 designs, 5 rebuilds, 2 repeats (CI)")
     args = p.parse_args(argv)
+    if args.quick:
+        args.designs, args.rebuild_designs, args.repeat = 20, 5, 2
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from results_io import finish, stamp, write_json
+
+    st = stamp()
 
     from trussid.fem.assembly import assemble
     from trussid.fem.modal import solve_modes
@@ -156,6 +164,20 @@ def main(argv=None) -> int:
     ]
     text = "\n".join(lines) + "\n"
     print(text)
+    if args.json:
+        la = f"{os.getloadavg()[0]:.1f}"
+        rows = [["build + assemble + 30 modes", f"{1e3 * med(single):.1f} ms", f"median of {args.repeat}", la,
+                 st["commit"]],
+                ["wall-thickness sweep (wall_basis + wall_modes)",
+                 f"{args.designs / (c_sweep + c_basis):.0f} designs per CPU-s",
+                 f"{args.designs / (t_sweep + t_basis):.0f} per wall-s, {args.designs} designs", la, st["commit"]]]
+        write_json(args.json, {"stamp": finish(st), "n_dof": n_dof, "sweep_vs_rebuild_max_rel_diff": agree,
+                               "tables": {"testbed": {
+                                   "columns": ["testbed (default, %d DOF)" % n_dof, "figure", "how", "load (1-min)",
+                                               "commit"],
+                                   "rows": rows,
+                                   "notes": f"`python benchmarks/bench_testbed.py`, {st['date_utc']}, one BLAS "
+                                            "thread; details: benchmarks/results/testbed.md."}}})
     if args.out:
         from trussid._util.files import atomic_path
 

@@ -48,6 +48,7 @@ SIZES = {
     "boom-1.5e5": "boom:2083",     # 149 994 free DOFs
     "lattice-3e3": "lattice:8",    # 6 * 64 * 7 = 2 688 free DOFs (3 072 before the base clamp)
     "lattice-3e4": "lattice:17",   # 6 * 289 * 16 = 27 744 free DOFs (the issue's 2.8e4 case)
+    "lattice-1.4e5": "lattice:29",  # 6 * 841 * 28 = 141 288 free DOFs (issue 18's next size)
 }
 SMALL = ("boom-1.5e4", "lattice-3e3")
 

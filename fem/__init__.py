@@ -16,6 +16,7 @@ _LAZY = {
     "Modes": "modal", "solve_modes": "modal",
     "solve_static": "static",
     "read_bdf": "nastran", "write_bdf": "nastran",
+    "write_op2": "op2", "read_op2_modes": "op2", "guyan": "reduction",
     "Wafer": "actuators", "strain_actuator_loads": "actuators",
     "Sensor": "sensors", "sensor_matrix": "sensors",
     "modal_plant": "plant", "residual_flexibility": "plant",

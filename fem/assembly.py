@@ -29,14 +29,16 @@ class System:
     K, M : (n_red, n_red) scipy.sparse.csr_matrix
         Symmetric stiffness [N/m ...] and mass [kg ...] on the reduced DOFs.
     T : (6 n_nodes, n_red) scipy.sparse.csr_matrix
-        Full DOF vector = ``T @ q`` (supported DOFs zero, rigid-body slaves expanded).
+        Full DOF vector in global axes = ``T @ q`` (supported DOFs zero, rigid-body slaves
+        and constrained DOFs expanded, omitted DOFs recovered statically).
     node_ids : (n_nodes,) int
     xyz : (n_nodes, 3) float
         Node coordinates [m].
     n_dof : int
         Number of reduced DOFs ``n_red``.
     dofs : (n_red,) int
-        Full DOF index (``6 * node_index + component``) of each reduced DOF.
+        Full DOF index (``6 * node_index + component``, components in the node's
+        displacement frame) of each reduced DOF.
     autospc : list of (int, str)
         ``(node_id, component)`` removed because they had neither stiffness nor mass.
     mass_formulation : str
@@ -45,6 +47,10 @@ class System:
     has_supports : bool
         The model had supports (then zero-frequency modes are mechanisms).
     name : str
+    inert : (6 n_nodes,) bool or None
+        Full DOFs with neither stiffness nor mass before constraints: nothing acts on them,
+        so a support there (NASTRAN GRID PS on an unconnected rotation) does not stop a
+        rigid-body motion.
     """
 
     K: sp.csr_matrix
@@ -59,6 +65,7 @@ class System:
     beam_theory: str = "euler-bernoulli"
     has_supports: bool = False
     name: str = "model"
+    inert: np.ndarray | None = None
 
     def dof_label(self, j: int) -> str:
         """``"node 7 rz"`` for reduced DOF ``j``."""
@@ -126,6 +133,19 @@ def spring_matrices(model) -> tuple[list, list]:
         blocks.append(k6[grounded])
         dofs.append(_element_dofs(ia[grounded][:, None]))
     return blocks, dofs
+
+
+def general_blocks(model) -> tuple[list, list, list]:
+    """Stiffness blocks, mass blocks and DOF indices of ``Model.add_matrices`` elements."""
+    K, M, dofs = [], [], []
+    for g in getattr(model, "general", []):
+        if len(g) == 0:
+            continue
+        idx = model.index_of(g.nodes, what=lambda pos, g=g: f"{g.label or 'element'} {g.ids[pos // g.nodes.shape[1]]}")
+        K.append(g.K)
+        M.append(g.M)
+        dofs.append(_element_dofs(idx))
+    return K, M, dofs
 
 
 def mass_blocks(model) -> tuple[list, list]:
@@ -233,12 +253,13 @@ def assemble(model, autospc: bool = False) -> System:
     Kb, Mb, db = beam_matrices(model)
     ks, ds = spring_matrices(model)
     ms, dm = mass_blocks(model)
-    K_full = _coo([Kb] + ks, [db] + ds, n)
-    M_full = _coo([Mb] + ms, [db] + dm, n)
+    kg, mg, dg = general_blocks(model)
+    K_full = _coo([Kb] + ks + kg, [db] + ds + dg, n)
+    M_full = _coo([Mb] + ms + mg, [db] + dm + dg, n)
 
     fixed = model.fixed_mask()
     T, dofs = build_transformation(model, fixed)
-    if model.rigid_bodies:
+    if model.rigid_bodies or getattr(model, "constraints", None) or model.node_frames() is not None:
         Tt = T.T.tocsr()
         K = (Tt @ K_full @ T).tocsr()
         M = (Tt @ M_full @ T).tocsr()
@@ -267,6 +288,16 @@ def assemble(model, autospc: bool = False) -> System:
         raise ModelError("the model has no free DOF left after supports and constraints")
     K.sort_indices()
     M.sort_indices()
-    return System(K=K, M=M, T=T, node_ids=node_ids, xyz=model.xyz, n_dof=K.shape[0], dofs=dofs,
-                  autospc=removed, mass_formulation=model.mass_formulation,
-                  beam_theory=model.beam_theory, has_supports=model.has_supports, name=model.name)
+    inert = (K_full.diagonal() == 0) & (M_full.diagonal() == 0)
+    system = System(K=K, M=M, T=T, node_ids=node_ids, xyz=model.xyz, n_dof=K.shape[0], dofs=dofs,
+                    autospc=removed, mass_formulation=model.mass_formulation,
+                    beam_theory=model.beam_theory, has_supports=model.has_supports, name=model.name,
+                    inert=inert)
+    omitted = model.omitted_mask().reshape(-1) if hasattr(model, "omitted_mask") else None
+    if omitted is not None and omitted.any():
+        from trussid.fem.reduction import guyan
+
+        # Omitted DOFs that were supported, dependent or removed by AUTOSPC are not in the
+        # system any more: only the remaining ones are condensed.
+        system = guyan(system, omitted[dofs])
+    return system

@@ -256,11 +256,8 @@ def check_beam_properties(beams, theory: str = "euler-bernoulli") -> None:
     Sections and materials validate themselves, but beams added from dicts of arrays (e.g.
     by the NASTRAN reader) arrive unchecked.
     """
-    checks = [("E", beams.E), ("G", beams.G), ("rho", beams.rho), ("A", beams.A)]
+    checks = [("E", beams.E), ("G", beams.G), ("A", beams.A)]
     frame = ~np.asarray(beams.rod, bool)
-    checks += [("Iy", np.where(frame, beams.Iy, 1.0)), ("Iz", np.where(frame, beams.Iz, 1.0))]
-    # A rod may omit J (axial only); a frame element needs it.
-    checks += [("J", np.where(frame, beams.J, 1.0))]
     for key, value in checks:
         value = np.asarray(value, float)
         bad = ~(np.isfinite(value) & (value > 0))
@@ -268,10 +265,22 @@ def check_beam_properties(beams, theory: str = "euler-bernoulli") -> None:
             i = int(np.flatnonzero(bad)[0])
             raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): {key} must be positive "
                              f"and finite, got {value[i]!r}")
-    rod_j = np.asarray(beams.J, float)[~frame]
-    bad = ~(np.isfinite(rod_j) & (rod_j >= 0))
+    # Zero density (a massless element: all mass in point masses, as in aeroelastic stick
+    # models), zero second moments and J = 0 (NASTRAN's default: no torsional stiffness)
+    # are legal: they leave DOFs without mass or stiffness, which AUTOSPC, the modal solver
+    # (massless DOFs) or the mechanism check handle, each with its own message.
+    for key, value in (("rho", beams.rho), ("Iy", np.where(frame, beams.Iy, 1.0)),
+                       ("Iz", np.where(frame, beams.Iz, 1.0))):
+        value = np.asarray(value, float)
+        bad = ~(np.isfinite(value) & (value >= 0))
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): {key} must be >= 0 "
+                             f"and finite, got {value[i]!r}")
+    all_j = np.asarray(beams.J, float)
+    bad = ~(np.isfinite(all_j) & (all_j >= 0))
     if bad.any():
-        i = int(np.flatnonzero(~frame)[np.flatnonzero(bad)[0]])
+        i = int(np.flatnonzero(bad)[0])
         raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): J must be >= 0, got {beams.J[i]!r}")
     nsm = np.asarray(beams.nsm, float)
     bad = ~(np.isfinite(nsm) & (nsm >= 0))

@@ -22,13 +22,16 @@ import scipy.sparse.linalg as sla
 from trussid.fem.assembly import System, assemble
 from trussid.fem.constraints import rigid_body_modes
 from trussid.fem.errors import ModelError
+from trussid.fem.factor import SPDFactor, cholmod_available
 from trussid._util.threads import blas_threads
 
 #: OpenBLAS threads used by the eigen and static solutions. The BLAS calls inside
 #: SuperLU and ARPACK are small (supernodes of tens of columns, level-2 updates), so
 #: threads only add synchronisation: measured on the shared 2-core machine under load,
 #: 20 modes of the 2.8e4-DOF lattice took 9.6 s CPU / 38 s wall with 2 threads and
-#: 5.4 s / 19 s with 1 (1.5e5-DOF boom: 5.1 s / 17.5 s vs 1.9 s / 6.6 s).
+#: 5.4 s / 19 s with 1 (1.5e5-DOF boom: 5.1 s / 17.5 s vs 1.9 s / 6.6 s). Those figures
+#: are SuperLU's; CHOLMOD's supernodal blocks (:mod:`trussid.fem.factor`) are BLAS-3 and
+#: could use a second thread on an idle machine, not on this shared one.
 BLAS_THREADS = 1
 
 #: Above this many reduced DOFs ``method="auto"`` switches from dense to shift-invert
@@ -71,69 +74,6 @@ class Modes:
 
     def __len__(self) -> int:
         return len(self.frequencies_hz)
-
-
-# ---------------------------------------------------------------------------- factorisation
-class SPDFactor:
-    """Sparse direct solver for a symmetric positive definite matrix.
-
-    SuperLU (``scipy.sparse.linalg.splu``) is scipy's only sparse direct solver. Used with
-    its defaults (COLAMD ordering, partial pivoting) it ignores symmetry and fills in
-    badly on frames. Here it runs in "symmetric mode" without pivoting (diagonal pivots of
-    a positive definite matrix need none), on a fill-reducing ordering computed on the
-    *node* graph when ``groups`` (the node of each DOF) is given: SuperLU's minimum degree
-    on ``A + A^T`` of the node graph, each node's DOFs kept together, which makes dense
-    6-column supernodes. Measured (CPU, 2.8e4-DOF cubic lattice): defaults 34 s /
-    8.4e7 factor entries; minimum degree on the DOF graph 7.2 s / 4.0e7; on the node graph
-    3.1 s / 2.5e7 (1.5e5-DOF boom: 0.30 s -> 0.17 s). Reverse Cuthill-McKee and a
-    geometric nested dissection were also tried: no better.
-
-    Parameters
-    ----------
-    A : scipy.sparse matrix
-        Symmetric positive definite.
-    groups : (n,) int, optional
-        Group (node) of each row; rows of one group are ordered together.
-    """
-
-    def __init__(self, A, groups=None):
-        A = sp.csc_matrix(A)
-        self.n = A.shape[0]
-        opts = dict(diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-        if groups is None:
-            self.perm = None
-            self.lu = sla.splu(A, permc_spec="MMD_AT_PLUS_A", **opts)
-            return
-        uniq, g = np.unique(np.asarray(groups), return_inverse=True)
-        P = sp.csr_matrix((np.ones(self.n), (g, np.arange(self.n))), shape=(len(uniq), self.n))
-        pattern = A.copy()
-        pattern.data = np.abs(pattern.data)
-        G = (P @ pattern @ P.T).tocsc()
-        # Only the pattern matters to the ordering; a dominant diagonal keeps this small
-        # auxiliary factorisation trivially stable.
-        G = G + sp.diags(np.full(len(uniq), 1.0 + 2.0 * abs(G).sum(axis=1).max()))
-        node_pos = sla.splu(G.tocsc(), permc_spec="MMD_AT_PLUS_A", **opts).perm_c
-        self.perm = np.lexsort((np.arange(self.n), node_pos[g]))  # DOFs of a node together
-        self.lu = sla.splu(A[self.perm][:, self.perm].tocsc(), permc_spec="NATURAL", **opts)
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        """``A^-1 b`` for b of shape (n,) or (n, k)."""
-        b = np.asarray(b, dtype=float)
-        if self.perm is None:
-            return self.lu.solve(b)
-        x = np.empty_like(b)
-        x[self.perm] = self.lu.solve(np.ascontiguousarray(b[self.perm]))
-        return x
-
-    def pivots(self) -> np.ndarray:
-        """Diagonal of U in the original DOF order (for singularity diagnosis)."""
-        # SuperLU factors Pr B Pc with column i of B moved to position perm_c[i].
-        d = self.lu.U.diagonal()[self.lu.perm_c]
-        if self.perm is None:
-            return d
-        out = np.empty(self.n)
-        out[self.perm] = d
-        return out
 
 
 # ---------------------------------------------------------------------------- eigen solution
@@ -188,7 +128,7 @@ def _dense(system: System, k: int, sigma: float | None):
     except la.LinAlgError:
         # K - sigma M is singular: a direction with neither stiffness nor mass.
         diag = np.abs(np.diag(B))
-        fac = SPDFactor(sp.csc_matrix(B) + sp.diags(1e-13 * np.where(diag > 0, diag, 1.0)))
+        fac = SPDFactor(sp.csc_matrix(B) + sp.diags(1e-13 * np.where(diag > 0, diag, 1.0)), backend="superlu")
         j = int(np.argmin(fac.pivots() / np.where(diag > 0, diag, 1.0)))
         raise ModelError(f"mechanism: {system.dof_label(j)} has neither mass nor a stiffness "
                          f"that restrains it") from None
@@ -238,8 +178,7 @@ def _shift_invert(system: System, k: int, sigma: float | None, tol: float):
         if fac is not None and lam is not None:
             if not (lam < ZERO_EIGENVALUE * eigenvalue_scale(system)).any():
                 return lam, X, True
-            diag = K.diagonal()
-            if not (fac.pivots() / np.where(diag > 0, diag, 1.0) < SINGULAR_PIVOT).any():
+            if fac.min_pivot_ratio() >= SINGULAR_PIVOT:
                 return lam, X, True
             # Nearly singular: redo with a negative shift for accurate flexible modes; the
             # zero-frequency modes are then checked for rigid-body motion or a mechanism.
@@ -282,11 +221,11 @@ def factor_stiffness(system: System):
     except RuntimeError:
         # An exactly zero pivot: SuperLU does not say where. A diagonal perturbation far
         # below the test threshold makes the factorisation succeed and the pivot visible.
-        fac = SPDFactor(system.K + sp.diags(1e-3 * SINGULAR_PIVOT * scale), groups=system.dofs // 6)
+        fac = SPDFactor(system.K + sp.diags(1e-3 * SINGULAR_PIVOT * scale), groups=system.dofs // 6,
+                        backend="superlu")
         return None, int(np.argmin(fac.pivots() / scale))
-    ratio = fac.pivots() / scale
-    if (ratio < SINGULAR_PIVOT).any():
-        return None, int(np.argmin(ratio))
+    if fac.min_pivot_ratio() < SINGULAR_PIVOT:
+        return None, int(np.argmin(fac.pivots() / scale))
     return fac, None
 
 
@@ -352,6 +291,7 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
         component where the factorisation of K finds no stiffness.
     """
     system = model_or_system if isinstance(model_or_system, System) else assemble(model_or_system, autospc=autospc)
+    cholmod_available()  # loads cvxopt's own BLAS before the thread limit is set
     with blas_threads(BLAS_THREADS):
         return _solve_modes(system, n_modes, method, sigma, tol)
 
@@ -399,7 +339,12 @@ def rigid_null_dimension(system: System) -> int:
     Q = R[system.dofs]                             # reduced coordinates of each motion
     w = np.tile(np.r_[np.ones(3), np.full(3, size)], len(xyz))[:, None]  # rotations in length units
     D = (system.T @ Q - R) * w
-    _, sv, Vt = np.linalg.svd(D, full_matrices=True)
+    inert = getattr(system, "inert", None)
+    if inert is not None:
+        D[inert] = 0.0  # nothing acts on these DOFs: a support there stops no motion
+    # Thin SVD: D is (6 n_nodes, 6) and only its right singular vectors are needed; a full
+    # one forms a dense (6 n_nodes)^2 U (3.5 GB and 10 s at 1.5e4 DOF, tests/fem/test_scaling.py).
+    _, sv, Vt = np.linalg.svd(D, full_matrices=False)
     sv = np.r_[sv, np.zeros(6 - len(sv))]
     admissible = Vt[sv <= 1e-9 * max(np.linalg.norm(R * w), 1.0)].T   # (6, a)
     if admissible.shape[1] == 0:

@@ -177,6 +177,61 @@ class RigidBody:
     label: str = ""
 
 
+@dataclass
+class LinearConstraint:
+    """Dependent DOFs as linear combinations of independent ones (MPC, RBAR, RBE3...).
+
+    ``u[dependent] = C @ u[independent]``, every component in its node's displacement frame
+    (:meth:`Model.set_node_frames`; global axes by default). Applied by DOF transformation
+    together with the rigid bodies: a dependent DOF must not be supported or dependent in
+    another constraint; independent DOFs may be dependent elsewhere (chains are composed).
+
+    Attributes
+    ----------
+    id : int
+    dep_nodes, dep_comps : (m,) int
+        Node ids and 0-based components (0..5 = ux..rz) of the dependent DOFs.
+    ind_nodes, ind_comps : (p,) int
+        Node ids and components of the independent DOFs.
+    C : (m, p) float
+        Coefficients [m/m, m/rad, rad/m as the components dictate].
+    label : str
+        For messages (e.g. ``"RBE3 7"``).
+    """
+
+    id: int
+    dep_nodes: np.ndarray
+    dep_comps: np.ndarray
+    ind_nodes: np.ndarray
+    ind_comps: np.ndarray
+    C: np.ndarray
+    label: str = ""
+
+
+@dataclass
+class GeneralElements:
+    """Element matrices given directly (NASTRAN GENEL/DMIG-like), one stack per call.
+
+    Attributes
+    ----------
+    ids : (n,) int
+    nodes : (n, k) int
+        Node ids joined by each element.
+    K, M : (n, 6k, 6k) float
+        Stiffness and mass in global axes, DOF order ``ux..rz`` of each node in turn.
+    label : str
+    """
+
+    ids: np.ndarray
+    nodes: np.ndarray
+    K: np.ndarray
+    M: np.ndarray
+    label: str = ""
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+
 class Model:
     """A 3-D frame model under construction.
 
@@ -215,6 +270,10 @@ class Model:
         self._springs: list[dict[str, np.ndarray]] = []
         self.rigid_bodies: list[RigidBody] = []
         self._fixed: list[tuple[np.ndarray, np.ndarray]] = []
+        self._omitted: list[tuple[np.ndarray, np.ndarray]] = []
+        self._frames: list[tuple[np.ndarray, np.ndarray]] = []
+        self.constraints: list[LinearConstraint] = []
+        self.general: list[GeneralElements] = []
 
     # ------------------------------------------------------------------ nodes
     def add_nodes(self, ids, xyz) -> None:
@@ -232,6 +291,37 @@ class Model:
     def add_node(self, id: int, xyz) -> None:
         """Add one node."""
         self.add_nodes([id], [xyz])
+
+    def set_node_frames(self, ids, frames) -> None:
+        """Give nodes a displacement frame (NASTRAN's GRID CD).
+
+        The six DOFs of such a node are its translations and rotations along the frame's
+        axes; supports (:meth:`fix`), rigid-body and linear-constraint components and
+        :meth:`omit` refer to them. Element matrices stay in global axes; the assembled
+        ``System.T`` maps the reduced DOFs to global displacements.
+
+        Parameters
+        ----------
+        ids : (n,) int
+            Node ids.
+        frames : (3, 3) or (n, 3, 3) float
+            Rows are the frame's axes in global coordinates (orthonormal).
+        """
+        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        fr = np.broadcast_to(np.asarray(frames, float), (len(ids), 3, 3)).copy()
+        err = np.abs(fr @ fr.transpose(0, 2, 1) - np.eye(3)).max(axis=(1, 2)) if len(ids) else np.zeros(0)
+        if (err > 1e-9).any():
+            raise ModelError(f"node {ids[err > 1e-9][0]}: displacement frame axes are not orthonormal")
+        self._frames.append((ids, fr))
+
+    def node_frames(self) -> np.ndarray | None:
+        """(n_nodes, 3, 3) displacement frames in node index order, or None if all global."""
+        if not self._frames:
+            return None
+        out = np.broadcast_to(np.eye(3), (self.n_nodes, 3, 3)).copy()
+        for ids, fr in self._frames:
+            out[np.atleast_1d(self.index_of(ids, what="a displacement frame"))] = fr
+        return out
 
     @property
     def node_ids(self) -> np.ndarray:
@@ -410,9 +500,75 @@ class Model:
             cg=None if cg is None else np.asarray(cg, dtype=float), inertia=inertia, label=label or f"rigid body {id}",
         ))
 
+    def add_constraint(self, id: int, dependent, independent, C, label: str = "") -> None:
+        """Add linear constraints ``u[dependent] = C @ u[independent]``.
+
+        Parameters
+        ----------
+        id : int
+        dependent, independent : ((m,) int, (m,) int) and ((p,) int, (p,) int)
+            Node ids and 0-based components (0..5) of the dependent and independent DOFs, in
+            the nodes' displacement frames.
+        C : (m, p) float
+        label : str
+        """
+        dn, dc = (np.atleast_1d(np.asarray(a, dtype=np.int64)) for a in dependent)
+        inn, ic = (np.atleast_1d(np.asarray(a, dtype=np.int64)) for a in independent)
+        C = np.asarray(C, float).reshape(len(dn), len(inn))
+        name = label or f"constraint {id}"
+        if len(dc) != len(dn) or len(ic) != len(inn):
+            raise ModelError(f"{name}: nodes and components differ in length")
+        if ((dc < 0) | (dc > 5)).any() or ((ic < 0) | (ic > 5)).any():
+            raise ModelError(f"{name}: components must be 0..5")
+        if not np.isfinite(C).all():
+            raise ModelError(f"{name}: coefficients are not finite")
+        self.constraints.append(LinearConstraint(int(id), dn, dc, inn, ic, C, name))
+
+    def add_matrices(self, ids, nodes, K=None, M=None, label: str = "") -> None:
+        """Add elements given by their matrices in global axes (GENEL/DMIG-like).
+
+        Parameters
+        ----------
+        ids : (n,) int
+        nodes : (n, k) int
+            Node ids joined by each element.
+        K, M : (n, 6k, 6k) float, optional
+            Symmetric stiffness and mass [SI per DOF pair]; default zero.
+        label : str
+        """
+        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        nodes = np.asarray(nodes, dtype=np.int64).reshape(len(ids), -1)
+        size = 6 * nodes.shape[1]
+        mats = []
+        for name, A in (("K", K), ("M", M)):
+            A = np.zeros((len(ids), size, size)) if A is None else np.asarray(A, float).reshape(len(ids), size, size)
+            bad = ~np.isfinite(A).all(axis=(1, 2)) | (np.abs(A - A.transpose(0, 2, 1)).max(axis=(1, 2), initial=0.0)
+                                                     > 1e-9 * np.abs(A).max(axis=(1, 2), initial=0.0))
+            if bad.any():
+                raise ModelError(f"{label or 'element'} {ids[bad][0]}: {name} must be finite and symmetric")
+            mats.append(A)
+        self.general.append(GeneralElements(ids, nodes, mats[0], mats[1], label))
+
     # ------------------------------------------------------------------ supports
+    def omit(self, nodes, dofs: str = "123456") -> None:
+        """Condense components ``dofs`` of node ids ``nodes`` statically (Guyan, NASTRAN OMIT).
+
+        See :func:`trussid.fem.reduction.guyan`: exact for DOFs without mass, an
+        approximation otherwise.
+        """
+        nodes = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        self._omitted.append((nodes, parse_dofs(dofs)))
+
+    def omitted_mask(self) -> np.ndarray:
+        """(n_nodes, 6) bool: DOFs to condense (:meth:`omit`), in node index order."""
+        mask = np.zeros((self.n_nodes, 6), dtype=bool)
+        for nodes, comps in self._omitted:
+            idx = self.index_of(nodes, what="an omitted DOF")
+            mask[np.ix_(np.atleast_1d(idx), comps.nonzero()[0])] = True
+        return mask
+
     def fix(self, nodes, dofs: str = "123456") -> None:
-        """Support (eliminate) components ``dofs`` at node ids ``nodes``."""
+        """Support (eliminate) components ``dofs`` at node ids ``nodes`` (in their frames)."""
         nodes = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
         self._fixed.append((nodes, parse_dofs(dofs)))
 

@@ -20,9 +20,15 @@ Conventions that matter
   ``Iy = I2``. Shear areas are ``K1 A`` (along y) and ``K2 A`` (along z).
 * Shear flexibility follows NASTRAN: PBAR without K1/K2 has none (infinite shear area);
   PBEAM has K1 = K2 = 1.0 by default (0.0 means none); PBARL/PBEAML compute shear
-  factors from the shape (here: the Cowper factors of :mod:`trussid.fem.sections`, whose torsion
-  constants are used too). The model is Timoshenko when any CBAR/CBEAM has a finite shear
-  area, else Euler-Bernoulli.
+  factors from the shape: ROD 0.9 as recent NASTRAN builds convert it, the other shapes the
+  Cowper factors of :mod:`trussid.fem.sections` (whose torsion constants are used too). The
+  model is Timoshenko when any CBAR/CBEAM has a finite shear area, else Euler-Bernoulli.
+* Element mass follows NASTRAN where it differs from :mod:`trussid.fem.elements` (lumped
+  CBEAM torsional inertia, coupled CROD, CBAR and shear-flexible CBEAM mass): see
+  :func:`_nastran_mass_conventions`; these were found on real NASTRAN output.
+* Displacement systems (GRID CD, rectangular, cylindrical or spherical) become node frames
+  of the model (:meth:`trussid.fem.Model.set_node_frames`): supports, scalar masses and
+  springs, rigid elements, MPCs and OP2 results refer to them, as in NASTRAN.
 * CONM2 inertia: the deck gives I11, I21, I22, I31, I32, I33 with the products of inertia as
   positive integrals (I21 = int x1 x2 dm); NASTRAN supplies the minus signs, so the tensor
   is ``[[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]]`` (MSC/Autodesk QRG, CONM2
@@ -48,22 +54,70 @@ from trussid.fem.sections import Section
 
 #: Bulk-data cards :func:`read_bdf` translates.
 SUPPORTED_CARDS = frozenset({
-    "GRID", "CORD1R", "CORD2R", "CORD1C", "CORD2C", "CORD1S", "CORD2S",
+    "GRID", "GRDSET", "CORD1R", "CORD2R", "CORD1C", "CORD2C", "CORD1S", "CORD2S",
     "CBAR", "CBEAM", "CROD", "CONROD", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PTUBE",
-    "MAT1", "CONM2", "RBE2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH",
-    "SPC", "SPC1", "SPCADD", "EIGRL", "EIGR", "PARAM", "ENDDATA",
+    "MAT1", "CONM2", "CMASS1", "CMASS2", "PMASS", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH",
+    "RBE2", "RBE3", "RBAR", "MPC", "MPCADD", "CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR",
+    "SPC", "SPC1", "SPCADD", "OMIT", "OMIT1", "ASET", "ASET1", "SUPORT", "SUPORT1", "SPOINT",
+    "EIGRL", "EIGR", "PARAM", "ENDDATA",
 })
 
+#: NASTRAN-95 rigid elements that pyNastran does not parse: read from the raw card lines.
+RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR"})
+
+#: Entries that cannot change the real eigenvalues of the structure: accepted, not
+#: translated, and listed with their counts in :attr:`BdfInfo.ignored`. Loads and enforced
+#: motion (a SOL 103 run has no load; SPCD values are irrelevant to modes, their SPC set is
+#: read), dynamic-load, frequency and random tables, damping (real modes are undamped),
+#: aeroelastic model (its splines only read the structural modes), output and DMAP book-
+#: keeping (USET, DTI, MDLPRM, PLOTEL), thermal materials (MAT4/MAT5: heat transfer only)
+#: and the complex-eigenvalue method EIGC.
+IGNORED_CARDS = frozenset({
+    # static and dynamic loads, enforced motion
+    "FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "LOAD", "GRAV", "ACCEL",
+    "ACCEL1", "PLOAD", "PLOAD1", "PLOAD2", "PLOAD4", "RFORCE", "SPCD", "DLOAD", "RLOAD1",
+    "RLOAD2", "TLOAD1", "TLOAD2", "DAREA", "DELAY", "DPHASE", "LSEQ", "ACSRCE",
+    # tables, frequencies, random and transient set-up
+    "TABLED1", "TABLED2", "TABLED3", "TABLED4", "TABDMP1", "TABRND1", "TABRNDG", "RANDPS",
+    "RANDT1", "FREQ", "FREQ1", "FREQ2", "FREQ3", "FREQ4", "FREQ5", "TSTEP", "TSTEP1", "NLPARM",
+    "EIGC", "EPOINT",
+    # damping elements (real modes are undamped)
+    "CDAMP1", "CDAMP2", "CDAMP3", "CDAMP4", "CVISC", "PDAMP", "PVISC",
+    # aeroelastic model
+    "AERO", "AEROS", "CAERO1", "CAERO2", "CAERO3", "CAERO4", "CAERO5", "PAERO1", "PAERO2",
+    "PAERO3", "PAERO4", "PAERO5", "SPLINE1", "SPLINE2", "SPLINE3", "SPLINE4", "SPLINE5", "SET1",
+    "SET2", "AEFACT", "AELIST", "AESTAT", "AESURF", "AESURFS", "AELINK", "AEPARM", "AECOMP",
+    "AECOMPL", "MKAERO1", "MKAERO2", "FLFACT", "FLUTTER", "GUST", "TRIM", "DIVERG", "MONPNT1",
+    "MONPNT2", "MONPNT3", "MONDSP1", "CSSCHD", "AEDW", "AEPRESS", "AEFORCE",
+    # output, sets for DMAP, tables for post-processing, plotting
+    "MDLPRM", "USET", "USET1", "DTI", "PLOTEL",
+    # heat-transfer materials (structural SOL 103 does not use them)
+    "MAT4", "MAT5",
+})
+
+#: Temperature-dependent material entries: ignored like the above unless the deck gives
+#: temperatures (TEMP/TEMPD), when they would change the stiffness and are refused.
+THERMAL_CARDS = frozenset({"MATT1", "TABLEM1", "TABLEM2", "TABLEM3", "TABLEM4", "TEMPD", "TEMP"})
+
 #: PARAMs read, and PARAMs without effect on the model's real modes (output and solver
-#: book-keeping, damping, shell-only settings: shells are refused anyway), accepted and
-#: listed in :attr:`BdfInfo.ignored`. Any other PARAM is refused like an unsupported card.
+#: book-keeping, damping, aeroelastic and shell-only settings), accepted and listed in
+#: :attr:`BdfInfo.ignored`. Any other PARAM is refused like an unsupported card.
 HANDLED_PARAMS = frozenset({"WTMASS", "COUPMASS", "AUTOSPC"})
 OUTPUT_PARAMS = frozenset({
     "POST", "PRTMAXIM", "GRDPNT", "OGEOM", "NOCOMPS", "PATVER", "SRCOMPS", "EST", "OUGCORD",
     "MAXRATIO", "BAILOUT", "NEWSEQ", "LMODES", "RESVEC", "PRGPST", "SEMAPPRT", "USETPRT",
     "AUTOMSET", "DDRMM", "POSTEXT", "PRINT", "NASPRT", "SOLADJC", "G", "W3", "W4", "K6ROT",
-    "SNORM",
+    "SNORM", "LAMLIM", "OIBULK", "OMACHPR", "RDRBE", "RSCON", "RSOPT", "UNITSYS", "KDAMP",
+    "OPPHIPA", "GUSTAERO", "AUNITS", "Q", "USETSEL", "GRDEQ", "RPOSTS1", "SPARSEDR", "LGDISP",
+    "MACH", "VREF", "OPGTKG", "PRTPCH", "DBALL", "SCRSAVE", "DBDICT", "DBUP", "OUNIT1", "OUNIT2",
+    "SEP1XOVR", "AUTOQSET", "CHECKOUT", "OPTEXIT", "INREL", "FIXEDB", "MODACC", "NOELOF",
+    "NOELOP", "NOGPF", "NOPRT", "PRTGPL", "PRTEQXIN", "PRTGPDT", "PRTCSTM", "PRTBGPDT",
+    "PRTGPTT", "PRTMGG", "PRTPG", "ERROR", "DBCDIAG", "TINY", "XFLAG",
 })
+
+#: Shear factor K1 = K2 of a PBARL/PBEAML ROD, as recent NASTRAN builds convert it (see
+#: :func:`_properties`).
+ROD_SHEAR_FACTOR = 0.9
 
 #: PBARL/PBEAML shapes with a matching :class:`trussid.fem.sections.Section` constructor.
 SECTION_TYPES = ("ROD", "TUBE", "BAR", "BOX")
@@ -118,7 +172,8 @@ class BdfInfo:
     cards : dict of str to int
         Bulk-data cards read, with counts.
     ignored : list of str
-        Accepted entries without effect on the modes (e.g. ``"PARAM,POST"``).
+        Accepted entries without effect on the modes, with counts (e.g. ``"FORCE (3)"``,
+        ``"PARAM,POST"``).
     notes : list of str
         Other things a user should know (multiple subcases, enforced displacements...).
     """
@@ -161,9 +216,17 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[M
     ------
     ModelError
         A missing or unreadable file, any card this reader does not translate (all such
-        cards are listed with their counts), or a card it cannot translate faithfully
-        (offsets, pin flags, tapered beams, non-basic displacement systems...), naming the
-        card.
+        cards are listed with their counts; element entries such as shells and solids
+        first), or a card it cannot translate faithfully (offsets, pin flags, tapered beams,
+        scalar points...), naming the card.
+
+    Notes
+    -----
+    Entries without effect on real modes (loads, tables, damping, aero model, output
+    requests: :data:`IGNORED_CARDS`) are accepted and listed with their counts in
+    ``info.ignored``. NASTRAN's own element conventions are reproduced where they differ
+    from the textbook elements of :mod:`trussid.fem.elements` (see
+    :func:`_nastran_mass_conventions` and the PBARL/PBEAML ROD shear factor).
     """
     path = Path(path)
     bdf = _parse(path)
@@ -171,8 +234,8 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[M
     _check_cards(bdf, path, info)
     _read_params(bdf, info)
 
-    node_ids, xyz = _nodes(bdf)
-    nodes = _NodeTable(node_ids, xyz)
+    node_ids, xyz, frames = _nodes(bdf)
+    nodes = _NodeTable(node_ids, xyz, frames)
     mats = _materials(bdf, info.wtmass)
     props = _properties(bdf, mats, info.wtmass)
 
@@ -194,12 +257,20 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[M
 
     model = Model(beam_theory=info.beam_theory, mass=info.mass, name=path.stem)
     model.add_nodes(node_ids, xyz)
+    if nodes.frames is not None:
+        model.set_node_frames(node_ids, nodes.frames)
+    _check_scalar_points(bdf, info)
     _add_bars(bdf, model, nodes, props)
     _add_rods(bdf, model, nodes, props, mats, info.wtmass)
+    _nastran_mass_conventions(bdf, model, nodes, props, info)
     _add_masses(bdf, model, nodes, info.wtmass)
+    _add_scalar_masses(bdf, model, nodes, info.wtmass)
     _add_springs(bdf, model, nodes)
     _add_rigid(bdf, model, nodes)
+    _add_raw_rigid(bdf, model, nodes)
+    _add_mpcs(bdf, model, nodes, info)
     _add_spcs(bdf, model, nodes, info)
+    _add_dof_sets(bdf, model, nodes, info)
     _select_eigen(bdf, info)
     return model, info
 
@@ -223,8 +294,19 @@ def _parse(path: Path):
     # current directory).
     source: str | io.StringIO = str(path)
     flags = re.IGNORECASE | re.MULTILINE
+    # INCLUDE files are relative to the deck. Checked here so that a missing one is named
+    # (pyNastran would also leave a crash file in the working directory).
+    includes = re.findall(r"^\s*INCLUDE\s+'([^']+)'", text, flags)
+    for inc in includes:
+        if not (path.parent / inc).is_file():
+            raise ModelError(f"{path}: INCLUDE '{inc}': no such file (looked in {path.parent})")
     punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, flags) is None
     if not punch and re.search(r"^\s*CEND\b", text, flags) is None:
+        # Read from memory, where pyNastran resolves INCLUDEs from the working directory:
+        # make them absolute.
+        text = re.sub(r"^(\s*INCLUDE\s+')([^']+)(')",
+                      lambda m: m.group(1) + str((path.parent / m.group(2)).resolve()) + m.group(3),
+                      text, flags=flags)
         source = io.StringIO("CEND\n" + text)
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     # Cards this reader does not translate are only counted, never parsed, so that a
@@ -244,17 +326,47 @@ def _parse(path: Path):
 
 
 def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
-    """Every card must be translated or known to be harmless: list all the others."""
-    bad = {name: n for name, n in bdf.card_count.items() if name not in SUPPORTED_CARDS}
+    """Every card must be translated or known to be harmless: list all the others.
+
+    Unsupported element entries (shells, solids...) come first in the message: they are
+    the reason a beam code cannot read the deck, the rest would follow from them.
+    """
+    counts = bdf.card_count
+    thermal_on = any(counts.get(c) for c in ("TEMPD", "TEMP")) or _case_values(bdf, "TEMPERATURE") \
+        or _case_values(bdf, "TEMP")
+    bad, ignored = {}, {}
+    for name, n in counts.items():
+        if name in SUPPORTED_CARDS:
+            continue
+        if name in IGNORED_CARDS or (name in THERMAL_CARDS and not thermal_on):
+            ignored[name] = n
+        else:
+            bad[name] = n
     for name in sorted(bdf.params):
         if name in OUTPUT_PARAMS:
-            info.ignored.append(f"PARAM,{name}")
+            ignored[f"PARAM,{name}"] = 1
         elif name not in HANDLED_PARAMS:
             bad[f"PARAM,{name}"] = 1
-    if bad:
-        listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items()))
-        raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
-                         f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")
+    info.ignored = [f"{k} ({v})" if not k.startswith("PARAM,") else k for k, v in sorted(ignored.items())]
+    if not bad:
+        return
+    elements = {k: v for k, v in bad.items() if _is_element_entry(k)}
+    if elements:
+        listing = ", ".join(f"{k} ({v})" for k, v in sorted(elements.items()))
+        rest = {k: v for k, v in bad.items() if k not in elements}
+        also = f"; also unsupported: {', '.join(f'{k} ({v})' for k, v in sorted(rest.items()))}" if rest else ""
+        raise ModelError(f"{path}: unsupported element entries: {listing} (trussid reads beam, rod, "
+                         f"spring, mass and rigid elements: CBAR, CBEAM, CROD, CONROD, CELAS1/2, "
+                         f"CBUSH, CONM2, CMASS1/2, RBE2, RBE3, RBAR, CRIGD1/2/3/R){also}")
+    listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items()))
+    raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
+                     f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")
+
+
+def _is_element_entry(name: str) -> bool:
+    """Element connection entries (CQUAD4, CHEXA, CTUBE, GENEL...), not coordinate systems."""
+    return (name.startswith("C") and not name.startswith("CORD") and name not in ("CONM1", "CMASS3", "CMASS4")
+            ) or name in ("GENEL", "PLOTEL")
 
 
 def _param(bdf, name):
@@ -290,10 +402,14 @@ def _read_params(bdf, info: BdfInfo) -> None:
 
 
 class _NodeTable:
-    """Node id -> index and coordinates, with lookups that name the referring card."""
+    """Node id -> index and coordinates, with lookups that name the referring card.
 
-    def __init__(self, ids: np.ndarray, xyz: np.ndarray):
-        self.ids, self.xyz = ids, xyz
+    ``frames`` holds each grid's displacement frame (rows = axes in basic), or None when
+    every grid uses the basic system.
+    """
+
+    def __init__(self, ids: np.ndarray, xyz: np.ndarray, frames: np.ndarray | None = None):
+        self.ids, self.xyz, self.frames = ids, xyz, frames
         self.order = np.argsort(ids, kind="stable")
         self.sorted = ids[self.order]
 
@@ -312,25 +428,59 @@ class _NodeTable:
     def coords(self, ids, card: str, eids) -> np.ndarray:
         return self.xyz[self.index(ids, card, eids)]
 
+    def frame(self, ids, card: str, eids) -> np.ndarray:
+        """(..., 3, 3) displacement frames of grids ``ids`` (identity for basic)."""
+        idx = self.index(ids, card, eids)
+        if self.frames is None:
+            return np.broadcast_to(np.eye(3), idx.shape + (3, 3)).copy()
+        return self.frames[idx]
 
-def _nodes(bdf) -> tuple[np.ndarray, np.ndarray]:
-    """GRID ids and basic coordinates (CP systems resolved by pyNastran)."""
+    def dof_vectors(self, ids, comps, card: str, eids) -> np.ndarray:
+        """(n, 6) global DOF direction of component ``comps`` (1-6) of each grid.
+
+        A scalar element on component c of a grid with displacement frame F acts along
+        row c of F (translation or rotation axis) in basic coordinates.
+        """
+        comps = np.asarray(comps, dtype=np.int64)
+        F = self.frame(ids, card, eids)
+        out = np.zeros((len(comps), 6))
+        rows = F[np.arange(len(comps)), (comps - 1) % 3]
+        rot = comps > 3
+        out[~rot, :3] = rows[~rot]
+        out[rot, 3:] = rows[rot]
+        return out
+
+
+def _nodes(bdf):
+    """GRID ids, basic coordinates and displacement frames; GRDSET defaults applied.
+
+    CP systems are resolved by pyNastran. A displacement system CD gives the grid's DOFs
+    along that system's axes at the grid (for cylindrical and spherical systems these
+    depend on the position): returned as frames whose rows are the axes in basic.
+    """
     if not bdf.nodes:
         raise ModelError("the deck has no GRID cards")
+    grdset = getattr(bdf, "grdset", None)
+    if grdset is not None:
+        if grdset.cp or grdset.cd:
+            raise ModelError(f"GRDSET: default CP={grdset.cp} / CD={grdset.cd} is not supported "
+                             f"(pyNastran cannot tell a GRID's blank CP/CD from 0); give them on the GRIDs")
+        if grdset.seid:
+            raise ModelError("GRDSET: superelements (SEID) are not supported")
+        if grdset.ps:
+            for g in bdf.nodes.values():
+                if not g.ps:
+                    g.ps = grdset.ps
     ids = np.fromiter(bdf.nodes.keys(), dtype=np.int64, count=len(bdf.nodes))
     cd = np.fromiter((g.cd for g in bdf.nodes.values()), dtype=np.int64, count=len(ids))
-    if (cd != 0).any():
-        bad = ids[cd != 0]
-        raise ModelError(f"GRID {bad[0]}: displacement coordinate system CD={cd[cd != 0][0]} is not "
-                         f"supported (only the basic system, CD blank or 0)"
-                         + (f"; also grids {', '.join(map(str, bad[1:6]))}" if len(bad) > 1 else ""))
     seid = [g.nid for g in bdf.nodes.values() if getattr(g, "seid", 0)]
     if seid:
         raise ModelError(f"GRID {seid[0]}: superelements (SEID) are not supported")
     cp = np.fromiter((g.cp for g in bdf.nodes.values()), dtype=np.int64, count=len(ids))
-    for nid, c in zip(ids[cp != 0], cp[cp != 0]):
-        if c not in bdf.coords:
-            raise ModelError(f"GRID {nid}: coordinate system CP={c} is not defined")
+    for what, arr in (("CP", cp), ("CD", cd)):
+        for nid, c in zip(ids[arr > 0], arr[arr > 0]):
+            if c not in bdf.coords:
+                raise ModelError(f"GRID {nid}: coordinate system {what}={c} is not defined")
     try:
         if len(bdf.coords) > 1:  # resolve coordinate systems defined relative to others
             bdf.cross_reference(xref=True, xref_nodes=True, xref_elements=False, xref_properties=False,
@@ -340,15 +490,57 @@ def _nodes(bdf) -> tuple[np.ndarray, np.ndarray]:
     except Exception as exc:  # pyNastran raises many types for a malformed system
         raise ModelError(f"cannot resolve coordinate systems: {' '.join(str(exc).split())[:200]}") from None
     if not (cp != 0).any():
-        return ids, np.array([g.xyz for g in bdf.nodes.values()], dtype=float).reshape(-1, 3)
-    try:
-        _icd, icp, xyz_cp, nid_cp_cd = bdf.get_displacement_index_xyz_cp_cd()
-        xyz = bdf.transform_xyzcp_to_xyz_cid(xyz_cp, nid_cp_cd[:, 0], icp, cid=0)
-    except Exception as exc:  # pyNastran raises many types for a malformed system
-        msg = " ".join(str(exc).split())[:200]
-        raise ModelError(f"cannot resolve grid coordinate systems: {msg}") from None
-    order = {int(n): i for i, n in enumerate(nid_cp_cd[:, 0])}
-    return ids, np.asarray(xyz, float)[[order[int(n)] for n in ids]]
+        xyz = np.array([g.xyz for g in bdf.nodes.values()], dtype=float).reshape(-1, 3)
+    else:
+        try:
+            _icd, icp, xyz_cp, nid_cp_cd = bdf.get_displacement_index_xyz_cp_cd()
+            xyz_b = bdf.transform_xyzcp_to_xyz_cid(xyz_cp, nid_cp_cd[:, 0], icp, cid=0)
+        except Exception as exc:  # pyNastran raises many types for a malformed system
+            msg = " ".join(str(exc).split())[:200]
+            raise ModelError(f"cannot resolve grid coordinate systems: {msg}") from None
+        order = {int(n): i for i, n in enumerate(nid_cp_cd[:, 0])}
+        xyz = np.asarray(xyz_b, float)[[order[int(n)] for n in ids]]
+    frames = None
+    if (cd > 0).any():
+        frames = np.broadcast_to(np.eye(3), (len(ids), 3, 3)).copy()
+        for c in np.unique(cd[cd > 0]):
+            sel = cd == c
+            frames[sel] = coord_axes(bdf.coords[int(c)], xyz[sel], f"GRID {ids[sel][0]} (CD={c})")
+    return ids, xyz, frames
+
+
+def coord_axes(coord, xyz: np.ndarray, label: str) -> np.ndarray:
+    """Local axes (rows, in basic) of a NASTRAN coordinate system at basic points ``xyz``.
+
+    Rectangular: the system's axes. Cylindrical (r, theta, z) and spherical (r, theta,
+    phi): the unit vectors of the coordinate directions at the point, which NASTRAN uses as
+    the displacement directions of a grid with that CD. On the axis (cylindrical) or at the
+    origin (spherical) those directions are undefined and the grid is refused.
+    """
+    R = np.vstack([coord.i, coord.j, coord.k]).astype(float)  # rows: system axes in basic
+    n = len(xyz)
+    if coord.Type == "R":
+        return np.broadcast_to(R, (n, 3, 3)).copy()
+    p = (np.asarray(xyz, float) - np.asarray(coord.origin, float)) @ R.T  # local rectangular
+    rho = np.hypot(p[:, 0], p[:, 1])
+    scale = max(float(np.abs(p).max(initial=0.0)), 1.0)
+    if coord.Type == "C":
+        if (rho <= 1e-12 * scale).any():
+            raise ModelError(f"{label}: grid on the axis of cylindrical system {coord.cid}: radial "
+                             f"and tangential directions are undefined")
+        c, s = p[:, 0] / rho, p[:, 1] / rho
+        loc = np.stack([np.stack([c, s, 0 * c], 1), np.stack([-s, c, 0 * c], 1),
+                        np.broadcast_to([0.0, 0.0, 1.0], (n, 3))], axis=1)
+    else:
+        r = np.linalg.norm(p, axis=1)
+        if (rho <= 1e-12 * scale).any():
+            raise ModelError(f"{label}: grid on the polar axis of spherical system {coord.cid}: "
+                             f"its directions are undefined")
+        ct, st = p[:, 2] / r, rho / r
+        cp_, sp_ = p[:, 0] / rho, p[:, 1] / rho
+        loc = np.stack([np.stack([st * cp_, st * sp_, ct], 1), np.stack([ct * cp_, ct * sp_, -st], 1),
+                        np.stack([-sp_, cp_, 0 * cp_], 1)], axis=1)
+    return loc @ R
 
 
 def _materials(bdf, wtmass: float) -> dict:
@@ -462,7 +654,14 @@ def _properties(bdf, mats: dict, wtmass: float) -> dict:
             else:
                 dims, nsm = p.dim, float(p.nsm or 0.0)
             s = _section_from_shape(shape, dims, _nu_for_shear(full), label)
-            props[pid] = _Prop(label, "bar", _sec(s.A, s.Iy, s.Iz, s.J, s.Asy, s.Asz), mat,
+            asy, asz = s.Asy, s.Asz
+            if shape == "ROD":
+                # NASTRAN converts PBARL/PBEAML ROD to PBAR/PBEAM with K1 = K2 = 0.9 in the
+                # newest builds (Simcenter 2019.2, NX 2022 ~0.898, MSC 2012-13 OP2s); one
+                # MSC 2012 build used 6/7. Cowper's 6(1+nu)/(7+6nu) (0.886 at nu = 0.33)
+                # sits between them; 0.9 is what the recent decks of the corpus were run with.
+                asy = asz = ROD_SHEAR_FACTOR * s.A
+            props[pid] = _Prop(label, "bar", _sec(s.A, s.Iy, s.Iz, s.J, asy, asz), mat,
                                nsm * wtmass, True)
         elif p.type == "PROD":
             props[pid] = _Prop(label, "rod", _rod_sec(p.A, p.j), mat, float(p.nsm) * wtmass, False)
@@ -513,8 +712,9 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
     elems = [e for e in bdf.elements.values() if e.type in ("CBAR", "CBEAM")]
     for e in elems:
         card = f"{e.type} {e.eid}"
-        if e.pa or e.pb:
-            raise ModelError(f"{card}: pin flags PA={e.pa or ''} PB={e.pb or ''} are not supported")
+        for flag in (e.pa, e.pb):
+            if flag and any(ch not in "123456" for ch in str(flag)):
+                raise ModelError(f"{card}: pin flags PA={e.pa or ''} PB={e.pb or ''} must be digits 1-6")
         if np.any(np.asarray(e.wa, float) != 0) or np.any(np.asarray(e.wb, float) != 0):
             raise ModelError(f"{card}: offsets WA={list(e.wa)} WB={list(e.wb)} are not supported "
                              f"(give the grids at the neutral axis)")
@@ -542,8 +742,46 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         bad = ~np.isfinite(orient).all(axis=1)
         if bad.any():
             raise ModelError(f"{card} {eids[bad][0]}: no orientation (give X1-X3 or G0)")
-        model.add_beams(eids, ends, prop.section, prop.mat, orient, nsm=prop.nsm, rod=False,
-                        label=prop.label)
+        mat, nsm = prop.mat, prop.nsm
+        if card == "CBAR" and model.mass_formulation == "consistent":
+            # NASTRAN's coupled CBAR mass has no torsional (nor rotary) inertia: the structural
+            # mass goes in as non-structural mass per length, which the element gives
+            # translational inertia only (the same translational mass, exactly; MSC 2020 on
+            # the pt145 deck: torsion modes 2.6e-4 high with it, 3e-7 without).
+            mat, nsm = {**prop.mat, "rho": 0.0}, prop.nsm + prop.mat["rho"] * prop.section["A"]
+        model.add_beams(eids, ends, prop.section, mat, orient, nsm=nsm, rod=False, label=prop.label)
+        pinned = np.array([bool(e.pa or e.pb) for e in group])
+        if pinned.any():
+            _add_pin_flags(model, [e for e, p in zip(group, pinned) if p], xyz[pinned], orient[pinned], prop)
+
+
+def _add_pin_flags(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarray, prop: _Prop) -> None:
+    """CBAR/CBEAM pin flags PA/PB: the released end DOFs (element axes) carry no force.
+
+    The element's stiffness is condensed statically on the released DOFs, one at a time
+    (a DOF already free after earlier releases is skipped), and the difference from the
+    unpinned element is added as an element matrix, so the beam itself stays a plain beam.
+    The mass is unchanged (NASTRAN's pin flags act on the stiffness).
+    """
+    from trussid.fem.elements import frame_matrices, local_axes, to_global
+
+    eids = np.array([e.eid for e in elems], dtype=np.int64)
+    L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
+    sec, mat = prop.section, prop.mat
+    K = frame_matrices(L, sec["A"], sec["Iy"], sec["Iz"], sec["J"], mat["E"], mat["G"], mat["rho"],
+                       Asy=sec["Asy"], Asz=sec["Asz"], theory=model.beam_theory)[0]
+    dK = np.zeros_like(K)
+    for i, e in enumerate(elems):
+        k = K[i].copy()
+        released = [int(c) - 1 for c in str(e.pa or "")] + [6 + int(c) - 1 for c in str(e.pb or "")]
+        for d in released:
+            if k[d, d] <= 1e-12 * np.abs(k).max():
+                continue
+            k = k - np.outer(k[:, d], k[d, :]) / k[d, d]
+            k[d, :] = k[:, d] = 0.0
+        dK[i] = 0.5 * (k + k.T) - K[i]
+    model.add_matrices(eids, np.array([[e.ga, e.gb] if e.type == "CBAR" else e.nodes for e in elems]),
+                       K=to_global(dK, R), label=f"{elems[0].type} pin flags")
 
 
 def _add_rods(bdf, model: Model, nodes: _NodeTable, props: dict, mats: dict, wtmass: float) -> None:
@@ -625,9 +863,59 @@ def _add_masses(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
     model.add_point_masses(nids, mass * wtmass, inertia=tensor * wtmass, offset=offset)
 
 
+def _scalar_ends(e, card: str, nodes: _NodeTable):
+    """(g1, c1, g2, c2) of a CELAS1/2 or CMASS1/2, grounded end last (g2 = 0)."""
+    g1, g2 = (n or 0 for n in (list(e.nodes) + [None, None])[:2])
+    c1, c2 = e.c1 or 0, e.c2 or 0
+    if g1 == 0 and g2 == 0:
+        raise ModelError(f"{card}: no grid given")
+    if g1 == 0:  # grounded at its first end: swap
+        g1, g2, c1, c2 = g2, g1, c2, c1
+    spoints = getattr(nodes, "spoints", set())
+    if c1 == 0 or (g2 != 0 and c2 == 0) or g1 in spoints or g2 in spoints:
+        raise ModelError(f"{card}: scalar points (SPOINT, component 0) are not supported")
+    if not (1 <= c1 <= 6) or (g2 and not 1 <= c2 <= 6):
+        raise ModelError(f"{card}: component must be 1-6, got {c1} / {c2}")
+    if g2 == g1 and c1 == c2:
+        raise ModelError(f"{card}: both ends are component {c1} of grid {g1}")
+    return g1, c1, g2, c2
+
+
+def _add_scalar_elements(model: Model, nodes: _NodeTable, ends: list, values: np.ndarray, eids: np.ndarray,
+                         card: str, kind: str) -> None:
+    """Scalar springs (``kind`` "K") or masses ("M") between grid components, any frames.
+
+    The element acts on ``u1 - u2`` with ``u`` the component along the grid's displacement
+    frame, so its matrix is ``value * a a^T`` with ``a`` the two DOF directions (the second
+    negated): a 12x12 block on the two grids, or 6x6 when grounded or on one grid.
+    """
+    if not ends:
+        return
+    g1, c1, g2, c2 = (np.array(col, dtype=np.int64) for col in zip(*ends))
+    a = nodes.dof_vectors(g1, c1, card, eids)
+    one = (g2 == 0) | (g2 == g1)
+    two = ~one
+    if one.any():
+        v = a[one].copy()
+        same = (g2[one] == g1[one])
+        if same.any():
+            v[same] -= nodes.dof_vectors(g1[one][same], c2[one][same], card, eids[one][same])
+        blocks = values[one][:, None, None] * v[:, :, None] * v[:, None, :]
+        model.add_matrices(eids[one], g1[one][:, None], **{kind: blocks}, label=card)
+    if two.any():
+        v = np.concatenate([a[two], -nodes.dof_vectors(g2[two], c2[two], card, eids[two])], axis=1)
+        blocks = values[two][:, None, None] * v[:, :, None] * v[:, None, :]
+        model.add_matrices(eids[two], np.column_stack([g1[two], g2[two]]), **{kind: blocks}, label=card)
+
+
 def _add_springs(bdf, model: Model, nodes: _NodeTable) -> None:
-    """CELAS1/CELAS2 (one component, C1 == C2) and CBUSH/PBUSH, in one add_springs call each."""
+    """CELAS1/CELAS2 and CBUSH/PBUSH.
+
+    A CELAS on equal components of grids in the basic system is a model spring; any other
+    (different components, displacement frames) a scalar element matrix.
+    """
     ids, pairs, ks = [], [], []
+    gen_ends, gen_k, gen_ids = [], [], []
     for e in bdf.elements.values():
         if e.type not in ("CELAS1", "CELAS2"):
             continue
@@ -639,23 +927,19 @@ def _add_springs(bdf, model: Model, nodes: _NodeTable) -> None:
             k = float(p.k)
         else:
             k = float(e.k)
-        g1, g2 = (n or 0 for n in e.nodes)
-        c1, c2 = e.c1 or 0, e.c2 or 0
-        if g1 == 0 and g2 == 0:
-            raise ModelError(f"{card}: no grid given")
-        if g1 == 0:  # grounded at its first end: swap
-            g1, g2, c1, c2 = g2, g1, c2, c1
-        if c1 == 0 or (g2 != 0 and c2 == 0):
-            raise ModelError(f"{card}: scalar points (component 0) are not supported")
-        if g2 != 0 and c1 != c2:
-            raise ModelError(f"{card}: couples component {c1} of grid {g1} with component {c2} of grid "
-                             f"{g2}; only equal components are supported")
-        if g2 == g1:
-            raise ModelError(f"{card}: both ends are grid {g1}")
+        if not (math.isfinite(k) and k >= 0):
+            raise ModelError(f"{card}: stiffness must be finite and >= 0, got {k:g}")
+        g1, c1, g2, c2 = _scalar_ends(e, card, nodes)
+        framed = nodes.frames is not None and (
+            np.any(nodes.frame([g1], card, [e.eid]) != np.eye(3))
+            or (g2 and np.any(nodes.frame([g2], card, [e.eid]) != np.eye(3))))
+        if (g2 and c1 != c2) or g2 == g1 or framed:
+            gen_ends.append((g1, c1, g2, c2))
+            gen_k.append(k)
+            gen_ids.append(e.eid)
+            continue
         kv = np.zeros(6)
         kv[c1 - 1] = k
-        if k < 0:
-            raise ModelError(f"{card}: negative stiffness {k:g} is not supported")
         ids.append(e.eid)
         pairs.append([g1, g2 if g2 else -1])
         ks.append(kv)
@@ -666,7 +950,48 @@ def _add_springs(bdf, model: Model, nodes: _NodeTable) -> None:
         two = pairs_a[:, 1] >= 0
         nodes.index(pairs_a[two, 1], "spring", ids_a[two])
         model.add_springs(ids_a, pairs_a, np.array(ks))
+    _add_scalar_elements(model, nodes, gen_ends, np.array(gen_k, float), np.array(gen_ids, dtype=np.int64),
+                         "CELAS", "K")
     _add_bushes(bdf, model, nodes)
+
+
+def _add_scalar_masses(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
+    """CMASS1 (mass from PMASS) and CMASS2: scalar masses on grid components, times WTMASS."""
+    ends, values, eids = [], [], []
+    for m in bdf.masses.values():
+        if m.type not in ("CMASS1", "CMASS2"):
+            continue
+        card = f"{m.type} {m.eid}"
+        if m.type == "CMASS1":
+            p = bdf.properties_mass.get(m.pid)
+            if p is None or p.type != "PMASS":
+                raise ModelError(f"{card}: property {m.pid} is not a defined PMASS")
+            value = float(p.mass)
+        else:
+            value = float(m.mass)
+        if not (math.isfinite(value) and value >= 0):
+            raise ModelError(f"{card}: mass must be finite and >= 0, got {value:g}")
+        ends.append(_scalar_ends(m, card, nodes))
+        values.append(value * wtmass)
+        eids.append(m.eid)
+    _add_scalar_elements(model, nodes, ends, np.array(values, float), np.array(eids, dtype=np.int64),
+                         "CMASS", "M")
+
+
+def offset_spring_matrix(xa, xb, p, frame, k) -> np.ndarray:
+    """12x12 global stiffness of a 6-DOF spring at point ``p`` joined rigidly to grids A and B.
+
+    The spring sees the relative motion at ``p``: ``d = F6 (S_B u_B - S_A u_A)`` with
+    ``S_X`` the rigid map from grid X to ``p`` and ``F6 = diag(F, F)`` (rows of ``frame``
+    are the spring axes), so ``K = B^T F6^T diag(k) F6 B`` with ``B = [-S_A, S_B]``.
+    """
+    from trussid.fem.constraints import rigid_transform
+
+    B = np.concatenate([-rigid_transform(np.asarray(p) - xa), rigid_transform(np.asarray(p) - xb)], axis=1)
+    F6 = np.zeros((6, 6))
+    F6[:3, :3] = F6[3:, 3:] = frame
+    A = F6 @ B
+    return A.T @ (np.asarray(k, float)[:, None] * A)
 
 
 def _add_bushes(bdf, model: Model, nodes: _NodeTable) -> None:
@@ -674,6 +999,7 @@ def _add_bushes(bdf, model: Model, nodes: _NodeTable) -> None:
     if not bushes:
         return
     ids, pairs, ks, frames = [], [], [], []
+    offset_ids, offset_pairs, offset_K = [], [], []
     for e in bushes:
         card = f"CBUSH {e.eid}"
         p = bdf.properties.get(e.pid)
@@ -708,29 +1034,347 @@ def _add_bushes(bdf, model: Model, nodes: _NodeTable) -> None:
             z /= np.linalg.norm(z)
             frame = np.vstack([x, np.cross(z, x), z])
         if not coincident:
-            # NASTRAN puts the spring at a point on GA-GB joined rigidly to both grids, so a
-            # translational stiffness across that line also transmits a moment (lever arm);
-            # the model's springs act between the grids' own DOFs and cannot represent that.
+            # NASTRAN puts the spring at the point S of GA-GB (S = 0.5 by default), joined
+            # rigidly to both grids, so a translational stiffness across that line also
+            # transmits a moment (lever arm): an element matrix of its own.
             across = np.linalg.norm(np.cross(frame, d / L), axis=1) > 1e-9
             if (across & (k[:3] != 0)).any():
-                raise ModelError(f"{card}: translational stiffness across the line between non-"
-                                 f"coincident grids {ga} and {gb} (lever-arm coupling) is not "
-                                 f"supported; make the grids coincident")
+                S = 0.5 if getattr(e, "s", None) is None else float(e.s)
+                offset_ids.append(e.eid)
+                offset_pairs.append([ga, gb])
+                offset_K.append(offset_spring_matrix(xa, xb, xa + S * d, frame, k))
+                continue
         ids.append(e.eid)
         pairs.append([ga, gb if gb else -1])
         ks.append(k)
         frames.append(frame)
-    model.add_springs(np.array(ids, dtype=np.int64), np.array(pairs, dtype=np.int64), np.array(ks),
-                      frame=np.array(frames))
+    if ids:
+        model.add_springs(np.array(ids, dtype=np.int64), np.array(pairs, dtype=np.int64), np.array(ks),
+                          frame=np.array(frames))
+    if offset_ids:
+        model.add_matrices(np.array(offset_ids, dtype=np.int64), np.array(offset_pairs, dtype=np.int64),
+                           K=np.array(offset_K), label="CBUSH")
+
+
+def _comps(text, card: str) -> list[int]:
+    """0-based components of a NASTRAN component string such as "123456"."""
+    text = "" if text is None else str(text).strip()
+    if any(ch not in "123456" for ch in text):
+        raise ModelError(f"{card}: components {text!r} must be digits 1-6")
+    return sorted({int(ch) - 1 for ch in text})
+
+
+def _add_rigid_element(model: Model, nodes: _NodeTable, eid: int, grids, independent, dependent,
+                       label: str) -> None:
+    """A rigid element given by (grid, component) lists: a linear constraint of the model."""
+    from trussid.fem.constraints import rigid_element
+
+    grids = list(dict.fromkeys(grids))
+    pos = {g: i for i, g in enumerate(grids)}
+    xyz = nodes.coords(grids, label.split()[0], [eid] * len(grids))
+    frames = None if nodes.frames is None else nodes.frame(grids, label.split()[0], [eid] * len(grids))
+    C = rigid_element(xyz, frames, [(pos[g], c) for g, c in independent],
+                      [(pos[g], c) for g, c in dependent], label)
+    dep = np.array(dependent, dtype=np.int64).reshape(-1, 2)
+    ind = np.array(independent, dtype=np.int64).reshape(-1, 2)
+    model.add_constraint(eid, (dep[:, 0], dep[:, 1]), (ind[:, 0], ind[:, 1]), C, label=label)
 
 
 def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
+    """RBE2 (rigid body), RBAR (rigid bar, any independent set) and RBE3 (interpolation)."""
+    from trussid.fem.constraints import rbe3_constraint
+
     for eid, e in sorted(bdf.rigid_elements.items()):
-        if e.type != "RBE2":
-            raise ModelError(f"{e.type} {eid}: not supported")
-        nodes.index([e.gn], "RBE2", [eid])
-        nodes.index(np.asarray(e.Gmi, dtype=np.int64), "RBE2", [eid] * len(e.Gmi))
-        model.add_rigid_body(eid, e.gn, e.Gmi, dofs=str(e.cm), mass=0.0, label=f"RBE2 {eid}")
+        card = f"{e.type} {eid}"
+        if e.type == "RBE2":
+            nodes.index([e.gn], "RBE2", [eid])
+            nodes.index(np.asarray(e.Gmi, dtype=np.int64), "RBE2", [eid] * len(e.Gmi))
+            model.add_rigid_body(eid, e.gn, e.Gmi, dofs=str(e.cm), mass=0.0, label=card)
+        elif e.type == "RBAR":
+            ind = [(e.ga, c) for c in _comps(e.cna, card)] + [(e.gb, c) for c in _comps(e.cnb, card)]
+            cma, cmb = _comps(e.cma, card), _comps(e.cmb, card)
+            if not cma and not cmb:  # NASTRAN: blank CMA and CMB = every DOF not independent
+                cma = [c for c in range(6) if (e.ga, c) not in ind]
+                cmb = [c for c in range(6) if (e.gb, c) not in ind]
+            dep = [(e.ga, c) for c in cma] + [(e.gb, c) for c in cmb]
+            if set(dep) & set(ind):
+                raise ModelError(f"{card}: a component is both independent and dependent")
+            _add_rigid_element(model, nodes, eid, [e.ga, e.gb], ind, dep, card)
+        elif e.type == "RBE3":
+            if e.Gmi:
+                raise ModelError(f"{card}: UM (alternative dependent DOFs) is not supported")
+            rows, comps, weights = [], [], []
+            for w, c, grids in zip(e.weights, e.comps, e.Gijs):
+                mask = np.zeros(6, bool)
+                mask[_comps(c, card)] = True
+                for g in grids:
+                    rows.append(int(g))
+                    comps.append(mask)
+                    weights.append(float(w))
+            rows_a = np.array(rows, dtype=np.int64)
+            comps_a = np.array(comps, dtype=bool).reshape(-1, 6)
+            refc = np.zeros(6, bool)
+            refc[_comps(e.refc, card)] = True
+            ref_xyz = nodes.coords([e.refgrid], "RBE3", [eid])[0]
+            xyz = nodes.coords(rows_a, "RBE3", [eid] * len(rows_a))
+            frames = None if nodes.frames is None else nodes.frame(rows_a, "RBE3", [eid] * len(rows_a))
+            ref_frame = None if nodes.frames is None else nodes.frame([e.refgrid], "RBE3", [eid])[0]
+            C = rbe3_constraint(ref_xyz, ref_frame, xyz, frames, comps_a, weights, refc, card)
+            ind_nodes = np.repeat(rows_a, comps_a.sum(axis=1))
+            ind_comps = np.nonzero(comps_a)[1]
+            dep_comps = np.flatnonzero(refc)
+            model.add_constraint(eid, (np.full(len(dep_comps), e.refgrid), dep_comps), (ind_nodes, ind_comps),
+                                 C, label=card)
+        else:
+            raise ModelError(f"{card}: not supported")
+
+
+def _raw_fields(lines: list[str], name: str) -> list[str]:
+    from pyNastran.bdf.bdf_interface.utils import to_fields
+
+    return [f.strip().upper() for f in to_fields(lines, name)]
+
+
+def _ints(fields: list[str], card: str) -> list[int]:
+    """Grid ids of a field list, with ``A THRU B`` expanded and blanks dropped."""
+    out, i = [], 0
+    fields = [f for f in fields if f]
+    while i < len(fields):
+        if i + 2 < len(fields) and fields[i + 1] == "THRU":
+            out.extend(range(int(fields[i]), int(fields[i + 2]) + 1))
+            i += 3
+            continue
+        try:
+            out.append(int(fields[i]))
+        except ValueError:
+            raise ModelError(f"{card}: field {fields[i]!r} is not a grid id") from None
+        i += 1
+    return out
+
+
+def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
+    """NASTRAN-95's rigid elements CRIGD1, CRIGD2, CRIGD3 and CRIGDR (unparsed by pyNastran).
+
+    CRIGD1 EID GI GM...: every component of each GM follows GI rigidly. CRIGD2 EID GI
+    (GM CM)...: the listed components. CRIGD3 EID (GI CI)... MSET (GM CM)...: six
+    independent components anywhere on the element determine the rigid motion. CRIGDR EID
+    GI GM CM: a rigid pin-ended rod, component CM of GM keeps the distance GI-GM.
+    """
+    for lines in getattr(bdf, "reject_lines", []):
+        body = [ln for ln in lines if ln.strip()]
+        name = body[0][:8].strip().rstrip("*").upper() if body else ""
+        if "," in name:
+            name = name.split(",")[0]
+        if name not in RAW_CARDS:
+            continue
+        f = _raw_fields(body, name)
+        try:
+            eid = int(f[1])
+        except (IndexError, ValueError):
+            raise ModelError(f"{name}: no element id") from None
+        card = f"{name} {eid}"
+        try:
+            if name == "CRIGD1":
+                gi, gms = int(f[2]), _ints(f[3:], card)
+                nodes.index([gi] + gms, name, [eid] * (1 + len(gms)))
+                model.add_rigid_body(eid, gi, gms, dofs="123456", label=card)
+            elif name == "CRIGD2":
+                gi = int(f[2])
+                vals = [x for x in f[3:] if x]
+                pairs = list(zip(vals[0::2], vals[1::2]))
+                grids = [gi] + [int(g) for g, _ in pairs]
+                ind = [(gi, c) for c in range(6)]
+                dep = [(int(g), c) for g, cm in pairs for c in _comps(cm, card)]
+                _add_rigid_element(model, nodes, eid, grids, ind, dep, card)
+            elif name == "CRIGD3":
+                vals = [x for x in f[2:] if x]
+                if "MSET" not in vals:
+                    raise ModelError(f"{card}: no MSET (dependent components) given")
+                k = vals.index("MSET")
+                ind = [(int(g), c) for g, cm in zip(vals[:k:2], vals[1:k:2]) for c in _comps(cm, card)]
+                dep = [(int(g), c) for g, cm in zip(vals[k + 1::2], vals[k + 2::2]) for c in _comps(cm, card)]
+                grids = [g for g, _ in ind + dep]
+                _add_rigid_element(model, nodes, eid, grids, ind, dep, card)
+            else:  # CRIGDR
+                gi, gm, cm = int(f[2]), int(f[3]), int(f[4])
+                _add_rigid_rod(model, nodes, eid, gi, gm, cm, card)
+        except (IndexError, ValueError):
+            raise ModelError(f"{card}: malformed entry") from None
+
+
+def _add_rigid_rod(model: Model, nodes: _NodeTable, eid: int, gi: int, gm: int, cm: int, card: str) -> None:
+    """CRIGDR: ``e . (u_M - u_I) = 0`` solved for translation ``cm`` of GM (frames honoured)."""
+    if cm not in (1, 2, 3):
+        raise ModelError(f"{card}: dependent component must be a translation 1-3, got {cm}")
+    x = nodes.coords([gi, gm], "CRIGDR", [eid, eid])
+    d = x[1] - x[0]
+    if not np.linalg.norm(d) > 0:
+        raise ModelError(f"{card}: grids {gi} and {gm} coincide")
+    e = d / np.linalg.norm(d)
+    F = nodes.frame([gi, gm], "CRIGDR", [eid, eid])
+    a, b = F[1] @ e, F[0] @ e  # the rod direction in each grid's displacement frame
+    c = cm - 1
+    if abs(a[c]) <= 1e-6:
+        raise ModelError(f"{card}: component {cm} of grid {gm} is normal to the rod; it cannot be dependent")
+    others = [k for k in range(3) if k != c]
+    ind_nodes = [gi, gi, gi] + [gm, gm]
+    ind_comps = [0, 1, 2] + others
+    C = np.concatenate([b, -a[others]])[None, :] / a[c]
+    model.add_constraint(eid, ([gm], [c]), (ind_nodes, ind_comps), C, label=card)
+
+
+def _add_mpcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
+    """MPC (through MPCADD) of the case control's MPC set: the first term is dependent."""
+    chosen = _case_values(bdf, "MPC")
+    if not chosen:
+        if bdf.mpcs or bdf.mpcadds:
+            info.notes.append(f"MPC sets {sorted(set(bdf.mpcs) | set(bdf.mpcadds))} present but not "
+                              f"selected by the case control: not applied (as NASTRAN)")
+        return
+    top = int(chosen[0])
+    if len(chosen) > 1:
+        info.notes.append(f"subcases select different MPC sets {chosen}; using the first, {top}")
+    sets, stack = [], [top]
+    while stack:
+        sid = stack.pop()
+        if sid in sets:
+            continue
+        if sid not in bdf.mpcs and sid not in bdf.mpcadds:
+            raise ModelError(f"case control MPC = {top}: MPC set {sid} is not defined")
+        sets.append(sid)
+        for add in bdf.mpcadds.get(sid, []):
+            stack.extend(add.sets)
+    for sid in sets:
+        for k, c in enumerate(bdf.mpcs.get(sid, [])):
+            card = f"MPC {sid}"
+            g = np.asarray(c.nodes, dtype=np.int64)
+            comp = [_comps(x, card) for x in c.components]
+            if any(len(x) != 1 for x in comp):
+                raise ModelError(f"{card}: each term needs exactly one component (scalar points are "
+                                 f"not supported)")
+            comp = np.array([x[0] for x in comp])
+            a = np.asarray(c.coefficients, float)
+            if a[0] == 0:
+                raise ModelError(f"{card}: the dependent term's coefficient is 0")
+            nodes.index(g, "MPC", [sid] * len(g))
+            model.add_constraint(sid, ([g[0]], [comp[0]]), (g[1:], comp[1:]), -a[1:][None, :] / a[0],
+                                 label=card)
+
+
+def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
+    """OMIT/OMIT1 and ASET/ASET1 (Guyan reduction); SUPORT/SUPORT1 (accepted, noted)."""
+    n = len(nodes.ids)
+    def mask_of(cards, what):
+        mask = np.zeros((n, 6), bool)
+        for c in cards:
+            ids = np.asarray(c.ids if hasattr(c, "ids") else c.node_ids, dtype=np.int64)
+            comps = c.components if isinstance(c.components, list) else [c.components] * len(ids)
+            idx = nodes.index(ids, what, np.zeros(len(ids), dtype=np.int64))
+            for i, cm in zip(np.atleast_1d(idx), comps):
+                mask[i, _comps(cm, what)] = True
+        return mask
+
+    omits = getattr(bdf, "omits", [])
+    asets = getattr(bdf, "asets", [])
+    if omits or asets:
+        omitted = mask_of(omits, "OMIT")
+        if asets:
+            omitted |= ~mask_of(asets, "ASET")
+        for c in range(6):
+            sel = omitted[:, c]
+            if sel.any():
+                model.omit(nodes.ids[sel], str(c + 1))
+        info.notes.append(f"OMIT/ASET: {int(omitted.sum())} DOFs condensed by Guyan reduction, as "
+                          f"NASTRAN does (exact for DOFs without mass)")
+    suport = getattr(bdf, "suport", []) + list(getattr(bdf, "suport1", {}).values())
+    if suport:
+        info.notes.append("SUPORT accepted: it selects reference DOFs for NASTRAN's rigid-body modes, "
+                          "which trussid computes anyway (they come first, at about 0 Hz)")
+
+
+def _check_scalar_points(bdf, info: BdfInfo) -> None:
+    """SPOINTs are accepted only when nothing connects them (then they are inert)."""
+    spoints = set(getattr(bdf, "spoints", {}) or {})
+    if not spoints:
+        return
+    used = set()
+    for e in list(bdf.elements.values()) + list(bdf.masses.values()):
+        used |= {n for n in (getattr(e, "nodes", None) or []) if n in spoints}
+    if used:
+        g = sorted(used)[0]
+        raise ModelError(f"SPOINT {g}: scalar points joined by elements are not supported")
+    info.notes.append(f"SPOINT {', '.join(map(str, sorted(spoints)[:5]))}: unconnected scalar "
+                      f"point(s), no effect on the modes: ignored")
+
+
+def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict, info: BdfInfo) -> None:
+    """NASTRAN's element mass where it differs from the textbook elements of fem.elements.
+
+    Each was found on real NASTRAN output (the nastran-corpus diagnosis) and is added as a
+    correction, so that :mod:`trussid.fem.elements` stays the textbook formulation:
+
+    * lumped CBEAM: the section's torsional inertia ``rho (I1 + I2) L / 2`` about the axis
+      at each end (a CBAR's lumped mass has none);
+    * coupled CBAR: no torsional inertia (the textbook element has ``rho (I1 + I2)``): done
+      in :func:`_add_bars`, exactly, by reading its structural mass as non-structural mass;
+    * coupled CROD/CONROD: axial ``m [[5/12, 1/12], [1/12, 5/12]]``, transverse lumped
+      ``m / 2`` (the textbook rod interpolates all three translations linearly);
+    * coupled shear-flexible CBEAM (NX): the Euler-Bernoulli cubic translational mass
+      without rotary inertia, on the shear-flexible stiffness.
+    """
+    from trussid.fem.elements import frame_matrices, local_axes
+
+    b = model.beams
+    if len(b) == 0:
+        return
+    idx = nodes.index(b.nodes, "element", b.ids)
+    xa, xb = nodes.xyz[idx[:, 0]], nodes.xyz[idx[:, 1]]
+    d = xb - xa
+    L = np.linalg.norm(d, axis=1)
+    if not (L > 0).all():
+        return  # zero-length elements are reported by the assembly, naming them
+    e = d / L[:, None]
+    cbeam = np.array([str(lbl).split()[0] in ("PBEAM", "PBEAML") for lbl in b.labels]) & ~b.rod
+    if model.mass_formulation == "lumped":
+        sel = cbeam & (b.rho * (b.Iy + b.Iz) > 0)
+        if sel.any():
+            polar = b.rho[sel] * (b.Iy[sel] + b.Iz[sel]) * L[sel] / 2.0
+            tensor = polar[:, None, None] * e[sel][:, :, None] * e[sel][:, None, :]
+            model.add_point_masses(np.concatenate([b.nodes[sel, 0], b.nodes[sel, 1]]), 0.0,
+                                   inertia=np.concatenate([tensor, tensor]))
+            info.notes.append(f"CBEAM lumped mass: torsional inertia rho (I1 + I2) L / 2 at each end "
+                              f"({int(sel.sum())} elements), as NASTRAN")
+        return
+    cbar = np.array([str(lbl).split()[0] in ("PBAR", "PBARL") for lbl in b.labels]) & ~b.rod
+    if cbar.any():
+        info.notes.append(f"CBAR coupled mass: no torsional inertia ({int(cbar.sum())} elements: structural "
+                          f"mass read as non-structural mass per length), as NASTRAN")
+    rod = np.asarray(b.rod, bool)
+    if rod.any():
+        m = (b.rho[rod] * b.A[rod] + b.nsm[rod]) * L[rod]
+        ee = e[rod][:, :, None] * e[rod][:, None, :]
+        # NASTRAN minus textbook: axial 5/12 - 1/3 = 1/12, transverse 1/2 - 1/3 = 1/6 on the
+        # diagonal, the opposite off the diagonal (total mass unchanged).
+        B3 = m[:, None, None] * (ee / 12.0 + (np.eye(3) - ee) / 6.0)
+        dM = np.zeros((int(rod.sum()), 12, 12))
+        dM[:, :3, :3] = dM[:, 6:9, 6:9] = B3
+        dM[:, :3, 6:9] = dM[:, 6:9, :3] = -B3
+        model.add_matrices(b.ids[rod], b.nodes[rod], M=dM, label="CROD coupled mass (NASTRAN)")
+        info.notes.append(f"CROD coupled mass: axial 5/12, 1/12 and lumped transverse mass "
+                          f"({int(rod.sum())} rods), as NASTRAN")
+    shear = cbeam & (np.isfinite(b.Asy) | np.isfinite(b.Asz))
+    if model.beam_theory == "timoshenko" and shear.any():
+        s = shear
+        Ls, R = local_axes(xa[s], xb[s], b.orient[s], b.ids[s])
+        args = (Ls, b.A[s], b.Iy[s], b.Iz[s], b.J[s], b.E[s], b.G[s], b.rho[s])
+        kw = dict(nsm=b.nsm[s], Asy=b.Asy[s], Asz=b.Asz[s], R=R, mass="consistent")
+        M_eb = frame_matrices(*args, **kw, theory="euler-bernoulli")[1]
+        M_t = frame_matrices(*args, **kw, theory="timoshenko")[1]
+        dM = M_eb - M_t
+        dM = 0.5 * (dM + dM.transpose(0, 2, 1))
+        model.add_matrices(b.ids[s], b.nodes[s], M=dM, label="CBEAM coupled mass (NASTRAN)")
+        info.notes.append(f"CBEAM coupled mass with shear flexibility: Euler-Bernoulli cubic mass "
+                          f"without rotary inertia ({int(s.sum())} elements), as NX NASTRAN")
 
 
 def _case_values(bdf, key: str) -> list:
@@ -850,7 +1494,10 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     CBUSH + PBUSH with a CORD2R for springs in other axes (grounded or between coincident
     grids only: elsewhere NASTRAN adds a lever arm the model's spring does not have); RBE2
     (a rigid body's mass as a CONM2 at its master, CID = 0, offset to its cg); SPC1 (set 1);
-    PARAM,COUPMASS (1 consistent, -1 lumped); EIGRL. Element ids that clash across kinds are
+    PARAM,COUPMASS (1 consistent, -1 lumped); EIGRL. NASTRAN's coupled CROD and CBAR mass differ
+    from the model's textbook consistent mass (see :func:`_nastran_mass_conventions`), so a
+    consistent-mass model with rods or torsional inertia reads back with NASTRAN's mass, as
+    NASTRAN would run it. Element ids that clash across kinds are
     renumbered above the largest id. Values are written in 16-character fields so that a
     re-read model matches to about 1e-12 (16-character fields).
     """
@@ -864,6 +1511,15 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     ids, xyz = model.node_ids, model.xyz
     if len(ids) == 0:
         raise ModelError("write_bdf: the model has no nodes")
+    unwritable = [what for what, present in (
+        ("element matrices (add_matrices)", bool(getattr(model, "general", None))),
+        ("linear constraints (add_constraint)", bool(getattr(model, "constraints", None))),
+        ("node displacement frames", model.node_frames() is not None if hasattr(model, "node_frames") else False),
+        ("omitted DOFs", bool(model.omitted_mask().any()) if hasattr(model, "omitted_mask") else False),
+    ) if present]
+    if unwritable:
+        raise ModelError(f"write_bdf: the model has {', '.join(unwritable)}, which this writer does not "
+                         f"translate back into NASTRAN entries")
     for nid, x in zip(ids.tolist(), xyz):
         bdf.add_grid(nid, x.tolist())
 

@@ -32,7 +32,8 @@ def modal_damping(damping, n: int) -> np.ndarray:
 
 def modal_plant(modes, loads: np.ndarray, sensors: list[Sensor], damping=0.0025, *,
                 n_modes: int | None = None, residual_flexibility: np.ndarray | None = None,
-                input_names: list[str] | None = None) -> control.StateSpace:
+                input_names: list[str] | None = None, disturbances: dict | None = None,
+                performance: list[Sensor] | None = None) -> control.StateSpace:
     """Continuous-time state-space plant from normal modes.
 
     Parameters
@@ -52,16 +53,40 @@ def modal_plant(modes, loads: np.ndarray, sensors: list[Sensor], damping=0.0025,
         direct term on displacement outputs (static correction). Velocity and acceleration
         outputs have no constant residual and are left as they are.
     input_names : list of str, optional
+    disturbances : dict of str -> (6 n_nodes,) float, optional
+        Extra named inputs after the ``loads`` columns: nodal loads per unit of each
+        disturbance (e.g. a force at a node [N/N], one axis of a wrench), for measuring
+        rejection through the same plant.
+    performance : list of Sensor, optional
+        Extra named outputs after ``sensors`` (e.g. motions that matter but are not
+        measured by the controller).
 
     Returns
     -------
     control.StateSpace
-        States ``[eta; eta']`` (2 n_kept), inputs as ``loads`` columns, outputs one per sensor
-        named after it.
+        States ``[eta; eta']`` (2 n_kept), inputs as ``loads`` columns then the
+        disturbances, outputs one per sensor (then per performance sensor) named after it.
     """
     F = np.asarray(loads, dtype=float)
     if F.ndim == 1:
         F = F[:, None]
+    names_in = list(input_names or [f"u{i + 1}" for i in range(F.shape[1])])
+    if len(names_in) != F.shape[1]:
+        raise ModelError(f"input_names: {len(names_in)} names for {F.shape[1]} load columns")
+    if disturbances:
+        cols = []
+        for name, col in disturbances.items():
+            col = np.asarray(col, dtype=float).ravel()
+            if col.shape[0] != F.shape[0]:
+                raise ModelError(f"disturbance '{name}': {col.shape[0]} load entries; the model "
+                                 f"has {F.shape[0]} DOFs")
+            if name in names_in:
+                raise ModelError(f"disturbance '{name}': the name is already an input")
+            cols.append(col)
+            names_in.append(str(name))
+        F = np.column_stack([F, *cols])
+    if performance:
+        sensors = list(sensors) + list(performance)
     Phi = modes.shapes_full
     if F.shape[0] != Phi.shape[0]:
         raise ModelError(f"loads have {F.shape[0]} rows; the model has {Phi.shape[0]} DOFs")
@@ -85,9 +110,15 @@ def modal_plant(modes, loads: np.ndarray, sensors: list[Sensor], damping=0.0025,
     C[acc, n:] = -SPhi[acc] * (2 * z * w)
     D[acc] = SPhi[acc] @ Bm
     if residual_flexibility is not None:
-        D[disp] += (S @ np.asarray(residual_flexibility).reshape(F.shape))[disp]
-    names_in = input_names or [f"u{i + 1}" for i in range(F.shape[1])]
+        R = np.asarray(residual_flexibility, dtype=float).reshape(F.shape[0], -1)
+        if R.shape[1] != F.shape[1]:
+            raise ModelError(f"residual_flexibility has {R.shape[1]} columns; the plant has "
+                             f"{F.shape[1]} inputs (loads and disturbances)")
+        D[disp] += (S @ R)[disp]
     names_out = [s.name or f"y{i + 1}" for i, s in enumerate(sensors)]
+    dup = sorted({n for n in names_out if names_out.count(n) > 1})
+    if dup:
+        raise ModelError(f"output name '{dup[0]}' is used by more than one sensor")
     states = [f"eta{i + 1}" for i in range(n)] + [f"deta{i + 1}" for i in range(n)]
     return control.ss(A, B, C, D, inputs=names_in, outputs=names_out, states=states)
 

@@ -6,6 +6,7 @@ import numpy as np
 
 from trussid.fem.assembly import System, assemble
 from trussid.fem.errors import ModelError
+from trussid.fem.factor import cholmod_available
 from trussid.fem.modal import BLAS_THREADS, blas_threads, factor_stiffness
 
 
@@ -38,6 +39,7 @@ def solve_static(model_or_system, f_full, *, autospc: bool = False) -> np.ndarra
         raise ModelError(f"load vector has {f_full.shape[0]} rows; the model has {n_full} DOFs "
                          f"(6 per node)")
     f = system.T.T @ f_full
+    cholmod_available()  # loads cvxopt's own BLAS before the thread limit is set
     with blas_threads(BLAS_THREADS):
         fac, j = factor_stiffness(system)
         if fac is None:

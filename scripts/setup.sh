@@ -24,3 +24,7 @@ if command -v apt-get >/dev/null 2>&1; then
 fi
 python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore \
     -e ".${extras:+[$extras]}"
+# slycot (trussid.lqg's MIMO disk margins): its wheel declares numpy>=2, pyNastran numpy<2;
+# the wheel runs on numpy 1.26, so it is installed without dependency resolution.
+python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore \
+    --no-deps "slycot==0.7.1"

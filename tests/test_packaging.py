@@ -38,9 +38,13 @@ def _declared():
             for d in meta["project"]["dependencies"]}
 
 
+#: Installed by scripts/setup.sh outside dependency resolution, with the reason there.
+SETUP_INSTALLED = {"slycot"}
+
+
 def test_every_third_party_import_is_a_runtime_dependency():
     dists = packages_distributions()
-    declared = _declared()
+    declared = _declared() | SETUP_INSTALLED
     missing = {}
     for top, where in _imported_top_levels().items():
         if top in sys.stdlib_module_names or top in PACKAGES or top == "__future__":
@@ -49,3 +53,10 @@ def test_every_third_party_import_is_a_runtime_dependency():
         if not owners & declared:
             missing[top] = where
     assert not missing, f"imported but not in [project.dependencies]: {missing}"
+
+
+def test_what_setup_installs_outside_resolution_is_in_setup_sh():
+    setup = (ROOT / "scripts" / "setup.sh").read_text()
+    for name in SETUP_INSTALLED:
+        assert f'--no-deps "{name}==' in setup
+        assert name not in _declared()

@@ -316,3 +316,61 @@ def plant_bode_figure(plant: control.StateSpace, title: str = ""):
         ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     return fig
+
+
+def sigma_figure(curves, title: str = "", ylabel: str = "largest singular value"):
+    """Largest singular value against frequency; ``curves`` a list of (label, f [Hz],
+    H (n_freq, p, m)). The first is drawn grey and wide (open loop), the others in colour."""
+    fig = Figure(figsize=(9, 4))
+    ax = fig.subplots()
+    for k, (label, f, H) in enumerate(curves):
+        s = np.linalg.svd(H, compute_uv=False)[:, 0]
+        st = dict(color="0.55", lw=2.2) if k == 0 else dict(color=f"C{k - 1}", lw=1.1)
+        ax.semilogy(f, s, label=label, **st)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel(ylabel)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if title:
+        ax.set_title(title)
+    fig.tight_layout()
+    return fig
+
+
+def decay_figure(curves, title: str = "", ylabel: str = "impulse response RMS over outputs [dB]"):
+    """Decay of impulse responses: ``curves`` a list of (label, t [s], envelope [dB])."""
+    fig = Figure(figsize=(9, 4))
+    ax = fig.subplots()
+    for k, (label, t, e) in enumerate(curves):
+        st = dict(color="0.55", lw=1.8) if k == 0 else dict(color=f"C{k - 1}", lw=1.0)
+        ax.plot(t, e, label=label, **st)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if title:
+        ax.set_title(title)
+    fig.tight_layout()
+    return fig
+
+
+def damping_map_figure(sets, title: str = "poles: frequency and damping",
+                       band=(0.0, 800.0)):
+    """Poles as frequency [Hz] against damping ratio [%] (log), the view where a 0.25 %
+    mode and a 5 % one are far apart. ``sets``: list of (label, frequency_hz, damping,
+    marker), drawn in order."""
+    fig = Figure(figsize=(9, 5))
+    ax = fig.subplots()
+    for k, (label, f, z, marker) in enumerate(sets):
+        f, z = np.asarray(f), np.asarray(z)
+        keep = (f >= band[0]) & (f <= band[1]) & (z > 0)
+        kw = dict(mfc="none") if marker == "o" else {}
+        ax.semilogy(f[keep], 100 * z[keep], marker, label=label, color=f"C{k}" if k else "k",
+                    ms=6 if marker == "o" else 5, **kw)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("damping ratio [%]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(title)
+    fig.tight_layout()
+    return fig

@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from trussid.cli import main
@@ -93,7 +94,7 @@ def test_n_overrides_the_deck_and_the_table_names_mass_and_units():
 
 @pytest.mark.parametrize("text,match", [
     ("BEGIN BULK\nGRID,1,,0.,0.,0.\nCQUAD4,1,1,1,2,3,4\nCHEXA,2,1,1,2,3,4,5,6\nENDDATA\n",
-     "unsupported bulk-data entries: CHEXA (1), CQUAD4 (1)"),
+     "unsupported element entries: CHEXA (1), CQUAD4 (1)"),
     ("BEGIN BULK\nGRID,1,,0.,0.,0.\nCELAS2,2,800.,7,1\nENDDATA\n", "spring 2: grid 7 is not defined"),
     ("BEGIN BULK\nGRID,1,,0,0,0\nENDDATA\n", "not a readable bulk-data deck"),
 ])
@@ -105,9 +106,9 @@ def test_bad_deck_exits_nonzero_with_one_line(tmp_path, cli, text, match):
 
 def test_bad_deck_from_the_shell_prints_one_line_and_no_traceback(tmp_path):
     deck = tmp_path / "bad.bdf"
-    deck.write_text("BEGIN BULK\nGRID,1,,0.,0.,0.\nCQUAD4,1,1,1,2,3,4\nMPC,3,1,1,1.\nENDDATA\n")
+    deck.write_text("BEGIN BULK\nGRID,1,,0.,0.,0.\nCQUAD4,1,1,1,2,3,4\nDMIG,STIF,0,6,1,0\nENDDATA\n")
     line = one_line_error(run(deck))
-    assert "CQUAD4 (1)" in line and "MPC (1)" in line
+    assert "CQUAD4 (1)" in line and "DMIG (1)" in line
 
 
 def test_missing_file_and_unknown_suffix_exit_with_one_line(tmp_path, cli):
@@ -149,3 +150,22 @@ def test_bad_testbed_toml_exits_with_one_line_naming_the_key(tmp_path, cli):
 
 def test_decks_have_no_labels_in_json(cli):
     assert json.loads(cli(FRAME, "--json").stdout)["labels"] is None
+
+
+def test_op2_option_writes_the_modes_for_pynastran(tmp_path, cli):
+    from trussid.fem.op2 import read_op2_modes
+
+    out = tmp_path / "frame.op2"
+    res = cli(FRAME, "--n", "4", "--json", "--op2", out)
+    assert res.returncode == 0, res.stderr
+    f = np.asarray(json.loads(res.stdout)["frequencies_hz"])
+    eig, _, vecs = read_op2_modes(out)
+    np.testing.assert_allclose(np.sqrt(eig) / (2 * np.pi), f, rtol=1e-7)
+    assert vecs.shape[0] == 4
+
+
+def test_op2_onto_a_directory_is_one_line_and_leaves_no_file(tmp_path, cli):
+    target = tmp_path / "out"
+    target.mkdir()
+    one_line_error(cli(FRAME, "--n", "2", "--op2", target))
+    assert list(tmp_path.iterdir()) == [target] and not list(target.iterdir())

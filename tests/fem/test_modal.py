@@ -183,24 +183,3 @@ def test_lumped_mass_dense_and_shift_invert_agree_despite_massless_rotations():
     d = solve_modes(m, 6, method="dense").frequencies_hz
     s = solve_modes(m, 6, method="sparse").frequencies_hz
     assert np.max(np.abs(s / d - 1.0)) < 1e-10
-
-
-@pytest.mark.parametrize("grouped", [False, True])
-def test_spd_factor_solves_and_reports_pivots_in_dof_order(grouped):
-    """The last pivot of an LDL^T-type elimination is 1 / (A^-1)_jj for the DOF j eliminated
-    last; every pivot is positive and at most its diagonal entry."""
-    import scipy.sparse as sp
-
-    from trussid.fem.modal import SPDFactor
-
-    B = sp.random(80, 80, density=0.05, random_state=3)
-    A = (B @ B.T + sp.diags(np.linspace(1.0, 9.0, 80))).tocsr()
-    f = SPDFactor(A, groups=np.arange(80) // 6 if grouped else None)
-    b = np.random.default_rng(1).standard_normal((80, 3))
-    x = f.solve(b)
-    assert np.abs(A @ x - b).max() < 1e-12
-    piv = f.pivots()
-    assert np.all(piv > 0) and np.all(piv <= A.diagonal() * (1 + 1e-12))
-    last = int(f.lu.perm_c.argmax())  # the (permuted) row eliminated last ...
-    j = last if f.perm is None else int(f.perm[last])  # ... is this DOF
-    assert piv[j] == pytest.approx(1.0 / np.linalg.inv(A.toarray())[j, j], rel=1e-10)

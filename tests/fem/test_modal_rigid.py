@@ -22,7 +22,7 @@ def stiff_beam(n=20, length=0.2, springs=None):
                 ALUMINIUM, orient=(0, 0, 1))
     m.add_point_masses([n // 2], 5.0, inertia=np.diag([0.01, 0.01, 0.01]))
     if springs is not None:
-        m.add_springs([1, 2], [0, n], springs)
+        m.add_springs([n + 1, n + 2], [0, n], springs)  # element ids are unique across kinds
     return m
 
 

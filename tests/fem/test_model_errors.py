@@ -55,12 +55,17 @@ def test_non_positive_material_constant_is_named(key, value):
         Material(**kw)
 
 
-@pytest.mark.parametrize("key", ["E", "G", "rho"])
+@pytest.mark.parametrize("key", ["E", "G"])
 def test_non_positive_material_array_is_named_at_assembly_by_element(key):
     mat = dict(GOOD_MATERIAL)
     mat[key] = 0.0
     with pytest.raises(ModelError, match=rf"element 12 \(.*\): {key} must be positive"):
         assemble(two_beams(material=mat))
+
+
+def test_negative_density_array_is_named_at_assembly_by_element():
+    with pytest.raises(ModelError, match=r"element 12 \(.*\): rho must be >= 0"):
+        assemble(two_beams(material=dict(GOOD_MATERIAL, rho=-1.0)))
 
 
 @pytest.mark.parametrize("key", ["A", "Iy", "Iz", "J"])
@@ -70,9 +75,24 @@ def test_non_positive_section_property_is_named(key):
     with pytest.raises(ModelError, match=rf"section 'flat bar': {key} must be positive"):
         Section.general(**kw)
     sec = dict(GOOD_SECTION)
-    sec[key] = 0.0
-    with pytest.raises(ModelError, match=rf"element 12 \(.*\): {key} must be positive"):
+    sec[key] = -1e-9 if key != "A" else 0.0
+    with pytest.raises(ModelError, match=rf"element 12 \(.*\): {key} must be (positive|>= 0)"):
         assemble(two_beams(section=sec))
+
+
+def test_massless_beam_and_zero_torsion_constant_are_legal_like_nastran():
+    """rho = 0 (all mass in point masses) and J = 0 are NASTRAN defaults: a cantilever of
+    massless beams with a tip mass is the spring-mass k = 3 E I / L^3 (closed form)."""
+    E, I, L, mass = 70e9, 1e-9, 1.0, 2.0
+    m = Model(mass="lumped")
+    m.add_nodes([1, 2, 3], [[0, 0, 0], [0.5, 0, 0], [1.0, 0, 0]])
+    sec = dict(GOOD_SECTION, Iy=I, Iz=I, J=0.0)
+    m.add_beams([11, 12], [[1, 2], [2, 3]], sec, dict(GOOD_MATERIAL, E=E, rho=0.0), orient=[0, 1, 0])
+    m.add_point_masses([3], [mass])
+    m.fix(1)
+    m.fix([2, 3], "14")  # axial and torsion: no mass (axial) and no stiffness (J = 0)
+    f = solve_modes(m, n_modes=1, autospc=True).frequencies_hz[0]
+    assert abs(f / (np.sqrt(3 * E * I / L**3 / mass) / (2 * np.pi)) - 1) < 1e-10
 
 
 def test_non_positive_shear_area_is_named_for_timoshenko():

@@ -308,8 +308,12 @@ def test_coupmass_selects_consistent_mass_and_lumped_is_the_default(tmp_path):
 
 
 # ----------------------------------------------------------------- write -> read
-def _frame_model(theory="euler-bernoulli", mass="consistent") -> Model:
-    """A 3-D frame with every kind of item the writer handles."""
+def _frame_model(theory="euler-bernoulli", mass="consistent", nastran_bars=False) -> Model:
+    """A 3-D frame with every kind of item the writer handles.
+
+    ``nastran_bars``: the bars as NASTRAN's coupled CBAR mass has them, without torsional
+    or rotary inertia: their structural mass given as non-structural mass per length.
+    """
     m = Model(beam_theory=theory, mass=mass, name="roundtrip")
     al = Material.isotropic(68.9e9, 0.33, 2700.0, "al")
     st = Material.isotropic(200e9, 0.29, 7850.0, "steel")
@@ -319,9 +323,15 @@ def _frame_model(theory="euler-bernoulli", mass="consistent") -> Model:
     m.add_nodes(list(pts), list(pts.values()))
     tube = Section.tube(0.01, 0.0015, name="tube")
     rect = Section.rectangle(0.02, 0.008, name="rect")
-    m.add_beams([1, 2, 3, 4], [[1, 5], [2, 6], [3, 7], [4, 8]], tube, al, orient=[1, 0.2, 0])
-    m.add_beams([5, 6, 7, 8], [[5, 6], [6, 7], [7, 8], [8, 5]], rect, st, orient=[0.1, 0.3, 1],
-                nsm=0.05)
+    def bar_mass(sec, mat, nsm=0.0):
+        if not nastran_bars:
+            return mat, nsm
+        return {"E": mat.E, "G": mat.G, "rho": 0.0}, nsm + mat.rho * sec.A
+
+    m.add_beams([1, 2, 3, 4], [[1, 5], [2, 6], [3, 7], [4, 8]], tube, bar_mass(tube, al)[0],
+                orient=[1, 0.2, 0], nsm=bar_mass(tube, al)[1])
+    m.add_beams([5, 6, 7, 8], [[5, 6], [6, 7], [7, 8], [8, 5]], rect, bar_mass(rect, st)[0],
+                orient=[0.1, 0.3, 1], nsm=bar_mass(rect, st, 0.05)[1])
     m.add_beams([9], [[5, 7]], Section.general(2e-5, 1, 1, 1e-10), al, orient=[0, 0, 1], rod=True)
     m.add_point_masses([6, 9], [0.3, 1.5],
                        inertia=[np.diag([1e-4, 2e-4, 3e-4]),
@@ -339,6 +349,38 @@ def _frame_model(theory="euler-bernoulli", mass="consistent") -> Model:
     return m
 
 
+def _add_nastran_rod_mass(model: Model) -> None:
+    """Add (NASTRAN's coupled CROD mass - the textbook rod mass) to ``model``'s rods: NASTRAN
+    axial m [5/12 1/12; 1/12 5/12] and lumped transverse m/2, against linear interpolation
+    m/6 [2 1; 1 2] in every direction."""
+    b = model.beams
+    xyz = dict(zip(model.node_ids.tolist(), model.xyz))
+    for i in np.flatnonzero(b.rod):
+        d = xyz[int(b.nodes[i, 1])] - xyz[int(b.nodes[i, 0])]
+        L = np.linalg.norm(d)
+        ee = np.outer(d, d) / L**2
+        m = (b.rho[i] * b.A[i] + b.nsm[i]) * L
+        nastran = np.kron(m * np.array([[5 / 12, 1 / 12], [1 / 12, 5 / 12]]), ee) + np.kron(m / 2 * np.eye(2), np.eye(3) - ee)
+        textbook = np.kron(m / 6 * np.array([[2.0, 1.0], [1.0, 2.0]]), np.eye(3))
+        M = np.zeros((12, 12))
+        t = [0, 1, 2, 6, 7, 8]
+        M[np.ix_(t, t)] = nastran - textbook
+        model.add_matrices([1000 + i], [b.nodes[i]], M=[M])
+
+
+def test_pin_flags_equal_a_hinge_built_from_a_duplicate_grid(tmp_path):
+    """CBAR PA=456 (rotations released at end A) is the same beam starting at its own grid
+    that follows grid 4 in translation only (RBE2 123): the model without the entry. The
+    beam is clamped at both ends so that the hinge is not a mechanism."""
+    base = cantilever_deck(n_el=6, coupmass="-1", extra="SPC1,1,123456,7")
+    pinned = base.replace("CBAR,4,1,4,5,0.,0.,1.", "CBAR,4,1,4,5,0.,0.,1.,,\n,456")
+    hinge = base.replace("CBAR,4,1,4,5,0.,0.,1.", "GRID,44,,0.5,0.,0.\nCBAR,4,1,44,5,0.,0.,1.\nRBE2,90,4,123,44")
+    f_pin = freqs(*read_bdf(write(tmp_path, pinned, "pin.bdf")), n=8)
+    f_hinge = freqs(*read_bdf(write(tmp_path, hinge, "hinge.bdf")), n=8)
+    assert 0 < f_pin[0] < 0.99 * freqs(*read_bdf(write(tmp_path, base, "base.bdf")), n=1)[0]
+    np.testing.assert_allclose(f_pin, f_hinge, rtol=1e-9)
+
+
 @pytest.mark.parametrize("theory,mass", [("euler-bernoulli", "consistent"),
                                          ("euler-bernoulli", "lumped"),
                                          ("timoshenko", "consistent")])
@@ -348,13 +390,20 @@ def test_written_deck_reads_back_to_the_same_frequencies(tmp_path, theory, mass)
     write_bdf(model, path, n_modes=12)
     back, info = read_bdf(path)
     assert (info.mass, back.beam_theory, info.eigen.n_modes) == (mass, theory, 12)
+    if mass == "consistent":
+        # NASTRAN (and so the re-read deck) gives a coupled CBAR no torsional or rotary
+        # inertia and a coupled CROD its own mass.
+        model = _frame_model(theory, mass, nastran_bars=True)
+        _add_nastran_rod_mass(model)
     f0 = solve_modes(model, n_modes=12).frequencies_hz
     f1 = solve_modes(back, n_modes=12, autospc=info.autospc).frequencies_hz
     np.testing.assert_allclose(f1, f0, rtol=1e-10)
 
 
 def test_written_deck_reads_back_to_the_same_model_arrays(tmp_path):
-    model = _frame_model("timoshenko")
+    # lumped: a coupled CBAR's mass is read back as non-structural mass (NASTRAN's coupled
+    # CBAR has no torsional inertia), which the frequency round trip above covers
+    model = _frame_model("timoshenko", "lumped")
     write_bdf(model, tmp_path / "rt.bdf")
     back, _ = read_bdf(tmp_path / "rt.bdf")
     np.testing.assert_array_equal(back.node_ids, model.node_ids)
@@ -398,25 +447,44 @@ def test_writer_refuses_a_spring_nastran_cannot_express_and_leaves_no_file(tmp_p
 
 # ----------------------------------------------------------------- bad input
 def test_unsupported_cards_are_all_listed_with_counts(tmp_path):
-    deck = cantilever_deck(n_el=2, extra="CQUAD4,100,1,1,2,3,1\nCQUAD4,101,1,1,2,3,1\n"
-                                         "CTRIA3,102,1,1,2,3\nMPC,7,1,1,1.,2,1,-1.\nPARAM,LGDISP,1")
+    deck = cantilever_deck(n_el=2, extra="DMIG,STIF,0,6,1,0\nCONM1,90,3\nPARAM,NOSUCH,1")
     with pytest.raises(ModelError) as exc:
         read_bdf(write(tmp_path, deck))
     msg = str(exc.value)
-    for item in ("CQUAD4 (2)", "CTRIA3 (1)", "MPC (1)", "PARAM,LGDISP"):
+    for item in ("DMIG (1)", "CONM1 (1)", "PARAM,NOSUCH"):
         assert item in msg
     assert "\n" not in msg
+
+
+def test_shell_and_solid_elements_are_named_first_in_one_line(tmp_path):
+    deck = cantilever_deck(n_el=2, extra="CQUAD4,100,1,1,2,3,1\nCQUAD4,101,1,1,2,3,1\n"
+                                         "CTRIA3,102,1,1,2,3\nPSHELL,1,1,0.1\nPARAM,NOSUCH,1")
+    with pytest.raises(ModelError) as exc:
+        read_bdf(write(tmp_path, deck))
+    msg = str(exc.value)
+    assert "unsupported element entries: CQUAD4 (2), CTRIA3 (1)" in msg
+    assert "also unsupported: PARAM,NOSUCH (1), PSHELL (1)" in msg
+    assert "\n" not in msg
+
+
+def test_entries_without_effect_on_modes_are_ignored_and_listed_once(tmp_path):
+    """Loads, tables, damping, aero and output entries leave the modes unchanged."""
+    extra = ("FORCE,1,21,0,1.,0.,100.,0.\nFORCE,1,20,0,1.,0.,100.,0.\nMDLPRM,HDF5,0\n"
+             "TABDMP1,1,CRIT\n,0.,0.02,1000.,0.02,ENDT\nPARAM,OIBULK,YES\nMAT4,501,200.")
+    plain, _ = read_bdf(write(tmp_path, cantilever_deck(n_el=20)))
+    model, info = read_bdf(write(tmp_path, cantilever_deck(n_el=20, extra=extra), "loaded.bdf"))
+    assert info.ignored == ["FORCE (2)", "MAT4 (1)", "MDLPRM (1)", "PARAM,OIBULK", "TABDMP1 (1)"]
+    np.testing.assert_array_equal(freqs(model, info), freqs(plain))
 
 
 @pytest.mark.parametrize("extra,replace,match", [
     ("", ("CBAR,2,1,2,3,0.,0.,1.", "CBAR,2,1,2,99,0.,0.,1."), "CBAR 2: grid 99 is not defined"),
     ("", ("CBAR,1,1,1,2,0.,0.,1.", "CBAR,1,1,1,2,0.,0.,1.\n,,,,0.,0.,0.1"), "CBAR 1: offsets"),
-    ("", ("CBAR,1,1,1,2,0.,0.,1.", "CBAR,1,1,1,2,0.,0.,1.,,\n,6"), "CBAR 1: pin flags"),
-    ("CELAS2,50,10.,2,1,3,2", ("", ""), "CELAS2 50: couples component 1 of grid 2 with component 2"),
-    ("", ("GRID,3,,", "GRID,3,,0.,0.,0.,5\nCORD2R,5,,0.,0.,0.,0.,0.,1.,\n,1.,0.,0.\nGRID,33,,"),
-     "GRID 3: displacement coordinate system CD=5"),
+    ("", ("CBAR,1,1,1,2,0.,0.,1.", "CBAR,1,1,1,2,0.,0.,1.,,\n,7"), "CBAR 1: pin flags"),
+    ("CELAS2,50,10.,2,0,3,2", ("", ""), "CELAS2 50: scalar points"),
+    ("", ("GRID,3,,", "GRID,3,,0.,0.,0.,5\nGRID,33,,"), "GRID 3: coordinate system CD=5 is not defined"),
     ("", ("PBAR,1,1,", "PBAR,1,77,"), "PBAR 1: material 77 is not defined"),
-    ("CBUSH,60,61,2,3,0.,1.,0.\nPBUSH,61,K,1.,1.,1.", ("", ""), "CBUSH 60: translational stiffness across"),
+    ("CBUSH,60,61,2,3,0.,1.,0.,,\n,,7,0.1,0.,0.\nPBUSH,61,K,1.,1.,1.", ("", ""), "CBUSH 60: spring offset OCID"),
 ])
 def test_bad_deck_errors_name_the_card(tmp_path, extra, replace, match):
     deck = cantilever_deck(n_el=4, extra=extra).replace(*replace)

@@ -312,7 +312,7 @@ def test_wall_thickness_study_writes_a_plot_and_prints_sensitivities(tmp_path):
     import matplotlib.image as mpimg
 
     root = Path(__file__).resolve().parents[2]
-    out = tmp_path / "plots" / "study.png"
+    out = tmp_path / "study.png"  # an existing folder: nothing creates one uninvited
     res = subprocess.run([sys.executable, str(root / "examples" / "wall_thickness_study.py"), "--points", "2",
                           "--modes", "20", "--out", str(out)], capture_output=True, text=True, cwd=tmp_path)
     assert res.returncode == 0, res.stderr
@@ -334,3 +334,28 @@ def test_wall_thickness_study_rejects_a_bad_sweep_without_writing(tmp_path):
                           "--out", str(out)], capture_output=True, text=True)
     assert res.returncode == 2 and "--points" in res.stderr and "Traceback" not in res.stderr
     assert not out.exists()
+
+
+def test_fine_meshes_take_the_sparse_path_and_match_a_dense_solution():
+    """Above DENSE_MAX_DOF the testbed's modes come from sparse shift-invert (no n x n
+    matrix): same frequencies as LAPACK's dense eigh of the same K, M, every mode below a
+    frequency found by count-doubling, and the wall sweep's sparse path agrees too."""
+    import scipy.linalg as la
+
+    from trussid.testbed.model import DENSE_MAX_DOF, solve_testbed_modes, wall_basis, wall_modes
+
+    tbm = build_testbed(elements_per_segment=10)
+    system = assemble(tbm.model)
+    assert system.n_dof > DENSE_MAX_DOF
+    lam = la.eigh(system.K.toarray(), system.M.toarray(), eigvals_only=True, subset_by_index=[0, 59])
+    f_ref = np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
+    modes = solve_testbed_modes(tbm, 12, system=system)
+    assert modes.method == "shift-invert"
+    assert np.max(np.abs(modes.frequencies_hz[6:] / f_ref[6:12] - 1)) < 1e-8
+    f_max = 0.5 * (f_ref[40] + f_ref[41])                 # 41 modes lie below it
+    below = solve_testbed_modes(tbm, 12, system=system, max_frequency_hz=f_max)
+    assert len(below) == 41 and below.frequencies_hz[-1] < f_max
+    basis = wall_basis(tbm, system)
+    f_sweep, X = wall_modes(basis, basis.walls_ref, 12)
+    assert np.max(np.abs(f_sweep[6:] / f_ref[6:12] - 1)) < 1e-8
+    assert np.allclose(X.T @ (system.M @ X), np.eye(12), atol=1e-9)

@@ -14,7 +14,8 @@ from trussid.fem.plant import modal_plant
 from trussid.fem.sensors import Sensor, sensor_matrix
 from trussid.fem.static import solve_static
 from trussid.testbed.model import build_testbed
-from trussid.testbed.plant import accelerometers, channel_loads, testbed_plant
+from trussid.testbed.plant import (accelerometers, channel_loads, node_load, testbed_plant,
+                                   udf_motion, udf_wrench)
 from trussid.geometry.spec import Testbed
 
 
@@ -121,3 +122,47 @@ def test_bad_plant_inputs_give_clear_errors(default_plant):
         Sensor(int(tbm.map.accelerometer_nodes[0]), (0, 0, 0), name="acc1")
     with pytest.raises(ModelError, match="below twice the highest kept mode"):
         testbed_plant(tbm=tbm, n_modes=60, sample_rate=1000.0)
+
+
+def test_udf_wrench_to_udf_motion_dc_gain_equals_static_solution(clamped):
+    """Disturbance inputs and performance outputs are exact: with every mode kept, the DC
+    gain from a unit wrench at the UDF to the UDF's displacement is the static solution."""
+    tbm, system, modes = clamped
+    F = channel_loads(tbm)
+    dist = udf_wrench(tbm)
+    perf = udf_motion(tbm, "displacement")
+    plant = modal_plant(modes, F, accelerometers(tbm), damping=0.0, input_names=["c1", "c2", "c3"],
+                        disturbances=dist, performance=perf)
+    assert list(plant.input_labels) == ["c1", "c2", "c3", *dist]
+    assert list(plant.output_labels) == ["acc1", "acc2", "acc3", "udf_x", "udf_y", "udf_z"]
+    W = np.column_stack(list(dist.values()))
+    static = sensor_matrix(modes.node_ids, perf) @ solve_static(system, W)
+    dc = (plant.C @ np.linalg.solve(-plant.A, plant.B) + plant.D)[3:, 3:]
+    assert np.abs(dc - static).max() <= 1e-8 * np.abs(static).max()
+
+
+def test_extra_channels_leave_the_control_channels_unchanged(default_plant):
+    tbm = default_plant.tbm
+    tp = testbed_plant(tbm=tbm, disturbances=udf_wrench(tbm, ("fz",)), performance=udf_motion(tbm))
+    d0, d = default_plant.discrete, tp.discrete
+    assert list(d.input_labels) == ["ch1", "ch2", "ch3", "udf_fz"]
+    assert list(d.output_labels)[:3] == list(d0.output_labels)
+    n = d0.nstates
+    # the disturbance bypasses the electronics: its direct term becomes one held-input state
+    assert d.nstates == n + 1
+    H0 = control.ss(d0.A, d0.B, d0.C, d0.D, d0.dt)(np.exp(2j * np.pi * 194.0 * d0.dt))
+    H = control.ss(d.A, d.B[:, :3], d.C[:3], d.D[:3, :3], d.dt)(np.exp(2j * np.pi * 194.0 * d.dt))
+    assert np.allclose(H, H0, rtol=1e-9, atol=0)
+    assert np.all(np.asarray(d.D) == 0)
+
+
+def test_bad_disturbance_and_performance_channels_are_named(default_plant):
+    tbm = default_plant.tbm
+    with pytest.raises(ModelError, match="unknown node 999"):
+        node_load(tbm, 999, "fz")
+    with pytest.raises(ModelError, match="axis"):
+        node_load(tbm, tbm.map.udf_master, "fw")
+    with pytest.raises(ModelError, match="'ch1'"):
+        testbed_plant(tbm=tbm, disturbances={"ch1": node_load(tbm, tbm.map.udf_master, "fz")})
+    with pytest.raises(ModelError, match="'acc1'"):
+        testbed_plant(tbm=tbm, performance=[Sensor(int(tbm.map.udf_master), (0, 0, 1), name="acc1")])

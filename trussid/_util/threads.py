@@ -37,6 +37,12 @@ def blas_thread_counts() -> list[int]:
     return [lib.num_threads for lib in _controller().select(user_api="blas").lib_controllers]
 
 
+def forget_blas_libraries() -> None:
+    """Rescan the loaded BLAS libraries at the next limit: call it after importing a package
+    that brings its own BLAS (cvxopt), or the limit will not reach that library."""
+    _controller.cache_clear()
+
+
 #: Environment variable that sets the BLAS threads of every ``trussid`` command.
 THREADS_ENV = "TRUSSID_THREADS"
 #: The environment variables BLAS/OpenMP libraries read when they load.

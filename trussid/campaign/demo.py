@@ -702,20 +702,37 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
         models.append(evaluate(fits[name], truth, rid, rval, h1s[name], settings, name, kind))
     timings["evaluation"] = time.perf_counter() - t0
 
+    control = None
+    if "mimo" in records:  # close the loop on the MIMO model (issue 14)
+        from trussid.campaign.control import demo_section
+
+        t0 = time.perf_counter()
+        say("      closing the loop: LQG from the MIMO model, on the FE truths ...")
+        control = demo_section(fits["mimo"].model, fits["mimo"].K, records["mimo"][0].data,
+                               truth, settings.quick, progress=lambda m: say("      " + m))
+        timings["control"] = time.perf_counter() - t0
+
     t0 = time.perf_counter()
     say(f"[5/5] writing the report in {out}/ ...")
     with atomic_directory(out, force=force) as tmp:
         summary = _write_report(tmp, tp, records, fits, h1s, truth, settings, models, timings,
-                                prov, t0, t_start)
+                                prov, t0, t_start, control)
     say(f"      done in {timings['total']:.1f} s")
     return summary
 
 
 def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings, prov, t0,
-                  t_start) -> dict:
-    """Every file of the report into ``out`` (the temporary directory); the summary."""
+                  t_start, control=None) -> dict:
+    """Every file of the report into ``out`` (the temporary directory); the summary.
+    ``control``: the closed-loop section ``(markdown, figures, summary)`` or None."""
     files = write_files(out, records, fits, truth)
     files["figures"] = write_figures(out, records, fits, h1s, truth, settings)
+    if control is not None:
+        from trussid.plots import save_figure
+
+        for fname, fig in control[1].items():
+            save_figure(fig, out / fname)
+        files["figures"] += list(control[1])
     summary = {
         "format_version": 1,
         "provenance": prov,
@@ -726,13 +743,15 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
         "files": files,
         "timings_s": timings,
     }
+    if control is not None:
+        summary["control"] = control[2]
     timings["report"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
     summary = json_safe(summary)
     with atomic_path(out / "summary.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2) + "\n")
     with atomic_path(out / "report.md") as tmp:
-        tmp.write_text(report_markdown(summary))
+        tmp.write_text(report_markdown(summary) + ("\n" + control[0] if control else ""))
     return summary
 
 

@@ -22,9 +22,10 @@ import sys
 from trussid import __version__
 from trussid._util.errors import UserError
 
-#: Sub-commands in the order ``--help`` lists them.
+#: Sub-commands in the order ``--help`` lists them (module ``trussid.cli.commands.<name>``
+#: with ``-`` read as ``_``).
 COMMANDS = ("demo", "modes", "render", "plant", "simulate", "identify", "compare", "greybox",
-            "export", "study")
+            "export", "control", "closed-loop", "study")
 
 
 class Parser(argparse.ArgumentParser):
@@ -59,12 +60,13 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(parser, None)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
+        modname = f"trussid.cli.commands.{name.replace('-', '_')}"
         try:
-            module = importlib.import_module(f"trussid.cli.commands.{name}")
+            module = importlib.import_module(modname)
         except ModuleNotFoundError as exc:
             # A command whose module is not there yet is simply not offered; any other
             # missing module is a real installation problem and must surface.
-            if exc.name == f"trussid.cli.commands.{name}":
+            if exc.name == modname:
                 continue
             raise
         module.add_parser(sub)

@@ -21,6 +21,7 @@ _LAZY = {
     "wall_sensitivities": "sensitivity", "testbed_sensitivities": "sensitivity",
     "LabChain": "chain", "lab_plant": "chain",
     "TestbedPlant": "plant", "testbed_plant": "plant", "plant_summary": "plant",
+    "node_load": "plant", "udf_wrench": "plant", "udf_motion": "plant",
     "testbed_decorations": "render",
 }
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)

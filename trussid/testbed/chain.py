@@ -82,8 +82,8 @@ def channel_electronics(chain: LabChain) -> control.StateSpace:
 
 
 def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
-              check_nyquist: bool = True, max_mode_hz: float | None = None
-              ) -> tuple[control.StateSpace, control.StateSpace]:
+              check_nyquist: bool = True, max_mode_hz: float | None = None,
+              n_commands: int | None = None) -> tuple[control.StateSpace, control.StateSpace]:
     """Compose the electronics with a structural plant and discretise.
 
     Parameters
@@ -95,6 +95,10 @@ def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
         Refuse a sample rate below twice ``max_mode_hz``.
     max_mode_hz : float, optional
         Highest kept structural mode [Hz] (for the Nyquist check).
+    n_commands : int, optional
+        The first ``n_commands`` inputs are D/A commands and go through the electronics;
+        the others (disturbances acting on the structure) enter the structure directly.
+        Default: all inputs.
 
     Returns
     -------
@@ -112,11 +116,16 @@ def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
         raise ModelError(f"sample rate {fs:g} Hz is below twice the highest kept mode "
                          f"({max_mode_hz:.1f} Hz): keep fewer modes or sample faster")
     inputs, outputs = list(structure.input_labels), list(structure.output_labels)
+    m = len(inputs) if n_commands is None else int(n_commands)
+    if not 0 <= m <= len(inputs):
+        raise ModelError(f"n_commands must be in 0..{len(inputs)}, got {n_commands}")
     elec = channel_electronics(chain)
     blocks = [control.ss(elec.A, elec.B, elec.C, elec.D, inputs=[name], outputs=[f"{name} pzt"],
-                         name=f"electronics {name}") for name in inputs]
+                         name=f"electronics {name}") for name in inputs[:m]]
+    # disturbances (inputs after the first m) act on the structure directly
     pzt = control.ss(structure.A, structure.B, structure.C, structure.D,
-                     inputs=[f"{name} pzt" for name in inputs], outputs=outputs, name="structure")
+                     inputs=[f"{name} pzt" for name in inputs[:m]] + inputs[m:], outputs=outputs,
+                     name="structure")
     cont = control.interconnect([*blocks, pzt], inplist=inputs, outlist=outputs, name="plant")
     cont = control.ss(cont.A, cont.B, cont.C, cont.D, inputs=inputs, outputs=outputs, name="plant")
     disc = control.c2d(cont, 1.0 / fs, method="zoh")
@@ -128,9 +137,14 @@ def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
 
 
 def _delay_direct_term(sys: control.StateSpace) -> control.StateSpace:
-    """y_k = C x_k + D u_{k-1}: append the held input as ``m`` states."""
-    n, m = sys.A.shape[0], sys.B.shape[1]
-    A = np.block([[sys.A, np.zeros((n, m))], [np.zeros((m, n + m))]])
-    B = np.vstack([sys.B, np.eye(m)])
-    C = np.hstack([sys.C, sys.D])
+    """y_k = C x_k + D u_{k-1}: append the held input as states, one per input with a
+    direct term (every input when none is filtered; only the disturbances otherwise)."""
+    n = sys.A.shape[0]
+    cols = np.flatnonzero(np.any(np.asarray(sys.D) != 0, axis=0))
+    m, k = sys.B.shape[1], cols.size
+    A = np.block([[sys.A, np.zeros((n, k))], [np.zeros((k, n + k))]])
+    E = np.zeros((k, m))
+    E[np.arange(k), cols] = 1.0
+    B = np.vstack([sys.B, E])
+    C = np.hstack([sys.C, np.asarray(sys.D)[:, cols]])
     return control.ss(A, B, C, np.zeros_like(sys.D), sys.dt)

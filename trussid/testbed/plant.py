@@ -121,6 +121,37 @@ def accelerometers(tbm: TestbedModel, quantity: str = "acceleration") -> list[Se
             for k, (n, d) in enumerate(zip(mp.accelerometer_nodes, mp.accelerometer_directions))]
 
 
+#: Names of the six axes of a wrench (force then moment, global axes).
+WRENCH_AXES = ("fx", "fy", "fz", "mx", "my", "mz")
+
+
+def node_load(tbm: TestbedModel, node: int, axis: str) -> np.ndarray:
+    """Nodal load vector of a unit force [N] or moment [N m] at ``node`` along ``axis``
+    (one of ``fx fy fz mx my mz``, global axes), for :func:`testbed_plant`'s disturbances."""
+    if axis not in WRENCH_AXES:
+        raise ModelError(f"load axis must be one of {', '.join(WRENCH_AXES)}, got {axis!r}")
+    ids = np.asarray(tbm.model.node_ids)
+    hit = np.flatnonzero(ids == int(node))
+    if hit.size == 0:
+        raise ModelError(f"disturbance load: unknown node {node}")
+    f = np.zeros(6 * ids.size)
+    f[6 * int(hit[0]) + WRENCH_AXES.index(axis)] = 1.0
+    return f
+
+
+def udf_wrench(tbm: TestbedModel, axes=WRENCH_AXES) -> dict:
+    """Disturbances ``udf_<axis>``: a unit force or moment on the UDF at its centre of
+    gravity (the master node of its rigid body)."""
+    return {f"udf_{a}": node_load(tbm, tbm.map.udf_master, a) for a in axes}
+
+
+def udf_motion(tbm: TestbedModel, quantity: str = "acceleration") -> list[Sensor]:
+    """Performance outputs ``udf_<x|y|z>``: the UDF's centre of gravity along the global
+    axes [SI units: m, m/s or m/s^2]."""
+    return [Sensor(int(tbm.map.udf_master), tuple(d), quantity, 1.0, name=f"udf_{a}")
+            for a, d in zip("xyz", np.eye(3))]
+
+
 def strut_sensors(tbm: TestbedModel, quantity: str = "acceleration",
                   sensitivity: float = 1.0) -> list[Sensor]:
     """One lateral sensor per strut, at the strut node nearest mid-span, along the strut's
@@ -136,7 +167,9 @@ def strut_sensors(tbm: TestbedModel, quantity: str = "acceleration",
 def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_rate: float | None = None,
                   quantity: str = "acceleration", chain: LabChain | None = None,
                   static_correction: bool = False, tbm: TestbedModel | None = None,
-                  arrangement: str = "extension", sensors: str = "udf") -> TestbedPlant:
+                  arrangement: str = "extension", sensors: str = "udf",
+                  disturbances: dict | None = None, performance: list[Sensor] | None = None
+                  ) -> TestbedPlant:
     """Build the testbed plant.
 
     Parameters
@@ -165,6 +198,12 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
     sensors : {"udf", "struts"}
         ``"udf"``: the lab's accelerometers at the UDF vertices; ``"struts"``: one lateral
         sensor per strut (:func:`strut_sensors`), whose shapes say which strut moves.
+    disturbances : dict of str -> (6 n_nodes,) float, optional
+        Extra named inputs after the actuator channels: nodal loads per unit disturbance
+        (:func:`node_load`, :func:`udf_wrench`). They act on the structure directly, not
+        through the electronics.
+    performance : list of fem.sensors.Sensor, optional
+        Extra named outputs after the accelerometers (e.g. :func:`udf_motion`).
 
     Returns
     -------
@@ -197,10 +236,15 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
         names = [f"ch{k + 1}" for k in range(F.shape[1])]
     out = accelerometers(tbm, quantity) if sensors == "udf" else strut_sensors(tbm, quantity)
     zeta = tb.damping.modal_ratio if damping is None else damping
-    resid = residual_flexibility(system, modes, F, keep) if static_correction else None
+    if static_correction:
+        cols = [F] + [np.asarray(v, dtype=float).reshape(-1, 1) for v in (disturbances or {}).values()]
+        resid = residual_flexibility(system, modes, np.hstack(cols), keep)
+    else:
+        resid = None
     structure = modal_plant(modes, F, out, zeta, n_modes=keep, residual_flexibility=resid,
-                            input_names=names)
-    cont, disc = lab_plant(structure, chain, max_mode_hz=float(modes.frequencies_hz[keep - 1]))
+                            input_names=names, disturbances=disturbances, performance=performance)
+    cont, disc = lab_plant(structure, chain, max_mode_hz=float(modes.frequencies_hz[keep - 1]),
+                           n_commands=F.shape[1])
     wafer = wafer_of(tb)
     return TestbedPlant(continuous=cont, discrete=disc, structure=structure,
                         modes=modes, loads=F,

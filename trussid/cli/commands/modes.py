@@ -29,6 +29,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--n", type=int, default=None, metavar="N",
                    help=f"number of modes (default: the deck's EIGRL ND, else {DEFAULT_N_MODES})")
     p.add_argument("--json", action="store_true", help="print a JSON object instead of a table")
+    p.add_argument("--op2", metavar="OUT.op2", default=None,
+                   help="also write the eigenvalues and mass-normalised eigenvectors as a NASTRAN "
+                   "OP2 file (OUGV1 eigenvector table, each grid in its CD system; 32-bit reals)")
     p.set_defaults(func=run)
 
 
@@ -54,6 +57,11 @@ def run(args) -> int:
         modes = solve_modes(system, n_modes=n)
     freqs = [float(f) for f in modes.frequencies_hz]
     model = loaded.model
+    if args.op2:
+        from trussid.fem.op2 import write_op2
+
+        write_op2(args.op2, modes, frames=model.node_frames(), title=f"trussid modes of {loaded.source}")
+        loaded.notes.append(f"OP2 written: {args.op2} ({len(freqs)} modes)")
     if args.json:
         print(json.dumps({
             "model": loaded.source,

@@ -1,0 +1,140 @@
+"""NASTRAN deck reading against solving: parse + build of a 1e5-element deck vs 20 modes (issue 13).
+
+Usage::
+
+    python benchmarks/bench_nastran_parse.py [--elements 100000] [--modes 20] [--repeat 1]
+        [--out benchmarks/results/nastran_parse]
+
+A cubic lattice frame of CBARs (:func:`fem_models.cubic_lattice`, ``3 n^2 (n - 1)``
+elements, base clamped) with at least ``--elements`` elements is written as a deck with
+:func:`trussid.fem.nastran.write_bdf` (large-field GRID, CBAR, PBAR, MAT1, SPC1, EIGRL; not
+timed). (A 1e5-element truss boom is 2.2 km long: its first bending eigenvalue is 1e-16 of
+the stiffest element's and the modal solver's zero-eigenvalue test takes it for a mechanism.)
+Then, in this process:
+
+- *parse*: pyNastran reading the deck (:func:`trussid.fem.nastran._parse`: the BDF object);
+- *read_bdf*: the whole :func:`trussid.fem.nastran.read_bdf` (parse + translation into a
+  :class:`trussid.fem.Model`); *build* = read_bdf - parse, the part that is trussid's;
+- *assemble*: :func:`trussid.fem.assembly.assemble`;
+- *eigen*: :func:`trussid.fem.modal.solve_modes` for the lowest ``--modes`` modes.
+
+Wall and CPU time (``time.perf_counter``, ``time.process_time``) per phase, best of
+``--repeat``; the load average before and after, machine and commit go beside them in
+``OUT.md`` and ``OUT.json``. A cProfile of one read_bdf call lists the functions where the
+time goes (top 12 by cumulative time) so that what is trussid's can be told from pyNastran's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import io
+import json
+import os
+import pstats
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from bench_fem_vs_opensees import machine_info  # noqa: E402
+from fem_models import cubic_lattice, to_trussid  # noqa: E402
+
+
+def timed(fn, *args, **kw):
+    w, c = time.perf_counter(), time.process_time()
+    out = fn(*args, **kw)
+    return out, time.perf_counter() - w, time.process_time() - c
+
+
+def main(argv=None) -> int:
+    from trussid._util.threads import blas_threads  # noqa: F401  (documented BLAS setting)
+    from trussid.fem import nastran
+    from trussid.fem.assembly import assemble
+    from trussid.fem.modal import solve_modes
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--elements", type=int, default=100_000)
+    ap.add_argument("--modes", type=int, default=20)
+    ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--out", default=str(HERE / "results" / "nastran_parse"))
+    args = ap.parse_args(argv)
+
+    n = 2
+    while 3 * n * n * (n - 1) < args.elements:
+        n += 1
+    spec = cubic_lattice(n)
+    model = to_trussid(spec)
+    load_before = os.getloadavg()
+    with tempfile.TemporaryDirectory() as tmp:
+        deck = Path(tmp) / "lattice.bdf"
+        nastran.write_bdf(model, deck, n_modes=args.modes, title="benchmark lattice")
+        size_mb = deck.stat().st_size / 1e6
+        best = {}
+        for _ in range(args.repeat):
+            _, w_parse, c_parse = timed(nastran._parse, deck)
+            (m2, info), w_read, c_read = timed(nastran.read_bdf, deck)
+            system, w_asm, c_asm = timed(assemble, m2, autospc=info.autospc)
+            modes, w_eig, c_eig = timed(solve_modes, system, n_modes=args.modes)
+            run = {"parse": (w_parse, c_parse), "read_bdf": (w_read, c_read),
+                   "build": (w_read - w_parse, c_read - c_parse), "assemble": (w_asm, c_asm),
+                   "eigen": (w_eig, c_eig)}
+            for k, v in run.items():
+                best[k] = min(best.get(k, v), v)
+        prof = cProfile.Profile()
+        prof.enable()
+        nastran.read_bdf(deck)
+        prof.disable()
+    load_after = os.getloadavg()
+    s = io.StringIO()
+    pstats.Stats(prof, stream=s).sort_stats("cumulative").print_stats(12)
+    profile = "\n".join(ln for ln in s.getvalue().splitlines() if ln.strip())
+
+    info_m = machine_info()
+    res = {"elements": int(len(model.beams)), "grids": int(len(model.node_ids)), "dof": int(system.n_dof),
+           "deck_mb": size_mb, "modes": args.modes, "lowest_hz": [float(f) for f in modes.frequencies_hz[:3]],
+           "wall_s": {k: v[0] for k, v in best.items()}, "cpu_s": {k: v[1] for k, v in best.items()},
+           "load_before": load_before, "load_after": load_after, "machine": info_m,
+           "parse_build_below_eigen": best["read_bdf"][0] + best["assemble"][0] < best["eigen"][0]}
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(json.dumps(res, indent=2, default=float))
+    w, c = res["wall_s"], res["cpu_s"]
+    rows = "\n".join(f"| {k} | {w[k]:.2f} | {c[k]:.2f} |" for k in ("parse", "build", "read_bdf", "assemble", "eigen"))
+    md = f"""# NASTRAN deck: parse + build vs {args.modes} modes
+
+`python benchmarks/bench_nastran_parse.py --elements {args.elements}` (issue 13, acceptance 5).
+
+Deck: cubic lattice frame ({n}^3 grids, base clamped) of {res['elements']} CBAR elements, {res['grids']} grids ({res['dof']} free DOF after
+the clamp), {size_mb:.1f} MB of large-field bulk data written by `write_bdf`; consistent mass.
+
+| phase | wall [s] | CPU [s] |
+| --- | --- | --- |
+{rows}
+
+Parse + build + assemble: {w['read_bdf'] + w['assemble']:.2f} s wall against {w['eigen']:.2f} s for the
+lowest {args.modes} modes ({'below' if res['parse_build_below_eigen'] else 'ABOVE'} the eigen time).
+*parse* is pyNastran's reader; *build* (trussid's translation into the model) is
+{w['build']:.2f} s of it.
+
+Machine: {info_m['nproc']} cores ({info_m['cpu']}), {info_m['memory']}; load average
+{load_before[0]:.2f} before, {load_after[0]:.2f} after (a shared machine: times are best of
+{args.repeat}); Python {info_m['python']}, numpy {info_m['numpy']}, scipy {info_m['scipy']};
+fem at {info_m['fem']}; {info_m['date_utc']}.
+
+Where read_bdf's time goes (cProfile, cumulative):
+
+```
+{profile}
+```
+"""
+    out.with_suffix(".md").write_text(md)
+    print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,126 @@
+"""LQG design: the gains do what the recipe says, on a model whose answer is known."""
+
+import control
+import numpy as np
+import pytest
+
+from trussid.lqg import ControlError, closed_loop, design_lqg, modal_truncation, select_modes
+from trussid.lqg.design import controller_matrices
+from trussid.lqg.modal import freq_damping
+
+from .conftest import modal_structure
+
+
+def _sorted(z):
+    return np.sort_complex(np.round(np.asarray(z), 10))
+
+
+def test_dominant_modes_are_those_with_a_quarter_of_the_largest_residue(structure):
+    sel, rows = select_modes(structure)
+    f = sorted(rows[b]["frequency_hz"] for b in sel)
+    # the 120 Hz mode has a tenth of the input gain: its residue is 1 % of the others'
+    assert np.allclose(f, [166.0, 194.0, 220.0], rtol=1e-3)
+    sel, rows = select_modes(structure, band=(100, 170))
+    assert np.allclose(sorted(rows[b]["frequency_hz"] for b in sel), [120.0, 166.0], rtol=1e-3)
+
+
+def test_modal_truncation_keeps_the_pole_and_the_resonance_of_the_kept_mode():
+    both = modal_structure(freqs=(166.0, 600.0))
+    red, kept = modal_truncation(both, [0])
+    w = 2 * np.pi * 166.0
+    s = -0.0025 * w + 1j * w * np.sqrt(1 - 0.0025**2)
+    assert np.allclose(np.sort_complex(np.linalg.eigvals(red.A)),
+                       np.sort_complex(np.exp(np.array([s.conjugate(), s]) / 1600)), atol=1e-12)
+    assert kept[0][1] == pytest.approx(np.exp(s / 1600), abs=1e-12)
+    # at its resonance the truncated model is the two-mode plant (the 600 Hz mode adds < 5 %)
+    z = np.exp(2j * np.pi * 166.0 / 1600)
+    H_red, H = np.asarray(red(z)), np.asarray(both(z))
+    assert np.linalg.norm(H_red - H) < 0.05 * np.linalg.norm(H)
+
+
+@pytest.mark.parametrize("target", [0.03, 0.07, 0.2])
+def test_state_feedback_gives_each_target_mode_the_target_damping(structure, record, target):
+    des = design_lqg(structure, *record, target_damping=target)
+    A, B = np.asarray(des.design_model.A), np.asarray(des.design_model.B)
+    f, z = freq_damping(np.linalg.eigvals(A - B @ des.F), structure.dt)
+    up = np.argsort(f)[1::2]  # one of each conjugate pair
+    assert np.allclose(z[up], target, rtol=0.03)
+    assert [t["frequency_hz"] for t in des.target_modes] == pytest.approx([166, 194, 220], rel=1e-3)
+
+
+@pytest.mark.parametrize("form", ["predictor", "filter"])
+def test_separation_closed_loop_on_the_design_model_has_lqr_and_estimator_poles(
+        structure, record, form):
+    """On the design model itself, the loop's poles are eig(A - BF) and eig(A - KC): an
+    independent check of the controller's matrices and of the loop interconnection."""
+    des = design_lqg(structure, *record, form=form)
+    dm = des.design_model
+    A, B, C = (np.asarray(M) for M in (dm.A, dm.B, dm.C))
+    expect = np.concatenate([np.linalg.eigvals(A - B @ des.F), np.linalg.eigvals(A - des.K @ C)])
+    got = np.linalg.eigvals(np.asarray(closed_loop(dm, des.controller).A))
+    assert np.allclose(_sorted(got), _sorted(expect), atol=1e-8)
+    # python-control's positive feedback agrees with the hand-built loop
+    fb = control.feedback(dm, des.controller, sign=+1)
+    assert np.allclose(_sorted(np.linalg.eigvals(fb.A)), _sorted(expect), atol=1e-8)
+
+
+def test_predictor_form_waits_one_sample_and_filter_form_does_not(structure, record):
+    p = design_lqg(structure, *record, form="predictor").controller
+    f = design_lqg(structure, *record, form="filter").controller
+    assert np.all(np.asarray(p.D) == 0)
+    assert np.any(np.asarray(f.D) != 0)
+    assert list(p.input_labels) == ["acc1", "acc2", "acc3"]
+    assert list(p.output_labels) == ["ch1", "ch2", "ch3"]
+
+
+def test_filter_form_from_predictor_gain_is_the_kalman_update():
+    """u = -F xhat[k|k]: with L = A^-1 K the filter form's command equals -F (x + L e)."""
+    rng = np.random.default_rng(5)
+    A = np.diag([0.5, -0.3]) + 0.1 * rng.normal(size=(2, 2))
+    B, C = rng.normal(size=(2, 1)), rng.normal(size=(1, 2))
+    F, K = rng.normal(size=(1, 2)), rng.normal(size=(2, 1))
+    Ac, Bc, Cc, Dc = controller_matrices(A, B, C, F, K, "filter")
+    x, y = rng.normal(size=2), rng.normal(size=1)
+    L = np.linalg.solve(A, K)
+    xf = x + L @ (y - C @ x)
+    assert np.allclose(Cc @ x + Dc @ y, -F @ xf)
+    assert np.allclose(Ac @ x + Bc @ y, A @ xf + B @ (-F @ xf))
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"target_damping": 0.0}, "target damping"),
+    ({"target_damping": 1.0}, "target damping"),
+    ({"band": (300.0, 400.0)}, "band 300-400 Hz holds no"),
+    ({"form": "smith"}, "form"),
+    ({"estimator": "model"}, "no predictor gain K"),
+])
+def test_bad_design_requests_name_the_item(structure, record, kwargs, match):
+    with pytest.raises(ControlError, match=match):
+        design_lqg(structure, *record, **kwargs)
+
+
+def test_unstable_or_continuous_models_are_refused(structure, record):
+    bad = control.ss(1.01 * np.asarray(structure.A), structure.B, structure.C, structure.D,
+                     structure.dt)
+    with pytest.raises(ControlError, match="unstable"):
+        design_lqg(bad, *record)
+    cont = control.ss(-np.eye(2), np.ones((2, 3)), np.ones((3, 2)), np.zeros((3, 3)))
+    with pytest.raises(ControlError, match="continuous"):
+        design_lqg(cont, *record)
+    with pytest.raises(ControlError, match="record has 2 inputs"):
+        design_lqg(structure, record[0][:, :2], record[1])
+
+
+def test_the_models_own_predictor_gain_can_be_the_estimator(structure, record):
+    """``estimator="model"``: the identified model's K, projected on the target modes, is
+    the design's predictor gain (here the Kalman gain of the full structure)."""
+    from trussid.plid.metrics import predictor_gain
+
+    n = structure.nstates
+    B = np.asarray(structure.B)
+    K = predictor_gain(structure, B @ B.T + 1e-9 * np.eye(n), 1e-2 * np.eye(3))
+    des = design_lqg(structure, *record, estimator="model", K=K)
+    assert des.K.shape == (des.design_model.nstates, 3)
+    assert "model's K" in des.info["estimator_choice"]["chosen"]
+    tab_rho = np.max(np.abs(np.linalg.eigvals(np.asarray(closed_loop(structure, des.controller).A))))
+    assert tab_rho < 1

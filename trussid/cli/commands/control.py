@@ -1,0 +1,91 @@
+"""``trussid control MODEL.npz --data ID.npz --out CONTROLLER.npz``: an LQG damping
+controller from an identified model and its identification record.
+
+The controller file is a model file (:mod:`trussid.plid.modelfile`): ``A, B, C, D, dt`` of
+``u = controller(y)``, inputs the sensor names, outputs the actuator names, no hidden sign.
+Beside them: ``design_json`` (the design's choices and target modes) and the gains of the
+decentralised baselines tuned on the same model (``baseline_kinds``, ``baseline_gains``,
+``baseline_bands``), which ``trussid closed-loop`` evaluates beside the LQG.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+#: Choices of --form (trussid.lqg.design.FORMS; repeated so that --help imports nothing).
+FORMS = ("predictor", "filter")
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "control", help="design an LQG damping controller from an identified model",
+        description="Design a discrete LQG that damps the identified model's dominant "
+        "modes (or those in --band), from the model and its identification record only. "
+        "The design model is the identified model restricted to the target modes; the "
+        "estimator gain is chosen on the record; the state feedback is tuned so that the "
+        "target modes reach --target-damping. Writes CONTROLLER.npz (u = controller(y)).")
+    p.add_argument("model", metavar="MODEL.npz", help="identified discrete model file")
+    p.add_argument("--data", required=True, metavar="ID.npz",
+                   help="the identification record of the model (.npz, .csv or .mat; "
+                   "channels named as the model's)")
+    p.add_argument("--out", required=True, metavar="CONTROLLER.npz", help="controller file")
+    p.add_argument("--target-damping", type=float, default=0.07, metavar="ZETA",
+                   help="damping ratio the state feedback gives each target mode, in (0, 1) "
+                   "(default 0.07: the estimator and the model error take some away)")
+    p.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="target every lightly damped mode in this band [Hz] (default: the "
+                   "dominant modes, residue >= 25 %% of the largest, in the excited band)")
+    p.add_argument("--form", choices=FORMS, default="predictor",
+                   help="predictor: u[k] from y up to k-1 (one sample to compute, as the "
+                   "thesis's PC); filter: u[k] from y[k] (no computation time)")
+    p.add_argument("--estimator", choices=("record", "model"), default="record",
+                   help="estimator gain: a Kalman gain chosen on the record for the design "
+                   "model (default), or the model file's own K projected on the target modes")
+    p.add_argument("--no-baselines", action="store_true",
+                   help="do not tune the decentralised baselines")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from trussid._util.errors import UserError
+    from trussid.campaign.control import design_controller
+    from trussid._util.jsonio import json_safe
+    from trussid.plid.datafile import read_data
+    from trussid.plid.modelfile import load_model, save_model
+
+    if not str(args.out).lower().endswith(".npz"):
+        raise UserError(f"--out {args.out}: the controller file must end in .npz")
+    if not (math.isfinite(args.target_damping) and 0 < args.target_damping < 1):
+        raise UserError(f"--target-damping must lie in (0, 1), got {args.target_damping:g}")
+    model, meta = load_model(args.model, which="discrete")
+    data = read_data(args.data, inputs=meta["input_names"], outputs=meta["output_names"])
+    if not math.isclose(data.fs, 1.0 / meta["dt"], rel_tol=1e-6):
+        raise UserError(f"--data {args.data}: sampled at {data.fs:g} Hz, the model at "
+                        f"{1.0 / meta['dt']:g} Hz")
+    des, base, timings = design_controller(
+        model, data.u, data.y, K=meta["K"], target_damping=args.target_damping,
+        band=args.band, form=args.form, baselines=not args.no_baselines, progress=print)
+    info = json_safe({"form": des.form, "target_modes": des.target_modes,
+                      "info": {k: v for k, v in des.info.items() if k != "model_modes"},
+                      "model": str(args.model), "data": str(args.data), "timings_s": timings})
+    extra = {"design_json": np.array(json.dumps(info))}
+    if base:
+        kinds = list(base)
+        extra.update(baseline_kinds=np.array(kinds),
+                     baseline_gains=np.array([base[k]["gain"] for k in kinds]),
+                     baseline_bands=np.array([base[k]["band"] for k in kinds]))
+    c = des.controller
+    save_model(args.out, c, input_names=list(c.input_labels), output_names=list(c.output_labels),
+               extra=extra)
+    print(f"controller: {c.nstates} states, {c.ninputs} sensors ({', '.join(c.input_labels)}) "
+          f"-> {c.noutputs} actuators ({', '.join(c.output_labels)}), {des.form} form, "
+          f"dt {c.dt:g} s")
+    for t in des.target_modes:
+        print(f"  target {t['frequency_hz']:7.1f} Hz: identified damping "
+              f"{100 * t['damping']:.3f} %, state feedback {100 * t['state_feedback_damping']:.2f} %")
+    print(f"written: {args.out}")
+    return 0

@@ -1,0 +1,294 @@
+"""Discrete LQG active damping designed from an identified model and its record.
+
+The controller is ``u = controller(y)``: inputs are the sensor names, outputs the actuator
+names, no hidden sign. Two forms (``form``):
+
+``predictor`` (default, as the thesis's PC ran it)
+    ``u[k] = -F xhat[k|k-1]``: the command of sample k uses measurements up to k-1, which
+    leaves one sample for the computation. ``xhat[k+1|k] = A xhat + B u[k] + K (y[k] - C
+    xhat)``, so ``Ac = A - B F - K C``, ``Bc = K``, ``Cc = -F``, ``Dc = 0``.
+``filter``
+    ``u[k] = -F xhat[k|k]`` with ``xhat[k|k] = xhat[k|k-1] + L (y[k] - C xhat[k|k-1])`` and
+    ``L = A^-1 K``: the command uses y[k] itself (a direct term), i.e. assumes the
+    computation takes no time.
+
+Recipe (measured in ``benchmarks/results/control.md``):
+
+1. Target modes: the identified model's lightly damped complex modes whose residue from
+   the actuators to the sensors is at least ``dominant_fraction`` of the largest one, or
+   every mode in ``band`` [Hz].
+2. Design model: the modal truncation of the identified model to the target modes (exact
+   poles and residues). A design on the full identified model keeps its poorly identified
+   out-of-band modes (e.g. the 0.25 % strut second-bending family) in the estimator, and a
+   5 % stiffness shift then destabilises the loop.
+3. Estimator gain: chosen on the identification record for the *design* model
+   (:func:`plid.metrics.choose_predictor`: steady-state Kalman gains for a ladder of
+   state-to-output noise ratios, the best one-step predictor on the record wins; the
+   out-of-band response of the structure then acts as output noise), or the identified
+   model's own ``K`` projected on the target modes (``estimator="model"``). If the
+   record's choice leaves a target mode's estimator pole below half the target damping,
+   it would ring in the closed loop, so the dual of step 4 replaces it.
+4. State feedback: :func:`control.dlqr` with ``R = I`` and a weight per target mode on its
+   real 2x2 modal block, iterated until the state-feedback damping of each target mode is
+   ``target_damping``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import control
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from .errors import ControlError
+from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
+
+FORMS = ("predictor", "filter")
+ESTIMATORS = ("record", "model")
+
+
+
+@dataclass
+class LQGDesign:
+    """A designed controller and what it was made from.
+
+    Attributes
+    ----------
+    controller : control.StateSpace
+        Discrete, ``u = controller(y)``; inputs the sensor names, outputs the actuator names.
+    design_model : control.StateSpace
+        The model the gains were computed on (real modal coordinates).
+    F : (m, n) float
+        State-feedback gain (``u = -F xhat``).
+    K : (n, p) float
+        One-step predictor gain of the design model.
+    form : str
+    target_modes : list of dict
+        Frequency [Hz], identified damping, residue and the state-feedback damping reached.
+    info : dict
+        Everything else (weights, estimator choice, iterations).
+    """
+
+    controller: control.StateSpace
+    design_model: control.StateSpace
+    F: np.ndarray
+    K: np.ndarray
+    form: str
+    target_modes: list
+    info: dict = field(default_factory=dict)
+
+
+def check_model(model, source: str = "model") -> None:
+    """Refuse a model a controller cannot be designed from (one line naming the problem)."""
+    if not control.isdtime(model, strict=True):
+        raise ControlError(f"{source}: the model is continuous (dt = 0); a discrete model is needed")
+    rho = np.max(np.abs(np.linalg.eigvals(np.asarray(model.A))), initial=0.0)
+    if not rho < 1:
+        raise ControlError(f"{source}: the model is unstable (largest pole magnitude {rho:.6f} >= 1)")
+
+
+def excited_band(u, fs: float, floor_db: float = -20.0) -> tuple[float, float]:
+    """Band [Hz] over which the record's inputs have power: where the summed Welch PSD
+    of the inputs is within ``floor_db`` of its peak (the demo's 0-400 Hz excitation)."""
+    from scipy.signal import welch
+
+    f, S = welch(np.asarray(u, dtype=float), fs=fs, nperseg=min(1024, len(u)), axis=0)
+    S = S.sum(axis=1) if S.ndim > 1 else S
+    on = f[S >= S.max() * 10 ** (floor_db / 10)]
+    return float(on.min()), float(on.max())
+
+
+def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping: float = 0.05,
+                 excited=None):
+    """Indices of the target blocks of :func:`modal.real_modal_basis` and a table of all modes.
+
+    Parameters
+    ----------
+    model : control.StateSpace
+        Discrete identified model.
+    band : (float, float), optional
+        Every complex mode with a frequency in ``[lo, hi]`` Hz.
+    dominant_fraction : float
+        Without ``band``: the complex modes with damping below ``max_damping`` inside the
+        ``excited`` band whose residue is at least this fraction of the largest such residue
+        (modes outside the excited band are poorly identified: the demo's 36-state model
+        has spurious ones at 441-667 Hz, above its 400 Hz excitation).
+    excited : (float, float), optional
+        Band the identification record excited [Hz] (:func:`excited_band`).
+    """
+    _, blocks = real_modal_basis(model.A)
+    md = modal_data(model.A, model.B, model.C, model.dt)
+    rows = []
+    for k, (idx, lam) in enumerate(blocks):
+        i = int(np.argmin(np.abs(md.poles - lam)))
+        rows.append({"block": k, "frequency_hz": float(md.frequency_hz[i]),
+                     "damping": float(md.damping[i]), "residue": float(md.residue[i]),
+                     "complex": idx.size == 2})
+    cand = [r for r in rows if r["complex"] and r["damping"] < max_damping]
+    if band is not None:
+        lo, hi = map(float, band)
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
+            raise ControlError(f"band: need 0 <= LO < HI [Hz], got {lo:g} {hi:g}")
+        sel = [r["block"] for r in cand if lo <= r["frequency_hz"] <= hi]
+        if not sel:
+            near = ", ".join(f"{r['frequency_hz']:.1f}" for r in cand)
+            raise ControlError(f"band {lo:g}-{hi:g} Hz holds no lightly damped mode of the model "
+                              f"(its modes: {near} Hz)")
+    else:
+        if excited is not None:
+            cand = [r for r in cand if excited[0] <= r["frequency_hz"] <= excited[1]]
+        if not cand:
+            raise ControlError("the model has no lightly damped complex mode to damp"
+                               + ("" if excited is None else
+                                  f" in the excited band {excited[0]:.0f}-{excited[1]:.0f} Hz"))
+        rmax = max(r["residue"] for r in cand)
+        sel = [r["block"] for r in cand if r["residue"] >= dominant_fraction * rmax]
+    return sorted(sel, key=lambda b: rows[b]["frequency_hz"]), rows
+
+
+def _mode_damping(Acl, T_blocks, n_modes, dt):
+    """Damping of each design-model mode in a closed loop on the design model: each
+    closed-loop pole (upper half plane) goes to the block holding most of its eigenvector."""
+    lam, V = np.linalg.eig(Acl)
+    up = lam.imag > 0
+    lam, V = lam[up], V[:, up]
+    share = np.array([[np.linalg.norm(V[idx, j]) for j in range(lam.size)] for idx in T_blocks])
+    r, c = linear_sum_assignment(-share)
+    zeta = np.full(n_modes, np.nan)
+    _, z = freq_damping(lam[c], dt)
+    zeta[r] = z
+    return zeta
+
+
+def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
+                    tol: float = 0.02):
+    """State feedback ``u = -F x`` from :func:`control.dlqr` with a weight on each modal
+    block, iterated so that every block's mode reaches damping ``target`` (relative ``tol``).
+
+    A mode's state-feedback damping grows monotonically with its weight; each weight is
+    scaled by ``(target / zeta)^2`` (at most x10 per step) until all agree.
+    """
+    n, m = B.shape
+    R = np.eye(m)
+    # a starting weight of the size of the input matrix's effect
+    q = np.full(len(blocks), 1e-3 / max(np.linalg.norm(B, 2) ** 2, 1e-300))
+    zeta = None
+    for it in range(max_iter):
+        Q = np.zeros((n, n))
+        for w, idx in zip(q, blocks):
+            Q[np.ix_(idx, idx)] = w * np.eye(idx.size)
+        # scipy's solver: slycot's sg02ad (python-control's default once slycot is installed)
+        # fails on the weakly weighted, 0.25 %-damped design models ("roundoff changed ...").
+        F, _, _ = control.dlqr(A, B, Q, R, method="scipy")
+        F = np.asarray(F)
+        zeta = _mode_damping(A - B @ F, blocks, len(blocks), dt)
+        # a mode already above the target with a vanishing weight needs no feedback
+        done = (np.abs(zeta / target - 1) < tol) | ((zeta > target) & (q < 1e-12 * q.max()))
+        if np.all(done):
+            break
+        q = q * np.clip((target / np.maximum(zeta, 1e-6)) ** 2, 0.1, 10.0)
+    return F, q, zeta, it + 1
+
+
+def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
+               form: str = "predictor", estimator: str = "record",
+               dominant_fraction: float = 0.25, K=None) -> LQGDesign:
+    """Design a discrete LQG damping controller from an identified model and its record.
+
+    Parameters
+    ----------
+    model : control.StateSpace
+        Discrete identified model (actuator volts in, sensor volts out), stable.
+    u, y : (N, m), (N, p) float
+        The identification record the model was identified from [V].
+    target_damping : float
+        Damping ratio the state feedback gives each target mode [-], in (0, 1).
+    band : (float, float), optional
+        Target every mode in this band [Hz] instead of the dominant ones.
+    form : {"predictor", "filter"}
+    estimator : {"record", "model"}
+        Kalman gain chosen on the record for the design model, or the model's own ``K``
+        (projected on the target modes).
+    dominant_fraction : float
+        Residue fraction that makes a mode dominant (without ``band``).
+    K : (n, p) float, optional
+        The identified model's predictor gain (needed for ``estimator="model"``).
+
+    Returns
+    -------
+    LQGDesign
+    """
+    # One function over 80 lines: the four steps of the recipe (module docstring) in order,
+    # with the input checks before them; each step is a few lines calling a helper.
+    from trussid.plid.metrics import choose_predictor
+
+    if not (isinstance(target_damping, (int, float)) and 0 < target_damping < 1):
+        raise ControlError(f"target damping must lie in (0, 1), got {target_damping!r}")
+    if form not in FORMS:
+        raise ControlError(f"form must be one of {', '.join(FORMS)}, got {form!r}")
+    if estimator not in ESTIMATORS:
+        raise ControlError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {estimator!r}")
+    check_model(model)
+    u = np.asarray(u, dtype=float).reshape(len(u), -1)
+    y = np.asarray(y, dtype=float).reshape(len(y), -1)
+    if u.shape[1] != model.ninputs or y.shape[1] != model.noutputs:
+        raise ControlError(f"record has {u.shape[1]} inputs and {y.shape[1]} outputs; the model "
+                          f"{model.ninputs} and {model.noutputs}")
+    excited = excited_band(u, 1.0 / model.dt)
+    sel, rows = select_modes(model, band, dominant_fraction, excited=excited)
+    dm, kept = modal_truncation(model, sel)
+    A, B, C = (np.asarray(M, dtype=float) for M in (dm.A, dm.B, dm.C))
+    blocks = [np.array([2 * k, 2 * k + 1]) for k in range(len(kept))]
+    F, q, zeta_sf, iters = lqr_for_damping(A, B, blocks, target_damping, model.dt)
+    if estimator == "model":
+        if K is None:
+            raise ControlError("estimator 'model': the model file has no predictor gain K")
+        T, all_blocks = real_modal_basis(model.A)
+        KT = np.linalg.solve(T, np.asarray(K, dtype=float))
+        Kd = np.vstack([KT[all_blocks[b][0]] for b in sel])
+        kinfo = {"chosen": "identified model's K, projected on the target modes"}
+    else:
+        Kd, _, kinfo = choose_predictor(dm, u, y)
+        zeta_k = _mode_damping(A - Kd @ C, blocks, len(blocks), model.dt)
+        if np.nanmin(zeta_k) < 0.5 * target_damping:
+            # An estimator pole left lightly damped on a target mode rings in the closed loop
+            # as the mode did (the best one-step predictor of a clean record can be slow).
+            # Use the dual of the state-feedback tuning instead: a steady-state Kalman gain
+            # whose predictor poles reach the target damping on every target mode.
+            Fd, _, _, _ = lqr_for_damping(A.T, C.T, blocks, target_damping, model.dt)
+            kinfo = dict(kinfo, rejected=kinfo.get("chosen"),
+                         rejected_min_damping=float(np.nanmin(zeta_k)),
+                         chosen="dual of the damping tuning (the record's best predictor "
+                                "left a target mode below half the target damping)")
+            Kd = Fd.T
+    rho = np.max(np.abs(np.linalg.eigvals(A - Kd @ C)))
+    if not rho < 1:
+        raise ControlError(f"the estimator is unstable on the design model (pole magnitude {rho:.4f})")
+    ctrl = controller_matrices(A, B, C, F, Kd, form)
+    names_in, names_out = list(model.output_labels), list(model.input_labels)
+    controller = control.ss(*ctrl, model.dt, inputs=names_in, outputs=names_out,
+                            name=f"lqg_{form}")
+    _, zeta_est = freq_damping(np.linalg.eigvals(A - Kd @ C), model.dt)
+    targets = [dict(rows[b], state_feedback_damping=float(z), weight=float(w))
+               for b, z, w in zip(sel, zeta_sf, q)]
+    info = {"form": form, "estimator": estimator, "estimator_choice": kinfo,
+            "target_damping": target_damping, "band": None if band is None else list(band),
+            "dominant_fraction": dominant_fraction, "lqr_iterations": iters,
+            "excited_band_hz": list(excited),
+            "design_states": int(A.shape[0]), "model_states": int(model.nstates),
+            "estimator_min_damping": float(np.min(zeta_est)) if zeta_est.size else None,
+            "model_modes": rows}
+    return LQGDesign(controller, dm, F, Kd, form, targets, info)
+
+
+def controller_matrices(A, B, C, F, K, form: str = "predictor"):
+    """``(Ac, Bc, Cc, Dc)`` of ``u = controller(y)`` for the LQG with state feedback ``F`` and
+    one-step predictor gain ``K`` (module docstring)."""
+    if form == "predictor":
+        return A - B @ F - K @ C, K, -F, np.zeros((F.shape[0], C.shape[0]))
+    L = np.linalg.solve(A, K)  # filter gain from the predictor gain (K = A L)
+    ABF = A - B @ F
+    IminusLC = np.eye(A.shape[0]) - L @ C
+    return ABF @ IminusLC, ABF @ L, -F @ IminusLC, -F @ L
