@@ -120,6 +120,9 @@ def build_transformation(model, fixed: np.ndarray) -> tuple[sp.csr_matrix, np.nd
     global map is then ``Lam @ D`` with ``Lam`` block-diagonal. Everything is sparse: the
     cost grows with the number of constrained DOFs, never with ``n_dof^2``.
     """
+    # Long: rigid bodies and linear constraints claim their dependent DOFs through one
+    # shared record of ownership (so that a DOF claimed twice is named with both owners);
+    # splitting the two loops out would pass that record and the row lists around.
     n_full = model.n_dof
     node_ids = model.node_ids
     xyz = model.xyz
