@@ -25,11 +25,14 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
 
 import numpy as np
 from tqdm import tqdm
 
 from trussid import geometry, testbed
+from trussid.geometry.params_toml import testbed_to_dict
+from trussid.study import read_study, run_study, spec_from_dict
 
 
 def parse_args(argv=None):
@@ -43,6 +46,9 @@ def parse_args(argv=None):
     p.add_argument("--high", type=float, default=1.4, help="highest wall / nominal (default %(default)s)")
     p.add_argument("--modes", type=int, default=30, help="modes computed (default %(default)s)")
     p.add_argument("--fmax", type=float, default=400.0, help="plot frequencies up to this [Hz] (default %(default)s)")
+    p.add_argument("--study", default=None, help="study output directory (Parquet; default: a temporary one)")
+    p.add_argument("--workers", type=int, default=0,
+                   help="0: in this process (default); N: a local Dask cluster of N worker processes")
     args = p.parse_args(argv)
     if args.points < 2:
         p.exit(2, f"wall_thickness_study: error: --points {args.points} must be at least 2\n")
@@ -68,18 +74,27 @@ labels = testbed.label_testbed_modes(tbm, modes).labels
 f0, dfdt = testbed.wall_sensitivities(basis, nominal, args.modes)
 
 # %%
-# The sweep: the k-th lowest frequency of each design, strut by strut.
+# The sweep, run as a study (:mod:`trussid.study`, docs/studies.md): one point per design,
+# listed strut by strut, each design's frequencies from the wall basis; its table is a
+# Parquet dataset (``--study DIR``, resumable) and ``--workers N`` spreads it over N local
+# Dask worker processes. ``sweep[i, j]``: the k-th lowest frequencies of design j of strut i.
 factors = np.linspace(args.low, args.high, args.points)
-sweep = np.empty((6, args.points, len(f0)))  # Hz
-walls = np.empty((6, args.points))  # m
+designs = np.repeat(nominal[None, :], 6 * args.points, axis=0)
+for i in range(6):  # a wall stays inside the tube
+    designs[i * args.points:(i + 1) * args.points, i] = np.minimum(factors * nominal[i],
+                                                                    0.95 * tb.struts.outer_radius)
+walls = designs.reshape(6, args.points, 6)[np.arange(6), :, np.arange(6)]  # m, (strut, design)
+spec = spec_from_dict({
+    "study": {"name": "wall-thickness-sweeps", "evaluate": "modes"},
+    "evaluate": {"n_modes": args.modes, "labels": False,
+                 **({"testbed": testbed_to_dict(tb)} if args.params else {})},
+    "sample": {"method": "list"},
+    "parameters": {f"wall{i}": [float(v) for v in designs[:, i]] for i in range(6)}})
+study_dir = args.study or tempfile.mkdtemp(prefix="wall_sweeps_")
 with tqdm(total=6 * args.points, desc="designs", unit="design", disable=__name__ != "__main__") as bar:
-    for i in range(6):
-        for j, fac in enumerate(factors):
-            w = nominal.copy()
-            w[i] = min(fac * nominal[i], 0.95 * tb.struts.outer_radius)  # a wall stays inside the tube
-            walls[i, j] = w[i]
-            sweep[i, j], _ = testbed.wall_modes(basis, w, args.modes)
-            bar.update()
+    run_study(spec, study_dir, workers=args.workers, progress=lambda rows: bar.update(len(rows)))
+table = read_study(study_dir)[1]  # one row per design, in point order
+sweep = table[[f"f{k + 1}" for k in range(len(f0))]].to_numpy().reshape(6, args.points, len(f0))  # Hz
 
 if __name__ == "__main__":
     import matplotlib.pyplot as plt
@@ -104,11 +119,12 @@ if __name__ == "__main__":
     fig.suptitle("Testbed frequencies vs one strut's wall thickness "
                  "(red: that strut's modes, blue: UDF rigid-body, grey: others)")
     fig.tight_layout()
+    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     tmp = f"{args.out}.tmp"  # a temporary name, then a rename: no partial file on failure
     fig.savefig(tmp, dpi=110, format="png")
     os.replace(tmp, args.out)
 
-    print(f"wrote {args.out}: {6 * args.points} designs, {len(f0)} modes each")
+    print(f"wrote {args.out}: {6 * args.points} designs, {len(f0)} modes each (table: {study_dir})")
     print()
     print("sensitivities df/dt at the nominal walls [Hz per 0.001 in of wall]")
     header = "".join(f"{f'strut {i}':>11}" for i in range(6))

@@ -25,7 +25,7 @@ from trussid._util.errors import UserError
 #: Sub-commands in the order ``--help`` lists them (module ``trussid.cli.commands.<name>``
 #: with ``-`` read as ``_``).
 COMMANDS = ("demo", "modes", "render", "plant", "simulate", "identify", "compare", "greybox",
-            "export", "control", "closed-loop")
+            "export", "control", "closed-loop", "study")
 
 
 class Parser(argparse.ArgumentParser):
