@@ -119,7 +119,6 @@ if __name__ == "__main__":
     fig.suptitle("Testbed frequencies vs one strut's wall thickness "
                  "(red: that strut's modes, blue: UDF rigid-body, grey: others)")
     fig.tight_layout()
-    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     tmp = f"{args.out}.tmp"  # a temporary name, then a rename: no partial file on failure
     fig.savefig(tmp, dpi=110, format="png")
     os.replace(tmp, args.out)

@@ -31,9 +31,11 @@ def test_order_table_finds_the_two_mode_plant_at_order_four(record, capsys):
 
     rows = list(csv.DictReader(out.open()))
     assert [int(r["order"]) for r in rows] == [2, 4, 6, 8]
-    # order 2 (one state per output) cannot be built by the subspace recipe: listed, not fatal
-    assert rows[0]["error"] and "failed:" in stdout
-    pred = {int(r["order"]): float(r["prediction_db_validation"]) for r in rows[1:]}
+    # order 2 (one state per output, a real-pole basis since any order is identified) holds
+    # one mode of the two: under-modelled, it predicts clearly worse than the true order
+    assert not rows[0]["error"]
+    pred = {int(r["order"]): float(r["prediction_db_validation"]) for r in rows}
+    assert pred[2] < pred[4] - 3.0
     change = {int(r["order"]): float(r["frf_change_db"]) for r in rows[2:]}
     # At the true order (2 modes = 4 states) the one-step prediction error is down to the
     # 40 dB sensor noise the record was simulated with (no model can predict the noise), and

@@ -66,7 +66,7 @@ def apply_supports(m, case, n_el, axis=(1.0, 0.0, 0.0)):
         # stiff torsion springs in the beam's frame, which do not touch bending.
         frame = np.linalg.qr(np.c_[axis, np.eye(3)])[0][:, :3].T
         frame[0] = axis  # QR may flip the sign of the first column
-        m.add_springs([1, 2], [0, n_el], [0, 0, 0, 1e3 * ALUMINIUM.G * TUBE.J / L_BEAM, 0, 0],
+        m.add_springs([n_el + 1, n_el + 2], [0, n_el], [0, 0, 0, 1e3 * ALUMINIUM.G * TUBE.J / L_BEAM, 0, 0],
                       frame=frame)
     elif case == "clamped-clamped":
         m.fix([0, n_el])
