@@ -99,8 +99,14 @@ def test_wall_thickness_sensitivity_matches_finite_differences_of_rebuilt_models
         tbm = testbed.build_testbed(ex.tb.with_walls(tuple(float(w) for w in walls)))
         f.append(testbed.solve_testbed_modes(tbm, ex.args.modes).frequencies_hz[k])
     assert ex.dfdt[k, 0] == pytest.approx((f[0] - f[1]) / (2 * h), rel=1e-4)
-    # The sweep passes through the nominal design (factor 1 of 0.6..1.4 in 15 steps).
-    np.testing.assert_allclose(ex.sweep[0, 7], ex.f0, rtol=1e-9)
+    # The sweep (a study over the wall basis) passes through the nominal design (factor 1 of
+    # 0.6..1.4 in 15 steps), solved apart from f0: the strut and UDF modes agree to 1e-9; the
+    # six sub-hertz suspension modes only to the two eigensolves' absolute eigenvalue error,
+    # about eps * lambda_max = 2e-16 * 1e13 = 2e-3 rad^2/s^2 (measured 4e-5).
+    structural = ex.f0 > 5.0
+    np.testing.assert_allclose(ex.sweep[0, 7][structural], ex.f0[structural], rtol=1e-9)
+    lam, lam0 = (2 * np.pi * ex.sweep[0, 7][~structural]) ** 2, (2 * np.pi * ex.f0[~structural]) ** 2
+    np.testing.assert_allclose(lam, lam0, rtol=0, atol=2e-3)
 
 
 @pytest.mark.slow

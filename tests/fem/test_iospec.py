@@ -53,9 +53,11 @@ def spec_file(tmp_path, text, name="io.toml"):
 def test_static_gain_of_the_cantilever_plant_is_the_beam_formula(tmp_path):
     model, info = read_bdf(DECK)
     spec = read_io(spec_file(tmp_path, TIP))
-    n_all = 6 * 20  # every mode of the 20 free nodes: the modal sum is the static solution
+    # every finite-frequency mode: 100 of the 120 free DOFs carry mass (the deck's lumped
+    # mass has no rotary inertia), and the sum over those modes is the static solution
+    n_all = 6 * 20
     sc, sd, modes, n = io_plant(model, spec, n_modes=n_all, damping=0.0)
-    assert sd is None and n == n_all
+    assert sd is None and n == 100
     dc = -np.asarray(sc.C) @ np.linalg.solve(np.asarray(sc.A), np.asarray(sc.B)) + sc.D
     a = L / 2
     # tip force P = 2 (gain) lbf: w(L) = P L^3 / 3EI, w(L/2) = P a^2 (3L - a) / 6EI

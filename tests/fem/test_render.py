@@ -595,11 +595,11 @@ def test_cli_grid_writes_one_png_of_the_first_modes(deck, tmp_path, capsys):
 @pytest.mark.parametrize("args, message", [
     (["--mode", "0"], "--mode 0: mode numbers start at 1"),
     (["--mode", "-3"], "--mode -3: mode numbers start at 1"),
-    (["--mode", "19"], "--mode 19 is out of range: the model has 18 modes (18 free DOF); valid mode numbers are 1 to 18"),
+    (["--mode", "16"], "--mode 16 is out of range: the model has 15 modes (18 free DOF); valid mode numbers are 1 to 15"),
     (["--grid", "0"], "--grid 0: must be at least 1"),
     (["--size", "big"], "--size 'big': expected WIDTHxHEIGHT"),
     (["--size", "8x8"], "window size 8x8 is out of range"),
-    (["--grid", "19"], "--grid 19: only the model has 18 modes"),
+    (["--grid", "16"], "--grid 16: only the model has 15 modes"),
     (["--amplitude", "-0.1"], "amplitude must be a finite number >= 0"),
     (["--scale", "nan"], "scale must be a finite number >= 0"),
 ])

@@ -25,6 +25,7 @@ def test_save_then_load_gives_an_equal_testbed(tmp_path):
         struts__top_rotational_stiffness=2.5e3, struts__base_rotational_stiffness=None,
         base__support="clamped", pzt__wafers_per_strut=4,
     )
+    (tmp_path / "sub").mkdir()  # save_testbed makes no folder it was not asked for
     path = tmp_path / "sub" / "design.toml"
     save_testbed(tb, path)
     assert load_testbed(path) == tb
