@@ -52,8 +52,11 @@ def test_every_command_runs_with_one_blas_thread_by_default(monkeypatch):
 
     seen = _spy(monkeypatch)
     with blas_threads(2):  # the caller's setting, whatever the test process started with
+        # (a BLAS built for one thread, as cvxopt's wheel is, stays at 1)
+        inside = blas_thread_counts()
+        assert 2 in inside
         assert main(["modes"]) == 0
-        assert set(blas_thread_counts()) == {2}  # scoped: the caller's setting is back
+        assert blas_thread_counts() == inside  # scoped: the caller's setting is back
     assert seen[0] and set(seen[0]) == {1}
 
 
@@ -62,7 +65,8 @@ def test_threads_option_and_variable_override_the_default(monkeypatch):
     monkeypatch.setenv("TRUSSID_THREADS", "2")
     assert main(["modes"]) == 0
     assert main(["--threads", "1", "modes"]) == 0
-    assert set(seen[0]) == {2} and set(seen[1]) == {1}
+    # 2 where a library can run two threads (cvxopt's single-threaded BLAS stays at 1)
+    assert 2 in seen[0] and set(seen[0]) <= {1, 2} and set(seen[1]) == {1}
 
 
 def test_the_command_line_entry_limits_blas_libraries_loaded_later():
