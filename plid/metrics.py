@@ -34,6 +34,7 @@ import control
 import numpy as np
 import scipy.linalg
 
+from trussid.plid._linalg import lstsq, modal_regressors
 from trussid.plid.errors import DataError
 from trussid.plid.experiment import simulate
 from trussid.plid.frf import FRF, frequency_response
@@ -175,9 +176,7 @@ def _long_ar_innovations(r: np.ndarray, lags: int) -> np.ndarray:
     N, p = r.shape
     lags = int(max(1, min(lags, (N // 4) // max(p, 1))))
     Phi = np.hstack([r[lags - i - 1:N - i - 1] for i in range(lags)])   # (N - lags, p lags)
-    from trussid.plid.subspace import _lstsq
-
-    coef = _lstsq(Phi, r[lags:])
+    coef = lstsq(Phi, r[lags:])
     e = np.zeros_like(r)
     e[lags:] = r[lags:] - Phi @ coef
     return e
@@ -200,7 +199,6 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: 
     list of ndarray (n, p)
         The gain after each iteration whose predictor ``A - K C`` is stable.
     """
-    from trussid.plid.subspace import _lstsq, _modal_regressors
 
     u, y = _check_sizes(model, u, y)
     A, C = np.asarray(model.A, float), np.asarray(model.C, float)
@@ -217,9 +215,9 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: 
     for it in range(iterations):
         if it:
             e = y - one_step_predict(model, u, y, K=K)
-        R = _modal_regressors(A, C, e, x0=True)          # (N, p, n p + n)
+        R = modal_regressors(A, C, e, x0=True)          # (N, p, n p + n)
         Rm = (R * w[None, :, None]).reshape(-1, R.shape[2])
-        theta = _lstsq(Rm, ((y - y_u - e) * w).ravel())
+        theta = lstsq(Rm, ((y - y_u - e) * w).ravel())
         K = theta[: n * p].reshape(p, n).T
         if not _stable_predictor(A, C, K):
             break

@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from trussid.plid.data import ModeShapes
 from trussid.plid.errors import DataError, IdentificationError
-from trussid.plid.modal import (mac, mark_stability, modal_table, mode_groups, pair_modes,
-                                pole_parameters, stabilisation)
+from trussid.plid.modal import mac, modal_table, mode_groups, pair_modes, pole_parameters
+from trussid.plid.stabilisation import mark_stability, stabilisation
 
 
 def test_mac_of_identical_shapes_is_one_to_1e_12(rng):
@@ -131,8 +132,6 @@ def test_stabilisation_marks_the_true_modes_stable_and_refuses_nothing_silently(
 
 
 def test_a_pole_that_moves_is_not_stable():
-    from trussid.plid.modal import ModeShapes
-
     prev = ModeShapes(np.array([10.0, 50.0]), np.array([0.01, 0.02]), np.eye(2))
     cur = ModeShapes(np.array([10.05, 52.0]), np.array([0.0102, 0.02]),
                      np.array([[1.0, 0.0], [0.1, 1.0]]))
