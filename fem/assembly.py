@@ -19,6 +19,9 @@ from trussid.fem.elements import check_beam_properties, frame_matrices, local_ax
 from trussid.fem.errors import ModelError
 from trussid.fem.model import DOF_NAMES
 
+__all__ = ["System", "beam_matrices", "spring_matrices", "general_blocks", "mass_blocks",
+           "assemble"]
+
 
 @dataclass
 class System:

@@ -17,6 +17,8 @@ import numpy as np
 from trussid.fem.errors import ModelError
 from trussid.fem.sensors import Sensor, sensor_matrix
 
+__all__ = ["modal_damping", "modal_plant", "residual_flexibility"]
+
 
 def modal_damping(damping, n: int) -> np.ndarray:
     """Per-mode damping ratios from a scalar or a sequence of length ``n``."""
