@@ -55,6 +55,10 @@ from trussid._util.files import atomic_path
 from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transform
 from trussid.fem.elements import frame_matrices, local_axes, to_global
 
+__all__ = ["SUPPORTED_CARDS", "RAW_CARDS", "IGNORED_CARDS", "THERMAL_CARDS", "HANDLED_PARAMS",
+           "OUTPUT_PARAMS", "ROD_SHEAR_FACTOR", "SECTION_TYPES", "EigenRequest", "BdfInfo",
+           "read_bdf", "coord_axes", "offset_spring_matrix", "write_bdf"]
+
 #: Bulk-data cards :func:`read_bdf` translates.
 SUPPORTED_CARDS = frozenset({
     "GRID", "GRDSET", "CORD1R", "CORD2R", "CORD1C", "CORD2C", "CORD1S", "CORD2S",
