@@ -7,6 +7,7 @@ Layers, lowest first (``docs/architecture.md``):
       trussid.geometry            the testbed's parametric description
     trussid.testbed               fem + geometry (the thesis testbed as an FE application)
     trussid.plots                 figures of plid results (no FE)
+    trussid.adapt                 closed-loop identification and adaptive redesign (plid, lqg)
     trussid.campaign, .updating,  workflows composing the layers below
       .study, .lqg_study
     trussid.cli                   parses, calls the library, prints; imported by nobody
@@ -40,13 +41,15 @@ ALLOWED = {
     "trussid.geometry": set(),
     "trussid.testbed": {"trussid.fem", "trussid.geometry"},
     "trussid.lqg": {"trussid.plid"},
+    "trussid.adapt": {"trussid.plid", "trussid.lqg", "trussid.testbed"},
     "trussid.plots": {"trussid.plid"},
     "trussid.campaign": {"trussid.fem", "trussid.plid", "trussid.geometry", "trussid.testbed",
-                         "trussid.plots", "trussid.lqg", "trussid.updating"},
+                         "trussid.plots", "trussid.lqg", "trussid.updating", "trussid.adapt"},
     "trussid.updating": {"trussid.fem", "trussid.plid", "trussid.geometry", "trussid.testbed",
                          "trussid.plots"},
     "trussid.study": {"trussid.fem", "trussid.plid", "trussid.geometry", "trussid.testbed",
-                      "trussid.plots", "trussid.lqg", "trussid.campaign", "trussid.updating"},
+                      "trussid.plots", "trussid.lqg", "trussid.campaign", "trussid.updating",
+                      "trussid.adapt"},
     "trussid.cli": {"*"},
 }
 TOP_LEVEL = {"trussid"}  # the bare package: __version__ only
