@@ -17,7 +17,7 @@ _LAZY = {
     "IOData": "data", "read_data": "datafile", "write_data": "datafile",
     "read_uff": "uff", "write_uff": "uff",
     "ModeShapes": "data", "modal_table": "modal", "mac": "modal",
-    "stabilisation": "stabilisation", "Stabilisation": "stabilisation",
+    "stabilisation": "stabilisation_diagram", "Stabilisation": "stabilisation_diagram",
     "pole_parameters": "modal", "pair_modes": "modal",
     "save_model": "modelfile", "load_model": "modelfile",
     "write_mat": "export", "python_code": "export", "write_python": "export",
