@@ -61,11 +61,11 @@ def measure(model, case, val, seconds, extra=None, K=None):
                 band=BAND)
     fe, de = [], []
     for r in c.poles:
-        tf = r["true_frequency_hz"]
-        if tf is None or r["frequency_hz"] is None or not 30 < tf < 400:
+        tf = r.true_frequency_hz
+        if not r.matched or not 30 < tf < 400:
             continue
-        fe.append(abs(r["frequency_error_percent"]))
-        de.append(abs(r["damping"] - r["true_damping"]) / r["true_damping"] * 100)
+        fe.append(abs(r.frequency_error_percent))
+        de.append(abs(r.damping - r.true_damping) / r.true_damping * 100)
     out = {"max_db": c.frf.max_db, "rms_db": c.frf.rms_db,
            "sim_db": c.simulation.overall if c.stable else None, "stable": c.stable,
            "one_step_db_val": c.prediction.overall if K is not None else None,

@@ -25,6 +25,7 @@ _LAZY = {
     "h1": "frf", "h2": "frf", "stepped_sine": "frf", "FRF": "frf",
     "frequency_response": "frf",
     "prediction_ratio_db": "metrics", "frf_error": "metrics", "compare_poles": "metrics",
+    "PoleMatch": "metrics",
     "simulation_fit": "metrics", "one_step_predict": "metrics", "predictor_gain": "metrics",
     "modal_parameters": "metrics", "choose_predictor": "metrics",
     "best_predictor": "metrics", "refine_predictor_gain": "metrics",

@@ -369,8 +369,8 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
     # H1 itself against the truth: how far the nonparametric estimate is to be trusted.
     keep = (h1_est.f >= settings.frf_band[0]) & (h1_est.f <= settings.frf_band[1])
     h1_true = _h1_error(h1_est, tcols, keep)
-    in_band = [r for r in c.poles if r["true_frequency_hz"] is not None
-               and settings.frf_band[0] <= r["true_frequency_hz"] <= settings.frf_band[1]]
+    in_band = [r for r in c.poles if r.true_frequency_hz is not None
+               and settings.frf_band[0] <= r.true_frequency_hz <= settings.frf_band[1]]
     y_rms = np.sqrt(np.mean(val.y**2, axis=0))
     p, s, e, eh = c.prediction, c.simulation, c.frf, c.frf_vs_estimate
     lo_x, hi_x = settings.excitation_band
@@ -402,7 +402,7 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
         "seconds": fit.seconds, "method": fit.method, "unstable_poles": c.unstable_poles,
         "stabilised": fit.info.get("stabilised", {}),
         "poles": c.poles,
-        "poles_in_band_matched": sum(r["frequency_hz"] is not None for r in in_band),
+        "poles_in_band_matched": sum(r.frequency_hz is not None for r in in_band),
         "poles_in_band_true": len(in_band),
         "validation_output_rms_v": y_rms.tolist(),
         "h1_coherence": coherence,
@@ -426,9 +426,8 @@ def mode_audit(poles: list, band, excited) -> dict:
 
     Parameters
     ----------
-    poles : list of dict
-        ``true_frequency_hz``, ``true_damping``, ``frequency_hz``, ``damping`` per row (true
-        pole with its match, or an unmatched identified pole with the true fields None).
+    poles : list of trussid.plid.metrics.PoleMatch
+        A true pole with its match, or an unmatched identified pole (true fields None).
     band : (float, float)
         The band [Hz] in which every true mode should be found (the FRF band).
     excited : (float, float)
@@ -446,24 +445,24 @@ def mode_audit(poles: list, band, excited) -> dict:
         LIGHT_DAMPING anywhere, each with ``spurious`` and ``in_excited_band``.
     """
     lo, hi = band
-    true_modes = sorted({(r["true_frequency_hz"], r["true_damping"]) for r in poles
-                         if r["true_frequency_hz"] is not None
-                         and r["true_damping"] <= MODE_DAMPING_MAX})
+    true_modes = sorted({(r.true_frequency_hz, r.true_damping) for r in poles
+                         if r.true_frequency_hz is not None
+                         and r.true_damping <= MODE_DAMPING_MAX})
     f_true = np.array([f for f, _ in true_modes]) if true_modes else np.zeros(0)
     rows, filters = [], 0
     for r in poles:
-        ft = r["true_frequency_hz"]
+        ft = r.true_frequency_hz
         if ft is None or not lo <= ft <= hi:
             continue
-        if r["true_damping"] > MODE_DAMPING_MAX:
+        if r.true_damping > MODE_DAMPING_MAX:
             filters += 1
             continue
-        fi = r["frequency_hz"]
-        found = (fi is not None and r["damping"] <= MODE_DAMPING_MAX
+        fi = r.frequency_hz
+        found = (fi is not None and r.damping <= MODE_DAMPING_MAX
                  and abs(fi - ft) <= FOUND_TOLERANCE * ft)
-        rows.append({"true_frequency_hz": ft, "true_damping": r["true_damping"],
+        rows.append({"true_frequency_hz": ft, "true_damping": r.true_damping,
                      "found": bool(found), "frequency_hz": fi if found else None,
-                     "damping": r["damping"] if found else None})
+                     "damping": r.damping if found else None})
 
     def nearest(f):
         if not f_true.size:
@@ -473,17 +472,17 @@ def mode_audit(poles: list, band, excited) -> dict:
 
     identified, spurious, light = [], [], []
     for r in poles:
-        fi = r["frequency_hz"]
-        if fi is None or r["damping"] > MODE_DAMPING_MAX:
+        fi = r.frequency_hz
+        if fi is None or r.damping > MODE_DAMPING_MAX:
             continue
         near, rel = nearest(fi)
-        entry = {"frequency_hz": fi, "damping": r["damping"], "nearest_true_hz": near,
+        entry = {"frequency_hz": fi, "damping": r.damping, "nearest_true_hz": near,
                  "spurious": bool(near is None or rel > FOUND_TOLERANCE),
                  "in_excited_band": bool(excited[0] <= fi <= excited[1])}
         identified.append(entry)
         if entry["spurious"]:
             spurious.append(entry)
-        if r["damping"] < LIGHT_DAMPING:
+        if r.damping < LIGHT_DAMPING:
             light.append(entry)
     key = lambda e: e["frequency_hz"]  # noqa: E731
     return {"band_hz": [lo, hi], "excited_band_hz": list(excited),

@@ -449,11 +449,11 @@ def _score(model, case, val, seconds, opts, K=None) -> dict:
     lo, hi = opts["mode_band"]
     fe, de = [], []
     for r in c.poles:
-        tf = r["true_frequency_hz"]
-        if tf is None or r["frequency_hz"] is None or not lo < tf < hi:
+        tf = r.true_frequency_hz
+        if not r.matched or not lo < tf < hi:
             continue
-        fe.append(abs(r["frequency_error_percent"]))
-        de.append(abs(r["damping"] - r["true_damping"]) / r["true_damping"] * 100)
+        fe.append(abs(r.frequency_error_percent))
+        de.append(abs(r.damping - r.true_damping) / r.true_damping * 100)
     nan = float("nan")
     return {"max_db": float(c.frf.max_db), "rms_db": float(c.frf.rms_db),
             "sim_db": float(c.simulation.overall) if c.stable else nan,
