@@ -20,6 +20,9 @@ from trussid.fem.errors import ModelError
 from trussid.fem.model import DOF_NAMES
 from trussid.fem.reduction import guyan
 
+__all__ = ["System", "beam_matrices", "spring_matrices", "general_blocks", "mass_blocks",
+           "assemble"]
+
 
 @dataclass
 class System:

@@ -20,6 +20,8 @@ import numpy as np
 from trussid.fem.errors import ModelError
 from trussid._util.files import atomic_path
 
+__all__ = ["write_op2", "read_op2_modes"]
+
 
 def write_op2(path: str | os.PathLike, modes, frames: np.ndarray | None = None,
               title: str = "trussid real modes") -> None:

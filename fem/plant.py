@@ -18,6 +18,8 @@ from trussid.fem.errors import ModelError
 from trussid.fem.sensors import Sensor, sensor_matrix
 from trussid.fem.static import solve_static
 
+__all__ = ["modal_damping", "modal_plant", "residual_flexibility"]
+
 
 def modal_damping(damping, n: int) -> np.ndarray:
     """Per-mode damping ratios from a scalar or a sequence of length ``n``."""
