@@ -293,7 +293,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     """
     from trussid.plid.estimator import PLIDWarning
     from trussid.plid.metrics import choose_predictor
-    from trussid.plid.multipass import default_via, fit_model
+    from trussid.plid.multipass import Stabilised, default_via, fit_model
 
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -306,8 +306,9 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
                         log=log, block_rows=None if block_rows is None else list(block_rows))
     res = idn.result
     model = idn.model
-    chosen = idn.info.get("chosen", "")
-    stab = dict(idn.info.get("stabilised") or {"applied": False, "reflected_poles": 0})
+    prov = idn.provenance
+    chosen = prov.chosen or ""
+    stab = prov.stabilised or Stabilised()
     if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
         # No stable candidate (none was measured on the testbed): reflect the poles outside
         # the unit circle in (plid.stability keeps the magnitude response) so that the model
@@ -316,10 +317,10 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
 
         st = stabilise(model)
         model = st.model
-        stab = {"applied": bool(st.applied), "reflected_poles": int(np.size(st.reflected))}
+        stab = Stabilised(bool(st.applied), int(np.size(st.reflected)))
         K, K_source, kinfo = choose_predictor(model, u, y)
     else:
-        K, kinfo = idn.K, idn.info.get("predictor") or {}
+        K, kinfo = idn.K, prov.predictor or {}
         K_source = kinfo.get("chosen", "")
     hist, hidx = res.theta_history, res.history_index
     if hist.shape[0] < 2 and idn.prior is not None:
@@ -329,8 +330,8 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     info = {"recipe": "trussid.plid.multipass.identify_reduced", "start": idn.start,
             "stabilised": stab, "basis": getattr(idn.basis, "name", ""),
             "R": np.asarray(idn.R).tolist(), "predictor": kinfo,
-            **{k: v for k, v in idn.info.items() if k not in ("passes", "predictor")},
-            "passes": idn.info.get("passes", [])}
+            **{k: v for k, v in prov.as_dict().items() if k not in ("passes", "predictor")},
+            "passes": prov.passes}
     method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
     return Identified(model, K, K_source, time.perf_counter() - t0, method,
                       res.innovations, hist, hidx, info)
@@ -339,7 +340,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
 def _history_of_last_pass(idn, u, y, order, dt):
     from trussid.plid.estimator import PLID, PLIDWarning
 
-    last = (idn.info.get("passes") or [{}])[-1]
+    last = (idn.provenance.passes or [{}])[-1]
     est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
                Q_theta=last.get("Q_theta", 0.0), prior=idn.prior,
                prior_theta_var=last.get("prior_theta_var", 1e-4), basis=idn.basis,

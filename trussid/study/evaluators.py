@@ -435,7 +435,7 @@ class IdentifyEvaluator(Evaluator):
             else:
                 ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1], progress=False)
         out = _score(ident.model, case, val, time.perf_counter() - t0, opts, K=ident.K)
-        out["block_rows"] = ident.info.get("subspace", {}).get("block_rows") or -1
+        out["block_rows"] = (ident.provenance.subspace or {}).get("block_rows") or -1
         return out
 
 
