@@ -67,8 +67,7 @@ def identify_plid(rec: ClosedLoopRecord, order: int, *, block_rows=(40, 80)) -> 
         warnings.simplefilter("ignore", PLIDWarning)
         idn = identify(rec.plant_input, rec.measured, order, rec.dt,
                        block_rows=list(block_rows), direct=False)
-    info = {"predictor": idn.info.get("predictor"), "stabilised": idn.info.get("stabilised"),
-            "subspace": idn.info.get("subspace")}
+    info = {"provenance": idn.provenance}
     return ClosedLoopModel(_named(idn.model, rec), np.asarray(idn.K), "PLID (direct method)",
                            time.perf_counter() - t0, time.process_time() - c0, info)
 

@@ -13,16 +13,20 @@ truth only as the simulator of the lab).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
+from pathlib import Path
 
 import control
 import numpy as np
+from matplotlib.figure import Figure
 
 from trussid.adapt.experiment import closed_loop_record, trial_rms
 from trussid.adapt.identify import identify_n4sid, identify_plid, nearest_modes
 from trussid.adapt.supervisor import AdaptSettings, adapt, mode_damping
 from trussid.lqg.evaluate import disk_margins
 from trussid.plid.metrics import frf_error
+from trussid.plid.modelfile import save_model
+from trussid.testbed.plant import testbed_plant
 
 from .control import design_controller, perturbed_testbed
 from .demo import conditioner_steps, sensor_noise_volts
@@ -82,8 +86,6 @@ def adapt_settings(demo_settings) -> AdaptDemoSettings:
 
 def changed_truth(tb, changes: dict):
     """The discrete true plant of the testbed ``tb`` with ``changes`` applied."""
-    from trussid.testbed.plant import testbed_plant
-
     return testbed_plant(perturbed_testbed(tb, changes)).discrete
 
 
@@ -235,10 +237,6 @@ def write_files(out, study: AdaptStudy) -> list:
     """``adapt/closed_loop_model.npz``, ``adapt/nominal_controller.npz`` and per change
     ``adapt/<change>/truth.npz`` and ``controller.npz`` into ``out`` (paths returned
     relative to it)."""
-    from pathlib import Path
-
-    from trussid.plid.modelfile import save_model
-
     out = Path(out)
     (out / "adapt").mkdir(parents=True, exist_ok=True)
     fit = study.nominal.plid
@@ -418,8 +416,6 @@ def report_markdown(study: AdaptStudy) -> str:
 def timeline_figure(study: AdaptStudy):
     """Sensor RMS (0.1 s windows) against time for each change, with the detection and the
     switch marked."""
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=(9, 2.6 * len(study.changes)))
     axes = fig.subplots(len(study.changes), 1, squeeze=False)[:, 0]
     for ax, ch in zip(axes, study.changes):
@@ -446,8 +442,6 @@ def timeline_figure(study: AdaptStudy):
 
 def damping_figure(study: AdaptStudy):
     """Dominant-mode damping before (nominal controller) and after, per change."""
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=(9, 3.2))
     ax = fig.subplots()
     x = 0
