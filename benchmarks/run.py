@@ -42,6 +42,8 @@ BENCHMARKS = {
                          "--tools", "trussid", "--json", "{json}"]),
     "testbed": (["bench_testbed.py", "--json", "{json}"], ["bench_testbed.py", "--quick", "--json", "{json}"]),
     "plant": (["bench_plant.py", "--json", "{json}"], ["bench_plant.py", "--quick", "--json", "{json}"]),
+    "adapt": (["bench_adapt.py", "--json", "{json}", "--out", "benchmarks/results/adapt.md"],
+              ["bench_adapt.py", "--quick", "--json", "{json}"]),
 }
 
 #: The scaling guards: pytest files run by both modes.

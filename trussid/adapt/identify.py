@@ -66,7 +66,7 @@ def identify_plid(rec: ClosedLoopRecord, order: int, *, block_rows=(40, 80)) -> 
         # a pass losing positive definiteness warns; identify recovers and says so in info
         warnings.simplefilter("ignore", PLIDWarning)
         idn = identify(rec.plant_input, rec.measured, order, rec.dt,
-                       block_rows=list(block_rows), direct=False)
+                       block_rows=list(block_rows), direct=False, progress=False)
     info = {"provenance": idn.provenance}
     return ClosedLoopModel(_named(idn.model, rec), np.asarray(idn.K), "PLID (direct method)",
                            time.perf_counter() - t0, time.process_time() - c0, info)

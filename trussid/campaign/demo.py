@@ -631,7 +631,7 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
 
 
 def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
-             force: bool = False, command: str | None = None) -> dict:
+             force: bool = False, command: str | None = None, adapt: bool = False) -> dict:
     """Run the whole campaign and write the report directory ``out``.
 
     Parameters
@@ -649,6 +649,9 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
         (before any computation).
     command : str, optional
         The command line that asked for the report (recorded in its provenance).
+    adapt : bool
+        Add the closed-loop identification and adaptive redesign section and its files
+        under ``adapt/`` (:mod:`trussid.campaign.adapt`, issue 27).
 
     Returns
     -------
@@ -669,6 +672,9 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     if not out.resolve().parent.is_dir():
         raise UserError(f"--out {out}: the directory {out.resolve().parent} does not exist "
                         "(it is not created for you)")
+    if adapt and not settings.mimo_order:
+        raise UserError("--adapt closes the loop with the MIMO model's controller; this "
+                        "campaign has no MIMO model (mimo_order 0)")
     prov = provenance(settings, command)
     t_start = time.perf_counter()
     timings = {}
@@ -712,19 +718,32 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
                                truth, settings.quick, progress=lambda m: say("      " + m))
         timings["control"] = time.perf_counter() - t0
 
+    adapted = None
+    if adapt:
+        # deferred: trussid.campaign.adapt imports this module (conditioner ranging, noise)
+        from trussid.campaign.adapt import demo_section as adapt_section
+
+        t0 = time.perf_counter()
+        say("      closed-loop identification and adaptive redesign on changed truths ...")
+        adapted = adapt_section(truth, tp.tbm.testbed, fits["mimo"].model, fits["mimo"].K,
+                                records["mimo"][0].data, settings,
+                                progress=lambda m: say("      " + m))
+        timings["adapt"] = time.perf_counter() - t0
+
     t0 = time.perf_counter()
     say(f"[5/5] writing the report in {out}/ ...")
     with atomic_directory(out, force=force) as tmp:
         summary = _write_report(tmp, tp, records, fits, h1s, truth, settings, models, timings,
-                                prov, t0, t_start, control)
+                                prov, t0, t_start, control, adapted)
     say(f"      done in {timings['total']:.1f} s")
     return summary
 
 
 def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings, prov, t0,
-                  t_start, control=None) -> dict:
+                  t_start, control=None, adapted=None) -> dict:
     """Every file of the report into ``out`` (the temporary directory); the summary.
-    ``control``: the closed-loop section ``(markdown, figures, summary)`` or None."""
+    ``control``: the closed-loop section ``(markdown, figures, summary)`` or None;
+    ``adapted``: :func:`trussid.campaign.adapt.demo_section`'s result or None."""
     files = write_files(out, records, fits, truth)
     files["figures"] = write_figures(out, records, fits, h1s, truth, settings)
     if control is not None:
@@ -733,6 +752,14 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
         for fname, fig in control[1].items():
             save_figure(fig, out / fname)
         files["figures"] += list(control[1])
+    if adapted is not None:
+        from trussid.campaign.adapt import write_files as write_adapt_files  # deferred: cycle
+        from trussid.plots import save_figure
+
+        for fname, fig in adapted[1].items():
+            save_figure(fig, out / fname)
+        files["figures"] += list(adapted[1])
+        files["adapt"] = write_adapt_files(out, adapted[3])
     summary = {
         "format_version": 1,
         "provenance": prov,
@@ -745,13 +772,16 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
     }
     if control is not None:
         summary["control"] = control[2]
+    if adapted is not None:
+        summary["adapt"] = adapted[2]
     timings["report"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
     summary = json_safe(summary)
     with atomic_path(out / "summary.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2) + "\n")
     with atomic_path(out / "report.md") as tmp:
-        tmp.write_text(report_markdown(summary) + ("\n" + control[0] if control else ""))
+        tmp.write_text(report_markdown(summary) + ("\n" + control[0] if control else "")
+                       + ("\n" + adapted[0] if adapted else ""))
     return summary
 
 
