@@ -75,7 +75,7 @@ def main() -> int:
         sk = replace(s, noise_factor=float(k))
         noise_v = sensor_noise_volts(tb, settings) * k
         nom, w, c = timed(nominal_closed_loop, truth, des.controller, sk, noise_v,
-                          tb.daq.full_scale, model, print)
+                          tb.daq.full_scale, model, print, tb.daq.bits)
         row = {"noise_factor": k, "noise_v": noise_v, "wall_s": w, "cpu_s": c,
                "frf_rms_db": nom.frf_rms_db, "truth": nom.truth_dominant,
                "plid": nom.identified_dominant["plid"], "n4sid": nom.identified_dominant["n4sid"],

@@ -110,17 +110,20 @@ class NominalClosedLoop:
     identified_dominant: dict     # {"plid", "n4sid"}: [(f, damping)] nearest those
     adc_full_scale: list
     noise_v: float
+    dac_full_scale: float = 10.0
+    bits: int = 12
 
 
 def nominal_closed_loop(truth, controller, s: AdaptDemoSettings, noise_v: float,
-                        full_scale: float, open_loop_model=None, progress=None):
+                        full_scale: float, open_loop_model=None, progress=None, bits: int = 12):
     """Closed-loop record on ``truth`` with ``controller``, PLID and N4SID models from it,
-    their FRF RMS errors against the truth (and the open-loop model's, if given)."""
+    their FRF RMS errors against the truth (and the open-loop model's, if given).
+    ``full_scale`` [V] and ``bits``: the lab's converters (both D/A and A/D)."""
     say = progress or (lambda msg: None)
     adc = adc_ranges(truth, controller, s, noise_v, full_scale)
     rec = closed_loop_record(truth, controller, s.n_samples, dither_rms=s.dither_rms,
                              band=s.dither_band, noise_rms=noise_v, adc_full_scale=adc,
-                             seed=s.seed)
+                             dac_full_scale=full_scale, bits=bits, seed=s.seed)
     say(f"closed-loop record: {rec.n_samples} samples, D/A clipped {rec.dac_clipped}, "
         f"A/D clipped {rec.adc_clipped}")
     fits = {"plid": identify_plid(rec, s.order, block_rows=s.block_rows),
@@ -133,7 +136,8 @@ def nominal_closed_loop(truth, controller, s: AdaptDemoSettings, noise_v: float,
     ident = {k: nearest_modes(f.model, [f0 for f0, _ in fd]) for k, f in fits.items()}
     for k, f in fits.items():
         say(f"{k}: {f.model.nstates} states, FRF RMS {frf[k]:.2f} dB, {f.cpu_seconds:.1f} s CPU")
-    return NominalClosedLoop(rec, fits["plid"], fits["n4sid"], frf, fd, ident, adc, noise_v)
+    return NominalClosedLoop(rec, fits["plid"], fits["n4sid"], frf, fd, ident, adc, noise_v,
+                             full_scale, bits)
 
 
 def _io(truth, rec):
@@ -167,12 +171,14 @@ class ChangeResult:
 
 
 def run_change(name, label, truth, controller, reference_hz, s: AdaptDemoSettings,
-               noise_v: float, adc, progress=None) -> ChangeResult:
+               noise_v: float, adc, progress=None, dac_full_scale: float = 10.0,
+               bits: int = 12) -> ChangeResult:
     """The adaptive loop on one changed truth, and its evaluation on that truth."""
     c0 = time.process_time()
     a = AdaptSettings(window=s.n_samples, order=s.order, block_rows=s.block_rows,
                       dither_rms=s.dither_rms, dither_band=s.dither_band, noise_rms=noise_v,
-                      adc_full_scale=tuple(adc), max_windows=s.max_windows,
+                      adc_full_scale=tuple(adc), dac_full_scale=dac_full_scale, bits=bits,
+                      max_windows=s.max_windows,
                       seed=s.seed + 100 * (1 + [c[0] for c in CHANGES].index(name)))
     run = adapt(truth, controller, reference_hz, a, progress=progress)
     before = mode_damping(truth, controller)
@@ -213,7 +219,7 @@ def adapt_study(truth, tb, model, K, data, demo_settings, progress=None) -> Adap
     cpu["nominal_design"] = time.process_time() - c0
     noise_v = sensor_noise_volts(tb, demo_settings) * s.noise_factor
     c0 = time.process_time()
-    nom = nominal_closed_loop(truth, ctrl, s, noise_v, tb.daq.full_scale, m, say)
+    nom = nominal_closed_loop(truth, ctrl, s, noise_v, tb.daq.full_scale, m, say, tb.daq.bits)
     cpu["nominal_closed_loop"] = time.process_time() - c0
     ref_hz = nearest_modes(nom.plid.model, [f for f, _ in nom.truth_dominant])
     ref_hz = [f for f, _ in ref_hz]
@@ -224,7 +230,8 @@ def adapt_study(truth, tb, model, K, data, demo_settings, progress=None) -> Adap
         tr = changed_truth(tb, changes)
         cpu[f"truth_{name}"] = time.process_time() - c0
         res = run_change(name, label, tr, ctrl, ref_hz, s, noise_v, nom.adc_full_scale,
-                         progress=lambda msg: say("  " + msg))
+                         progress=lambda msg: say("  " + msg),
+                         dac_full_scale=tb.daq.full_scale, bits=tb.daq.bits)
         study.changes.append(res)
         cpu[f"adapt_{name}"] = res.cpu_seconds
     return study
