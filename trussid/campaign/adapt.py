@@ -447,6 +447,30 @@ def timeline_figure(study: AdaptStudy):
     return fig
 
 
+def damping_time_figure(study: AdaptStudy):
+    """The running controller's least dominant-mode damping predicted on each window's
+    closed-loop model (what the loop sees) against time, and on the truth (what it does)."""
+    fig = Figure(figsize=(9, 3.4))
+    ax = fig.subplots()
+    for k, ch in enumerate(study.changes):
+        ev = [e for e in ch.run.events if e.kind == "identified"]
+        t = [e.t for e in ev]
+        z = [100 * min(e.detail["predicted_damping"]) for e in ev]
+        ax.plot(t, z, "o-", color=f"C{k}", label=f"{ch.label}: on the window's model")
+        ends = [0.0] + ch.run.switch_times + [len(ch.run.records) * ch.run.records[0].n_samples
+                                               * ch.run.records[0].dt]
+        for j, c in enumerate(ch.run.controllers):
+            zt = 100 * (ch.before if j == 0 else ch.after).dominant_damping.min()
+            ax.hlines(zt, ends[j], ends[j + 1], color=f"C{k}", ls="--", lw=1.2,
+                      label=f"{ch.label}: on the truth" if j == 0 else None)
+    ax.set_xlabel("time since the change [s]")
+    ax.set_ylabel("least dominant-mode damping [%]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
 def damping_figure(study: AdaptStudy):
     """Dominant-mode damping before (nominal controller) and after, per change."""
     fig = Figure(figsize=(9, 3.2))
@@ -476,6 +500,7 @@ def demo_section(truth, tb, model, K, data, demo_settings, progress=None):
     """``trussid demo --adapt``'s hook: ``(markdown, {file name: Figure}, summary, study)``."""
     study = adapt_study(truth, tb, model, K, data, demo_settings, progress)
     figs = {"adapt_timeline.png": timeline_figure(study),
-            "adapt_damping.png": damping_figure(study)}
+            "adapt_damping.png": damping_figure(study),
+            "adapt_damping_time.png": damping_time_figure(study)}
     md = report_markdown(study) + "\n" + "\n".join(f"![{n}]({n})" for n in figs) + "\n"
     return md, figs, summary(study), study
