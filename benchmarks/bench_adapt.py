@@ -35,8 +35,8 @@ import control  # noqa: E402
 from results_io import finish, stamp, write_json  # noqa: E402
 from trussid.campaign.adapt import adapt_settings, nominal_closed_loop  # noqa: E402
 from trussid.campaign.control import design_controller  # noqa: E402
-from trussid.campaign.demo import (build_plant, demo_settings, identify_model,  # noqa: E402
-                                   run_experiments, sensor_noise_volts)
+from trussid.campaign.demo import (build_plant, conditioner_steps, demo_settings,  # noqa: E402
+                                   identify_model, run_experiments, sensor_noise_volts)
 
 NOISE_FACTORS = (1, 10, 30)
 #: Issue 27, acceptance 1.
@@ -71,11 +71,16 @@ def main() -> int:
     des, _, _ = design_controller(model, d.u, d.y, K=fit.K, baselines=False)
     s = adapt_settings(settings)
     rows, guards = [], []
+
+    def ranging(rms):   # the demo's conditioner ranging
+        return conditioner_steps(rms, tb.daq.full_scale, settings.range_target,
+                                 settings.gain_steps)
+
     for k in NOISE_FACTORS:
         sk = replace(s, noise_factor=float(k))
         noise_v = sensor_noise_volts(tb, settings) * k
         nom, w, c = timed(nominal_closed_loop, truth, des.controller, sk, noise_v,
-                          tb.daq.full_scale, model, print, tb.daq.bits)
+                          tb.daq.full_scale, ranging, model, print, tb.daq.bits)
         row = {"noise_factor": k, "noise_v": noise_v, "wall_s": w, "cpu_s": c,
                "frf_rms_db": nom.frf_rms_db, "truth": nom.truth_dominant,
                "plid": nom.identified_dominant["plid"], "n4sid": nom.identified_dominant["n4sid"],

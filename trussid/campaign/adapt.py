@@ -29,7 +29,6 @@ from trussid.plid.modelfile import save_model
 from trussid.testbed.plant import testbed_plant
 
 from .control import design_controller, perturbed_testbed
-from .demo import conditioner_steps, sensor_noise_volts
 
 #: (file-system name, label, :func:`trussid.campaign.control.perturbed_testbed` changes)
 CHANGES = (
@@ -90,12 +89,13 @@ def changed_truth(tb, changes: dict):
 
 
 def adc_ranges(truth, controller, s: AdaptDemoSettings, noise_v: float, full_scale: float,
-               steps=(1.0, 2.0, 5.0)) -> list:
+               ranging) -> list:
     """A/D range per sensor [V, plant units] as the demo ranges its conditioners, from a
-    noise-free trial run of the same loop (its own seed)."""
+    noise-free trial run of the same loop (its own seed). ``ranging(rms)``: the
+    conditioner step per sensor for output RMS ``rms`` [V] (the demo's
+    :func:`trussid.campaign.demo.conditioner_steps` with its settings)."""
     rms = trial_rms(truth, controller, s.n_samples, s.dither_rms, s.dither_band, s.seed + 7)
-    g = conditioner_steps(np.sqrt(rms**2 + noise_v**2), full_scale, s.range_target, steps)
-    return [full_scale / x for x in g]
+    return [full_scale / x for x in ranging(np.sqrt(rms**2 + noise_v**2))]
 
 
 @dataclass
@@ -115,12 +115,14 @@ class NominalClosedLoop:
 
 
 def nominal_closed_loop(truth, controller, s: AdaptDemoSettings, noise_v: float,
-                        full_scale: float, open_loop_model=None, progress=None, bits: int = 12):
+                        full_scale: float, ranging, open_loop_model=None, progress=None,
+                        bits: int = 12):
     """Closed-loop record on ``truth`` with ``controller``, PLID and N4SID models from it,
     their FRF RMS errors against the truth (and the open-loop model's, if given).
-    ``full_scale`` [V] and ``bits``: the lab's converters (both D/A and A/D)."""
+    ``full_scale`` [V] and ``bits``: the lab's converters (both D/A and A/D); ``ranging``:
+    as :func:`adc_ranges` takes it."""
     say = progress or (lambda msg: None)
-    adc = adc_ranges(truth, controller, s, noise_v, full_scale)
+    adc = adc_ranges(truth, controller, s, noise_v, full_scale, ranging)
     rec = closed_loop_record(truth, controller, s.n_samples, dither_rms=s.dither_rms,
                              band=s.dither_band, noise_rms=noise_v, adc_full_scale=adc,
                              dac_full_scale=full_scale, bits=bits, seed=s.seed)
@@ -205,9 +207,11 @@ class AdaptStudy:
     cpu_seconds: dict = field(default_factory=dict)
 
 
-def adapt_study(truth, tb, model, K, data, demo_settings, progress=None) -> AdaptStudy:
+def adapt_study(truth, tb, model, K, data, demo_settings, noise_v: float, ranging,
+                progress=None) -> AdaptStudy:
     """The whole closed-loop campaign from the demo's truth, testbed, MIMO model (with its
-    predictor gain ``K``) and identification record ``data`` (:class:`trussid.plid.data.IOData`)."""
+    predictor gain ``K``) and identification record ``data`` (:class:`trussid.plid.data.IOData`);
+    ``noise_v``: the demo's sensor noise [V]; ``ranging``: as :func:`adc_ranges` takes it."""
     say = progress or (lambda msg: None)
     s = adapt_settings(demo_settings)
     cpu = {}
@@ -217,9 +221,10 @@ def adapt_study(truth, tb, model, K, data, demo_settings, progress=None) -> Adap
     des, _, _ = design_controller(m, data.u, data.y, K=K, baselines=False)
     ctrl = des.controller
     cpu["nominal_design"] = time.process_time() - c0
-    noise_v = sensor_noise_volts(tb, demo_settings) * s.noise_factor
+    noise_v = noise_v * s.noise_factor
     c0 = time.process_time()
-    nom = nominal_closed_loop(truth, ctrl, s, noise_v, tb.daq.full_scale, m, say, tb.daq.bits)
+    nom = nominal_closed_loop(truth, ctrl, s, noise_v, tb.daq.full_scale, ranging, m, say,
+                              tb.daq.bits)
     cpu["nominal_closed_loop"] = time.process_time() - c0
     ref_hz = nearest_modes(nom.plid.model, [f for f, _ in nom.truth_dominant])
     ref_hz = [f for f, _ in ref_hz]
@@ -496,9 +501,10 @@ def damping_figure(study: AdaptStudy):
     return fig
 
 
-def demo_section(truth, tb, model, K, data, demo_settings, progress=None):
-    """``trussid demo --adapt``'s hook: ``(markdown, {file name: Figure}, summary, study)``."""
-    study = adapt_study(truth, tb, model, K, data, demo_settings, progress)
+def demo_section(truth, tb, model, K, data, demo_settings, noise_v, ranging, progress=None):
+    """``trussid demo --adapt``'s hook: ``(markdown, {file name: Figure}, summary, study)``
+    (arguments as :func:`adapt_study`'s)."""
+    study = adapt_study(truth, tb, model, K, data, demo_settings, noise_v, ranging, progress)
     figs = {"adapt_timeline.png": timeline_figure(study),
             "adapt_damping.png": damping_figure(study),
             "adapt_damping_time.png": damping_time_figure(study)}

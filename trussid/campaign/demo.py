@@ -57,6 +57,8 @@ import numpy as np
 
 from trussid._util.files import atomic_path
 from trussid._util.jsonio import json_safe
+from trussid.campaign.adapt import demo_section as adapt_demo_section
+from trussid.campaign.adapt import write_files as write_adapt_files
 
 #: Standard gravity [m/s^2], to give sensor noise in g.
 G0 = 9.80665
@@ -730,14 +732,20 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
 
 def _adapt_section(tp, fits, records, settings, timings, say):
-    """Closed-loop identification and adaptive redesign (issue 27), timed into ``timings``."""
-    # deferred: trussid.campaign.adapt imports this module (conditioner ranging, noise)
-    from trussid.campaign.adapt import demo_section
-
+    """Closed-loop identification and adaptive redesign (issue 27), timed into ``timings``;
+    the closed-loop records get this campaign's sensor noise and conditioner ranging."""
     t0 = time.perf_counter()
     say("      closed-loop identification and adaptive redesign on changed truths ...")
-    out = demo_section(tp.discrete, tp.tbm.testbed, fits["mimo"].model, fits["mimo"].K,
-                       records["mimo"][0].data, settings, progress=lambda m: say("      " + m))
+    tb = tp.tbm.testbed
+
+    def ranging(rms):
+        return conditioner_steps(rms, tb.daq.full_scale, settings.range_target,
+                                 settings.gain_steps)
+
+    out = adapt_demo_section(tp.discrete, tb, fits["mimo"].model, fits["mimo"].K,
+                             records["mimo"][0].data, settings,
+                             sensor_noise_volts(tb, settings), ranging,
+                             progress=lambda m: say("      " + m))
     timings["adapt"] = time.perf_counter() - t0
     return out
 
@@ -756,7 +764,6 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
             save_figure(fig, out / fname)
         files["figures"] += list(control[1])
     if adapted is not None:
-        from trussid.campaign.adapt import write_files as write_adapt_files  # deferred: cycle
         from trussid.plots import save_figure
 
         for fname, fig in adapted[1].items():
