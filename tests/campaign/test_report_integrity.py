@@ -15,6 +15,7 @@ from trussid._util.errors import UserError
 from trussid._util.files import atomic_directory
 from trussid.campaign import demo as demo_mod
 from trussid.campaign.demo import mode_audit
+from trussid.geometry.lab import LabSpec
 
 
 def row(ft, zt, fi, zi):
@@ -124,8 +125,9 @@ def test_run_demo_interrupted_at_a_stage_leaves_the_previous_report(tmp_path, mo
             discrete = type("D", (), {"dt": 1 / 1600, "nstates": 1, "ninputs": 3,
                                       "noutputs": 3})()
             modes = type("M", (), {"frequencies_hz": __import__("numpy").array([10.0, 50.0])})()
+            lab = LabSpec()
 
-        monkeypatch.setattr(demo_mod, "build_plant", lambda s: TP)
+        monkeypatch.setattr(demo_mod, "build_plant", lambda tb: TP)
         monkeypatch.setattr(demo_mod, "run_experiments", lambda *a, **k: {})
         monkeypatch.setattr(demo_mod, "identify_records", lambda *a: ({}, {}))
         monkeypatch.setattr(demo_mod, stage, stop)

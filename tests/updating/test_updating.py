@@ -240,7 +240,7 @@ def test_walls_from_a_plid_model_of_noisy_bending_test_data(nominal, full):
     tb, tbm, _ = nominal
     truth = perturbed(tb, 3)
     true_tbm = build_testbed(tb.with_walls(tuple(truth)))
-    tp = testbed_plant(tbm=true_tbm, arrangement="bending", sensors="struts")
+    tp = testbed_plant(true_tbm, arrangement="bending", sensors="struts")
     plant, modes = tp.discrete, tp.modes
     n = 16000 if full else 5000
     exp = run_experiment(plant, n, "white", rms=1.0, band=(30.0, 90.0), seed=4, snr_db=40,

@@ -3,8 +3,8 @@
 Plain functions over plain data, in the order ``trussid demo`` runs them::
 
     settings = demo_settings(quick)
-    tp       = build_plant(settings)                     default testbed -> modes -> plant
-    exps     = run_experiments(tp.discrete, settings)    identification + validation records
+    tp       = build_plant(tb)                           testbed -> modes -> plant (its lab)
+    exps     = run_experiments(tp, settings)             identification + validation records
     fit      = identify_model(u, y, order, dt)           PLID (the one switchable call)
     metrics  = evaluate(fit, truth, validation, h1)      prediction, FRF, poles
     write_report(out, ...)                               report.md, PNGs, summary.json, files
@@ -18,14 +18,16 @@ Signal chain of every record (:func:`trussid.plid.experiment.run_experiment`):
 
 - excitation: Gaussian white noise band-limited to 0-400 Hz (the band holding the modes
   the thesis measured; "nothing significant 350-450 Hz"), 2.5 V RMS per driven channel at
-  the 12-bit +-10 V D/A, i.e. a crest factor of 4: a Gaussian sample exceeds 4 sigma with
+  the D/A (the thesis lab: 12-bit +-10 V), i.e. a crest factor of 4: a Gaussian sample exceeds 4 sigma with
   probability 6e-5, so the D/A clips rarely (the counts are reported);
 - the plant: D/A volts -> smoothing filter -> amplifier -> PZT -> structure ->
   accelerometer -> signal conditioner (``tb.accelerometers.conditioning_gain``) -> A/D
-  volts, discretised by ZOH at 1600 Hz (:func:`trussid.testbed.plant.testbed_plant`);
-- sensor noise: white, ``sensor_noise_g`` RMS referred to the accelerometer [g] over the
-  0-800 Hz band (default 10 ug, about 0.35 ug/sqrt(Hz): a low-noise piezoelectric
-  accelerometer with its charge amplifier). It is amplified with the signal by the
+  volts, discretised by ZOH at the lab's sample rate
+  (:func:`trussid.testbed.plant.testbed_plant`); every number of that chain and of the
+  converters is the testbed's lab (``tb.lab``, :class:`trussid.geometry.lab.LabSpec`);
+- sensor noise: white, ``tb.accelerometers.noise`` RMS referred to the accelerometer over
+  0 to half the sample rate (the thesis lab: 10 ug, about 0.35 ug/sqrt(Hz): a low-noise
+  piezoelectric accelerometer with its charge amplifier). It is amplified with the signal by the
   conditioner, so it is independent of the gain setting. In the MIMO record it lies
   59-64 dB under the signals, near the 12-bit quantisation noise (62-67 dB), as the
   thesis reports ("the 12-bit converters give about 60 dB"); in a SIMO record the two
@@ -40,7 +42,7 @@ Signal chain of every record (:func:`trussid.plid.experiment.run_experiment`):
   driven vertex see signals some 20 dB weaker; without this step they would be recorded
   with a few dozen LSB. Recorded outputs stay in the plant's units (volts at the nominal
   conditioning gain): only the A/D range seen by each channel changes.
-- 12-bit A/D quantisation with clipping counted.
+- A/D quantisation at the lab's resolution, with clipping counted.
 
 Identification data and validation data are separate records with different seeds.
 """
@@ -57,9 +59,8 @@ import numpy as np
 
 from trussid._util.files import atomic_path
 from trussid._util.jsonio import json_safe
+from trussid.geometry.lab import G0, lab_record
 
-#: Standard gravity [m/s^2], to give sensor noise in g.
-G0 = 9.80665
 
 
 # --------------------------------------------------------------------------- settings
@@ -74,15 +75,13 @@ class DemoSettings:
     quick : bool
         The reduced run (``trussid demo --quick``).
     n_identification, n_validation : int
-        Samples of each identification and validation record (1600 Hz).
+        Samples of each identification and validation record (at the lab's sample rate).
     excitation : str
         Excitation kind (:func:`trussid.plid.experiment.excitation`).
     excitation_rms : float
         RMS of each driven D/A channel [V].
     excitation_band : (float, float)
         Excitation band [Hz].
-    sensor_noise_g : float
-        Sensor (accelerometer + conditioner) noise RMS referred to the accelerometer [g].
     range_target : float
         Each sensor's conditioner step is the largest 1-2-5 step (x0.5 or more) that keeps
         its RMS at most this fraction of the A/D full scale (a fifth: the lightly damped
@@ -115,7 +114,6 @@ class DemoSettings:
     excitation: str = "white"
     excitation_rms: float = 2.5
     excitation_band: tuple = (0.0, 400.0)
-    sensor_noise_g: float = 10e-6
     range_target: float = 0.2
     gain_steps: tuple = (1.0, 2.0, 5.0)
     simo_channels: tuple = (0, 1, 2)
@@ -146,17 +144,12 @@ def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
 # --------------------------------------------------------------------------- plant
 
 
-def build_plant(settings: DemoSettings, tb=None):
-    """The default testbed's plant at 1600 Hz (:class:`trussid.testbed.plant.TestbedPlant`)."""
+def build_plant(tb=None):
+    """The plant of testbed ``tb`` (default: the default testbed) at its lab's sample rate,
+    with its lab chain (:class:`trussid.testbed.plant.TestbedPlant`)."""
     from trussid.testbed.plant import testbed_plant
 
     return testbed_plant(tb)
-
-
-def sensor_noise_volts(tb, settings: DemoSettings) -> float:
-    """Sensor noise RMS in plant output units (volts at the nominal conditioning gain)."""
-    acc = tb.accelerometers
-    return settings.sensor_noise_g * G0 * acc.sensitivity * acc.conditioning_gain
 
 
 # --------------------------------------------------------------------------- experiments
@@ -206,8 +199,9 @@ def drive(settings: DemoSettings, plant, n: int, channels, seed: int) -> np.ndar
 
 
 def range_conditioners(plant, settings: DemoSettings, channels, seed: int, n_samples: int,
-                       noise_v: float, full_scale: float = 10.0) -> list:
-    """Conditioner steps from a noise-free trial run of the experiment (its own seed)."""
+                       noise_v: float, full_scale: float) -> list:
+    """Conditioner steps from a noise-free trial run of the experiment (its own seed), for an
+    A/D range of +-``full_scale`` [V]."""
     from trussid.plid.experiment import simulate
 
     trial = drive(settings, plant, n_samples, channels, seed)
@@ -216,11 +210,12 @@ def range_conditioners(plant, settings: DemoSettings, channels, seed: int, n_sam
 
 
 def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels, seed: int,
-                n_samples: int, noise_v: float, steps, full_scale: float = 10.0,
-                bits: int = 12) -> Record:
-    """One record with the conditioners at ``steps`` (see the module docstring)."""
+                n_samples: int, noise_v: float, steps, lab) -> Record:
+    """One record with the conditioners at ``steps`` (see the module docstring), through the
+    converters of ``lab`` (:class:`trussid.geometry.lab.LabSpec`)."""
     from trussid.plid.experiment import run_experiment
 
+    full_scale, bits = lab.daq.full_scale, lab.daq.bits
     adc_fs = [full_scale / g for g in steps]
     u = drive(settings, plant, n_samples, channels, seed)
     exp = run_experiment(plant, n_samples, u=u, seed=seed + 1, sensor_noise_rms=noise_v,
@@ -236,9 +231,8 @@ def run_experiments(tp, settings: DemoSettings, progress=None) -> dict:
 
     Model names are ``simo_ch<k>`` (k = 1..3) and ``mimo``.
     """
-    plant = tp.discrete
-    tb = tp.tbm.testbed
-    noise_v = sensor_noise_volts(tb, settings)
+    plant, lab = tp.discrete, tp.lab
+    noise_v = lab.accelerometers.noise_volts
     plan = [(f"simo_ch{c + 1}", (c,)) for c in settings.simo_channels]
     if settings.mimo_order:
         plan.append(("mimo", tuple(range(plant.ninputs))))
@@ -246,13 +240,11 @@ def run_experiments(tp, settings: DemoSettings, progress=None) -> dict:
     for k, (name, channels) in enumerate(plan):
         base = settings.seed + 1000 * k
         steps = range_conditioners(plant, settings, channels, base + 250,
-                                   settings.n_identification, noise_v, tb.daq.full_scale)
+                                   settings.n_identification, noise_v, lab.daq.full_scale)
         rid = take_record(plant, settings, name, "identification", channels, base,
-                          settings.n_identification, noise_v, steps, tb.daq.full_scale,
-                          tb.daq.bits)
+                          settings.n_identification, noise_v, steps, lab)
         rval = take_record(plant, settings, name, "validation", channels, base + 500,
-                           settings.n_validation, noise_v, steps, tb.daq.full_scale,
-                           tb.daq.bits)
+                           settings.n_validation, noise_v, steps, lab)
         out[name] = (rid, rval)
         if progress:
             progress(f"recorded {name}: {rid.data.n_samples} + {rval.data.n_samples} samples")
@@ -573,8 +565,9 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
     return fits, h1s
 
 
-def write_files(out: Path, records: dict, fits: dict, truth) -> dict:
-    """The records (driven channels only) and the models as data and model files."""
+def write_files(out: Path, records: dict, fits: dict, truth, lab) -> dict:
+    """The records (driven channels only) and the models as data and model files; the true
+    plant's file records its ``lab`` (:func:`trussid.geometry.lab.lab_record`)."""
     from trussid.plid.datafile import with_channels, write_data
     from trussid.plid.modelfile import save_model
 
@@ -593,7 +586,7 @@ def write_files(out: Path, records: dict, fits: dict, truth) -> dict:
                    output_names=rid.data.output_names)
         files["models"].append(fname)
     save_model(out / "plant_true.npz", truth, input_names=list(truth.input_labels),
-               output_names=list(truth.output_labels))
+               output_names=list(truth.output_labels), extra=lab_record(lab))
     files["models"].append("plant_true.npz")
     return files
 
@@ -631,7 +624,7 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
 
 
 def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
-             force: bool = False, command: str | None = None) -> dict:
+             force: bool = False, command: str | None = None, testbed=None) -> dict:
     """Run the whole campaign and write the report directory ``out``.
 
     Parameters
@@ -649,6 +642,9 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
         (before any computation).
     command : str, optional
         The command line that asked for the report (recorded in its provenance).
+    testbed : trussid.geometry.spec.Testbed, optional
+        The testbed and its lab (``testbed.lab``: sample rate, converters, chain, sensor
+        noise); default the default testbed in the thesis lab.
 
     Returns
     -------
@@ -675,7 +671,7 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
     t0 = time.perf_counter()
     say("[1/5] testbed -> modes -> plant ...")
-    tp = build_plant(settings)
+    tp = build_plant(testbed)
     truth = tp.discrete
     fs = 1.0 / truth.dt
     timings["plant"] = time.perf_counter() - t0
@@ -685,7 +681,7 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
         f"{truth.noutputs}, {fs:g} Hz ({timings['plant']:.1f} s)")
 
     t0 = time.perf_counter()
-    say("[2/5] simulated experiments (12-bit D/A and A/D, sensor noise) ...")
+    say(f"[2/5] simulated experiments ({tp.lab.daq.bits}-bit D/A and A/D, sensor noise) ...")
     records = run_experiments(tp, settings, progress=lambda m: say("      " + m))
     timings["experiments"] = time.perf_counter() - t0
 
@@ -704,12 +700,16 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
     control = None
     if "mimo" in records:  # close the loop on the MIMO model (issue 14)
-        from trussid.campaign.control import demo_section
+        from trussid.campaign.control import LoopSettings, demo_section
 
         t0 = time.perf_counter()
         say("      closing the loop: LQG from the MIMO model, on the FE truths ...")
+        # the plant's own lab and the demo's excitation at the D/A
+        loop = LoopSettings.for_lab(tp.lab, excitation_rms=settings.excitation_rms,
+                                    excitation_band_hz=settings.excitation_band[1])
         control = demo_section(fits["mimo"].model, fits["mimo"].K, records["mimo"][0].data,
-                               truth, settings.quick, progress=lambda m: say("      " + m))
+                               truth, settings.quick, loop, tp.tbm.testbed,
+                               progress=lambda m: say("      " + m))
         timings["control"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -725,7 +725,7 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
                   t_start, control=None) -> dict:
     """Every file of the report into ``out`` (the temporary directory); the summary.
     ``control``: the closed-loop section ``(markdown, figures, summary)`` or None."""
-    files = write_files(out, records, fits, truth)
+    files = write_files(out, records, fits, truth, tp.lab)
     files["figures"] = write_figures(out, records, fits, h1s, truth, settings)
     if control is not None:
         from trussid.plots import save_figure
@@ -757,9 +757,9 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
 
 def plant_section(tp, settings: DemoSettings) -> dict:
     """The summary's plant: size, rate, modes, transducers, converters and noise."""
-    tb = tp.tbm.testbed
+    tb, lab = tp.tbm.testbed, tp.lab
     f = tp.modes.frequencies_hz
-    acc = tb.accelerometers
+    acc = lab.accelerometers
     return {
         "states": int(tp.discrete.nstates), "inputs": list(tp.discrete.input_labels),
         "outputs": list(tp.discrete.output_labels), "sample_rate_hz": 1.0 / tp.discrete.dt,
@@ -767,9 +767,10 @@ def plant_section(tp, settings: DemoSettings) -> dict:
         "modal_damping": tb.damping.modal_ratio,
         "accelerometer_sensitivity_v_per_g": acc.sensitivity * G0,
         "conditioning_gain": acc.conditioning_gain,
-        "converter_bits": tb.daq.bits, "converter_full_scale_v": tb.daq.full_scale,
-        "sensor_noise_g_rms": settings.sensor_noise_g,
-        "sensor_noise_v_rms": sensor_noise_volts(tb, settings),
+        "converter_bits": lab.daq.bits, "converter_full_scale_v": lab.daq.full_scale,
+        "sensor_noise_g_rms": acc.noise / G0,
+        "sensor_noise_v_rms": acc.noise_volts,
+        "lab": lab.to_dict(),
     }
 
 
@@ -784,12 +785,16 @@ def experiment_summary(records: dict, settings: DemoSettings) -> list:
             lsb = np.asarray(e.lsb["adc"], dtype=float)
             rows.append({
                 "model": name, "purpose": rec.purpose, "samples": d.n_samples,
+                "sample_rate_hz": d.fs,
                 "driven_channels": [d.input_names[c] for c in rec.channels], "seed": rec.seed,
                 "excitation": settings.excitation, "excitation_rms_v": settings.excitation_rms,
                 "excitation_band_hz": list(settings.excitation_band),
                 "dac_clipped": e.clipping["dac"], "adc_clipped": e.clipping["adc"],
                 "conditioner_steps": rec.gain_steps,
                 "adc_full_scale_v": rec.adc_full_scale,
+                # the converters' LSB as the experiment applied them [V]
+                "dac_lsb_v": np.atleast_1d(np.asarray(e.lsb["dac"], dtype=float)).tolist(),
+                "adc_lsb_v": np.atleast_1d(lsb).tolist(),
                 # converter resolution from the LSB the experiment used: 2 FS / 2^bits
                 "adc_bits": [int(round(np.log2(2 * fs / q)))
                              for fs, q in zip(rec.adc_full_scale, np.atleast_1d(lsb))],
@@ -821,7 +826,8 @@ def report_markdown(s: dict) -> str:
           f"{100 * pl['modal_damping']:.2f} %; discrete plant of {pl['states']} states, "
           f"{len(pl['inputs'])} D/A channels ({', '.join(pl['inputs'])}) to "
           f"{len(pl['outputs'])} accelerometers ({', '.join(pl['outputs'])}) at "
-          f"{pl['sample_rate_hz']:g} Hz, with the smoothing filter, amplifier and 120 Hz "
+          f"{pl['sample_rate_hz']:g} Hz, with the smoothing filter, amplifier and "
+          f"{pl['lab']['filters']['lowpass_cutoff']:g} Hz "
           f"low-pass. Accelerometers {1000 * pl['accelerometer_sensitivity_v_per_g']:.0f} mV/g, "
           f"signal conditioner gain {pl['conditioning_gain']:g} V/V; "
           f"{pl['converter_bits']}-bit converters, +-{pl['converter_full_scale_v']:g} V; "
