@@ -31,7 +31,7 @@ def report(tmp_path_factory):
     """The tiny campaign (about a minute): the tests that read it are in the slow tier."""
     out = tmp_path_factory.mktemp("demo") / "report"
     lines = []
-    summary = run_demo(out, _tiny(), progress=lines.append)
+    summary = run_demo(out, _tiny(), progress=lines.append).to_dict()
     return out, summary, lines
 
 
@@ -268,7 +268,7 @@ def test_demo_campaign_simo_models_and_the_thesis_prediction_ratio(tmp_path, ful
     all sensors together, as the thesis quotes it) on the separate validation record, with
     12-bit converters; the models are stable and simulate.
     """
-    summary = run_demo(tmp_path / "r", demo_settings(quick=not full), progress=None)
+    summary = run_demo(tmp_path / "r", demo_settings(quick=not full), progress=None).to_dict()
     simo = [m for m in summary["models"] if m["kind"] == "SIMO"]
     assert len(simo) == (3 if full else 1)
     assert any(m["kind"] == "MIMO" for m in summary["models"])

@@ -52,13 +52,17 @@ from __future__ import annotations
 import json
 import time
 import warnings
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from trussid._util.files import atomic_path
 from trussid._util.jsonio import json_safe
+from trussid.campaign.report import report_markdown
+from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
+                                      DemoSummary, ExperimentRow, ModeAudit, ModelSummary,
+                                      PlantSummary, Provenance, ReportFiles)
 from trussid.geometry.lab import G0, lab_record
 
 
@@ -346,7 +350,7 @@ def _history_of_last_pass(idn, u, y, order, dt):
 
 
 def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings: DemoSettings,
-             name: str, kind: str) -> dict:
+             name: str, kind: str) -> ModelSummary:
     """All metrics of one model, by :func:`trussid.plid.evaluate.compare` (as ``trussid
     compare``): validation prediction and simulation, FRF errors against the true plant and
     the H1 estimate, matched poles."""
@@ -374,33 +378,33 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
         "mean_above_excited_band": (h1_est.coherence[above].mean(axis=0).tolist()
                                     if above.any() else None),
     }
-    return {
-        "name": name, "kind": kind, "states": c.states, "inputs": c.inputs, "outputs": c.outputs,
-        "input_names": [val.input_names[c_] for c_ in cols], "output_names": list(val.output_names),
-        "signal_to_prediction_error_db": p.overall,
-        "signal_to_prediction_error_db_per_output": p.per_output,
-        "signal_to_prediction_error_db_mean_normalised": p.mean_normalised,
-        "prediction_skip_samples": p.skip,
-        "predictor_gain": p.gain,
-        "frf_max_error_db": e.max_db, "frf_rms_error_db": e.rms_db,
-        "frf_max_error_deg": e.max_deg, "frf_rms_error_deg": e.rms_deg,
-        "frf_error_per_channel": e.per_channel,
-        "frf_band_hz": list(settings.frf_band),
-        "frf_error_vs_h1": {"max_db": eh.max_db, "rms_db": eh.rms_db, "max_deg": eh.max_deg,
-                            "rms_deg": eh.rms_deg},
-        "h1_error_vs_true": h1_true,
-        "simulation_fit_db": s.overall,
-        "simulation_fit_db_per_output": s.per_output,
-        "seconds": fit.seconds, "method": fit.method, "unstable_poles": c.unstable_poles,
-        "stabilised": fit.info.get("stabilised", {}),
-        "poles": c.poles,
-        "poles_in_band_matched": sum(r["frequency_hz"] is not None for r in in_band),
-        "poles_in_band_true": len(in_band),
-        "validation_output_rms_v": y_rms.tolist(),
-        "h1_coherence": coherence,
-        "modes_check": mode_audit(c.poles, settings.frf_band, settings.excitation_band),
-        "identification": json_safe(fit.info),
-    }
+    return ModelSummary(
+        name=name, kind=kind, states=c.states, inputs=c.inputs, outputs=c.outputs,
+        input_names=[val.input_names[c_] for c_ in cols], output_names=list(val.output_names),
+        signal_to_prediction_error_db=p.overall,
+        signal_to_prediction_error_db_per_output=p.per_output,
+        signal_to_prediction_error_db_mean_normalised=p.mean_normalised,
+        prediction_skip_samples=p.skip,
+        predictor_gain=p.gain,
+        frf_max_error_db=e.max_db, frf_rms_error_db=e.rms_db,
+        frf_max_error_deg=e.max_deg, frf_rms_error_deg=e.rms_deg,
+        frf_error_per_channel=e.per_channel,
+        frf_band_hz=list(settings.frf_band),
+        frf_error_vs_h1={"max_db": eh.max_db, "rms_db": eh.rms_db, "max_deg": eh.max_deg,
+                         "rms_deg": eh.rms_deg},
+        h1_error_vs_true=h1_true,
+        simulation_fit_db=s.overall,
+        simulation_fit_db_per_output=s.per_output,
+        seconds=fit.seconds, method=fit.method, unstable_poles=c.unstable_poles,
+        stabilised=fit.info.get("stabilised", {}),
+        poles=c.poles,
+        poles_in_band_matched=sum(r["frequency_hz"] is not None for r in in_band),
+        poles_in_band_true=len(in_band),
+        validation_output_rms_v=y_rms.tolist(),
+        h1_coherence=coherence,
+        modes_check=mode_audit(c.poles, settings.frf_band, settings.excitation_band),
+        identification=json_safe(fit.info),
+    )
 
 
 #: A true or identified pole with a damping ratio above this is not a structural mode (the
@@ -413,7 +417,7 @@ FOUND_TOLERANCE = 0.05
 LIGHT_DAMPING = 0.01
 
 
-def mode_audit(poles: list, band, excited) -> dict:
+def mode_audit(poles: list, band, excited) -> ModeAudit:
     """What a model lacks and what it adds, from matched poles (:func:`plid.metrics.compare_poles`).
 
     Parameters
@@ -428,7 +432,7 @@ def mode_audit(poles: list, band, excited) -> dict:
 
     Returns
     -------
-    dict
+    ModeAudit
         ``true_modes_in_band``: every true structural mode (damping <= MODE_DAMPING_MAX) in
         ``band`` with ``found`` (matched within FOUND_TOLERANCE in frequency) and the
         identified frequency and damping; ``missing``: the frequencies not found;
@@ -453,9 +457,9 @@ def mode_audit(poles: list, band, excited) -> dict:
         fi = r["frequency_hz"]
         found = (fi is not None and r["damping"] <= MODE_DAMPING_MAX
                  and abs(fi - ft) <= FOUND_TOLERANCE * ft)
-        rows.append({"true_frequency_hz": ft, "true_damping": r["true_damping"],
-                     "found": bool(found), "frequency_hz": fi if found else None,
-                     "damping": r["damping"] if found else None})
+        rows.append(AuditedTrueMode(true_frequency_hz=ft, true_damping=r["true_damping"],
+                                    found=bool(found), frequency_hz=fi if found else None,
+                                    damping=r["damping"] if found else None))
 
     def nearest(f):
         if not f_true.size:
@@ -469,26 +473,26 @@ def mode_audit(poles: list, band, excited) -> dict:
         if fi is None or r["damping"] > MODE_DAMPING_MAX:
             continue
         near, rel = nearest(fi)
-        entry = {"frequency_hz": fi, "damping": r["damping"], "nearest_true_hz": near,
-                 "spurious": bool(near is None or rel > FOUND_TOLERANCE),
-                 "in_excited_band": bool(excited[0] <= fi <= excited[1])}
+        entry = AuditedIdentifiedMode(frequency_hz=fi, damping=r["damping"], nearest_true_hz=near,
+                                      spurious=bool(near is None or rel > FOUND_TOLERANCE),
+                                      in_excited_band=bool(excited[0] <= fi <= excited[1]))
         identified.append(entry)
-        if entry["spurious"]:
+        if entry.spurious:
             spurious.append(entry)
         if r["damping"] < LIGHT_DAMPING:
             light.append(entry)
-    key = lambda e: e["frequency_hz"]  # noqa: E731
-    return {"band_hz": [lo, hi], "excited_band_hz": list(excited),
-            "true_modes_in_band": rows,
-            "found": sum(r["found"] for r in rows), "total": len(rows),
-            "missing": [r["true_frequency_hz"] for r in rows if not r["found"]],
-            "filter_poles_in_band": filters,
-            "spurious": sorted(spurious, key=key), "lightly_damped": sorted(light, key=key),
-            "rules": {"structural_damping_max": MODE_DAMPING_MAX,
-                      "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING}}
+    key = lambda e: e.frequency_hz  # noqa: E731
+    return ModeAudit(band_hz=[lo, hi], excited_band_hz=list(excited),
+                     true_modes_in_band=rows,
+                     found=sum(r.found for r in rows), total=len(rows),
+                     missing=[r.true_frequency_hz for r in rows if not r.found],
+                     filter_poles_in_band=filters,
+                     spurious=sorted(spurious, key=key), lightly_damped=sorted(light, key=key),
+                     rules={"structural_damping_max": MODE_DAMPING_MAX,
+                            "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING})
 
 
-def provenance(settings: "DemoSettings", command: str | None = None) -> dict:
+def provenance(settings: "DemoSettings", command: str | None = None) -> Provenance:
     """Who made the report, how and where: trussid version, source commit (when the package
     runs from a git checkout), seed, command line, machine, load and date (UTC)."""
     import os
@@ -518,11 +522,11 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> dict:
         load = list(os.getloadavg())
     except OSError:
         load = None
-    return {"trussid_version": trussid_version, "commit": commit, "seed": settings.seed,
-            "command": command, "machine": platform.node(), "platform": platform.platform(),
-            "cpus": os.cpu_count(), "python": platform.python_version(),
-            "load_average_start": load,
-            "date_utc": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}
+    return Provenance(trussid_version=trussid_version, commit=commit, seed=settings.seed,
+                      command=command, machine=platform.node(), platform=platform.platform(),
+                      cpus=os.cpu_count(), python=platform.python_version(),
+                      load_average_start=load,
+                      date_utc=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()))
 
 
 def _h1_error(h1_est, truth, keep) -> dict:
@@ -565,29 +569,29 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
     return fits, h1s
 
 
-def write_files(out: Path, records: dict, fits: dict, truth, lab) -> dict:
+def write_files(out: Path, records: dict, fits: dict, truth, lab) -> ReportFiles:
     """The records (driven channels only) and the models as data and model files; the true
     plant's file records its ``lab`` (:func:`trussid.geometry.lab.lab_record`)."""
     from trussid.plid.datafile import with_channels, write_data
     from trussid.plid.modelfile import save_model
 
-    files = {"data": [], "models": []}
+    files = ReportFiles()
     for name, (rid, rval) in records.items():
         for rec in (rid, rval):
             fname = f"data_{name}_{rec.purpose[:3]}.npz"
             # Only the driven channels: the others are zero and a data file refuses them.
             write_data(with_channels(rec.data, inputs=[rec.data.input_names[c] for c in
                                                        rec.channels]), out / fname)
-            files["data"].append(fname)
+            files.data.append(fname)
         fname = f"model_{name}.npz"
         cols = list(rid.channels)
         save_model(out / fname, fits[name].model, K=fits[name].K,
                    input_names=[rid.data.input_names[c] for c in cols],
                    output_names=rid.data.output_names)
-        files["models"].append(fname)
+        files.models.append(fname)
     save_model(out / "plant_true.npz", truth, input_names=list(truth.input_labels),
                output_names=list(truth.output_labels), extra=lab_record(lab))
-    files["models"].append("plant_true.npz")
+    files.models.append("plant_true.npz")
     return files
 
 
@@ -648,8 +652,8 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
     Returns
     -------
-    dict
-        The summary (also written as ``summary.json``).
+    DemoSummary
+        The summary (written as ``summary.json`` and ``report.md``).
     """
     from trussid._util.errors import UserError
     from trussid._util.files import atomic_directory
@@ -722,59 +726,52 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
 
 def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings, prov, t0,
-                  t_start, control=None) -> dict:
+                  t_start, control=None) -> DemoSummary:
     """Every file of the report into ``out`` (the temporary directory); the summary.
     ``control``: the closed-loop section ``(markdown, figures, summary)`` or None."""
     files = write_files(out, records, fits, truth, tp.lab)
-    files["figures"] = write_figures(out, records, fits, h1s, truth, settings)
+    files.figures = write_figures(out, records, fits, h1s, truth, settings)
     if control is not None:
         from trussid.plots import save_figure
 
         for fname, fig in control[1].items():
             save_figure(fig, out / fname)
-        files["figures"] += list(control[1])
-    summary = {
-        "format_version": 1,
-        "provenance": prov,
-        "settings": asdict(settings),
-        "plant": plant_section(tp, settings),
-        "experiments": experiment_summary(records, settings),
-        "models": models,
-        "files": files,
-        "timings_s": timings,
-    }
-    if control is not None:
-        summary["control"] = control[2]
+        files.figures += list(control[1])
+    summary = DemoSummary(
+        format_version=1, provenance=prov, settings=settings, plant=plant_section(tp),
+        experiments=experiment_summary(records, settings), models=models, files=files,
+        timings_s=timings,
+        control=None if control is None else ClosedLoopSection(control[0], control[2]))
     timings["report"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
-    summary = json_safe(summary)
     with atomic_path(out / "summary.json") as tmp:
-        tmp.write_text(json.dumps(summary, indent=2) + "\n")
+        tmp.write_text(json.dumps(summary.to_dict(), indent=2) + "\n")
     with atomic_path(out / "report.md") as tmp:
-        tmp.write_text(report_markdown(summary) + ("\n" + control[0] if control else ""))
+        tmp.write_text(report_markdown(summary))
     return summary
 
 
-def plant_section(tp, settings: DemoSettings) -> dict:
+def plant_section(tp) -> PlantSummary:
     """The summary's plant: size, rate, modes, transducers, converters and noise."""
     tb, lab = tp.tbm.testbed, tp.lab
     f = tp.modes.frequencies_hz
     acc = lab.accelerometers
-    return {
-        "states": int(tp.discrete.nstates), "inputs": list(tp.discrete.input_labels),
-        "outputs": list(tp.discrete.output_labels), "sample_rate_hz": 1.0 / tp.discrete.dt,
-        "modes": int(f.size), "mode_frequencies_hz": f.tolist(),
-        "modal_damping": tb.damping.modal_ratio,
-        "accelerometer_sensitivity_v_per_g": acc.sensitivity * G0,
-        "conditioning_gain": acc.conditioning_gain,
-        "converter_bits": lab.daq.bits, "converter_full_scale_v": lab.daq.full_scale,
-        "sensor_noise_g_rms": acc.noise / G0,
-        "sensor_noise_v_rms": acc.noise_volts,
-        "lab": lab.to_dict(),
-    }
+    return PlantSummary(
+        states=int(tp.discrete.nstates), inputs=list(tp.discrete.input_labels),
+        outputs=list(tp.discrete.output_labels), sample_rate_hz=1.0 / tp.discrete.dt,
+        modes=int(f.size), mode_frequencies_hz=f.tolist(),
+        modal_damping=tb.damping.modal_ratio,
+        accelerometer_sensitivity_v_per_g=acc.sensitivity * G0,
+        conditioning_gain=acc.conditioning_gain,
+        converter_bits=lab.daq.bits, converter_full_scale_v=lab.daq.full_scale,
+        sensor_noise_g_rms=acc.noise / G0,
+        sensor_noise_v_rms=acc.noise_volts,
+        lab=lab,
+    )
 
 
-def experiment_summary(records: dict, settings: DemoSettings) -> list:
+def experiment_summary(records: dict, settings: DemoSettings) -> list[ExperimentRow]:
+    """One row per record: its size, rate, drive, converters, ranges and signal-to-noise."""
     rows = []
     for name, pair in records.items():
         for rec in pair:
@@ -783,215 +780,27 @@ def experiment_summary(records: dict, settings: DemoSettings) -> list:
             y_rms = np.sqrt(np.mean(e.y_clean**2, axis=0))
             noise = np.asarray(e.sensor_noise_rms)
             lsb = np.asarray(e.lsb["adc"], dtype=float)
-            rows.append({
-                "model": name, "purpose": rec.purpose, "samples": d.n_samples,
-                "sample_rate_hz": d.fs,
-                "driven_channels": [d.input_names[c] for c in rec.channels], "seed": rec.seed,
-                "excitation": settings.excitation, "excitation_rms_v": settings.excitation_rms,
-                "excitation_band_hz": list(settings.excitation_band),
-                "dac_clipped": e.clipping["dac"], "adc_clipped": e.clipping["adc"],
-                "conditioner_steps": rec.gain_steps,
-                "adc_full_scale_v": rec.adc_full_scale,
+            rows.append(ExperimentRow(
+                model=name, purpose=rec.purpose, samples=d.n_samples,
+                sample_rate_hz=d.fs,
+                driven_channels=[d.input_names[c] for c in rec.channels], seed=rec.seed,
+                excitation=settings.excitation, excitation_rms_v=settings.excitation_rms,
+                excitation_band_hz=list(settings.excitation_band),
+                dac_clipped=e.clipping["dac"], adc_clipped=e.clipping["adc"],
+                conditioner_steps=rec.gain_steps,
+                adc_full_scale_v=rec.adc_full_scale,
                 # the converters' LSB as the experiment applied them [V]
-                "dac_lsb_v": np.atleast_1d(np.asarray(e.lsb["dac"], dtype=float)).tolist(),
-                "adc_lsb_v": np.atleast_1d(lsb).tolist(),
+                dac_lsb_v=np.atleast_1d(np.asarray(e.lsb["dac"], dtype=float)).tolist(),
+                adc_lsb_v=np.atleast_1d(lsb).tolist(),
                 # converter resolution from the LSB the experiment used: 2 FS / 2^bits
-                "adc_bits": [int(round(np.log2(2 * fs / q)))
-                             for fs, q in zip(rec.adc_full_scale, np.atleast_1d(lsb))],
-                "output_rms_v": y_rms.tolist(),
-                "output_rms_fraction_of_range": (y_rms / np.asarray(rec.adc_full_scale)).tolist(),
-                "sensor_snr_db": (20 * np.log10(y_rms / noise)).tolist(),
-                "quantisation_snr_db": (20 * np.log10(y_rms / (lsb / np.sqrt(12)))).tolist(),
-            })
+                adc_bits=[int(round(np.log2(2 * fs / q)))
+                          for fs, q in zip(rec.adc_full_scale, np.atleast_1d(lsb))],
+                output_rms_v=y_rms.tolist(),
+                output_rms_fraction_of_range=(y_rms / np.asarray(rec.adc_full_scale)).tolist(),
+                sensor_snr_db=(20 * np.log10(y_rms / noise)).tolist(),
+                quantisation_snr_db=(20 * np.log10(y_rms / (lsb / np.sqrt(12)))).tolist(),
+            ))
     return rows
-
-
-def _f(x, fmt=".2f"):
-    return "-" if x is None else format(x, fmt)
-
-
-def report_markdown(s: dict) -> str:
-    """The human-readable report (Markdown) from the summary."""
-    # Long: a report template, read best top to bottom in the order of the report.
-    st, pl = s["settings"], s["plant"]
-    L = ["# trussid demo: PLID on the simulated testbed", ""]
-    L += provenance_lines(s.get("provenance") or {})
-    L += [f"Run: {'quick' if st['quick'] else 'full'}; total {s['timings_s']['total']:.1f} s "
-          f"(plant {s['timings_s']['plant']:.1f} s, experiments "
-          f"{s['timings_s']['experiments']:.1f} s, identification "
-          f"{s['timings_s']['identification']:.1f} s, evaluation "
-          f"{s['timings_s']['evaluation']:.1f} s).", ""]
-    L += ["## Plant", "",
-          f"Default testbed, {pl['modes']} modes below Nyquist, modal damping "
-          f"{100 * pl['modal_damping']:.2f} %; discrete plant of {pl['states']} states, "
-          f"{len(pl['inputs'])} D/A channels ({', '.join(pl['inputs'])}) to "
-          f"{len(pl['outputs'])} accelerometers ({', '.join(pl['outputs'])}) at "
-          f"{pl['sample_rate_hz']:g} Hz, with the smoothing filter, amplifier and "
-          f"{pl['lab']['filters']['lowpass_cutoff']:g} Hz "
-          f"low-pass. Accelerometers {1000 * pl['accelerometer_sensitivity_v_per_g']:.0f} mV/g, "
-          f"signal conditioner gain {pl['conditioning_gain']:g} V/V; "
-          f"{pl['converter_bits']}-bit converters, +-{pl['converter_full_scale_v']:g} V; "
-          f"sensor noise {1e6 * pl['sensor_noise_g_rms']:.0f} ug RMS "
-          f"({1e3 * pl['sensor_noise_v_rms']:.2f} mV at the nominal gain).", ""]
-    L += ["## Experiments", "",
-          f"Excitation: {st['excitation']} noise, {st['excitation_band'][0]:g}-"
-          f"{st['excitation_band'][1]:g} Hz, {st['excitation_rms']:g} V RMS per driven "
-          "channel. Conditioners ranged in 1-2-5 steps to about "
-          f"{st['range_target']:.2f} of full scale at most.", "",
-          "| record | samples | driven | D/A clipped | A/D clipped | gain steps | "
-          "RMS / range | sensor SNR [dB] | quantisation SNR [dB] |",
-          "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for r in s["experiments"]:
-        L.append(f"| {r['model']} {r['purpose']} | {r['samples']} | "
-                 f"{', '.join(r['driven_channels'])} | {sum(r['dac_clipped'])} | "
-                 f"{', '.join(map(str, r['adc_clipped']))} | "
-                 f"{', '.join(f'{g:g}' for g in r['conditioner_steps'])} | "
-                 f"{', '.join(f'{v:.2f}' for v in r['output_rms_fraction_of_range'])} | "
-                 f"{', '.join(f'{v:.1f}' for v in r['sensor_snr_db'])} | "
-                 f"{', '.join(f'{v:.1f}' for v in r['quantisation_snr_db'])} |")
-    L += ["", "## Identified models", "",
-          "One-step signal-to-prediction-error ratio (SPE) on the validation record, as the "
-          "thesis defines it: the RMS of the sensor signals over the RMS of the one-step "
-          "prediction error, over all sensors and samples (`10 log10(sum y^2 / sum e^2)`, "
-          "volts at the A/D; `plid.metrics`). Beside it, per output, and the mean of the "
-          "normalised error powers (`-10 log10(mean_j MS(e_j)/MS(y_j))`, dominated by the "
-          "weakest output: in a SIMO record the two accelerometers away from the driven "
-          "vertex are limited by sensor noise to 38-50 dB). FRF errors are against the "
-          f"true plant over {st['frf_band'][0]:g}-{st['frf_band'][1]:g} Hz.", "",
-          "Every score in this table is on the **validation** record (a separate record "
-          "with its own seed), never on the record the model was fitted to; the simulation "
-          "fit runs the model from the inputs alone (no measured outputs fed back), "
-          "against the noise-free outputs. Phase errors are against the true plant, "
-          "magnitude and phase separately. \"Modes found\" counts the true structural "
-          "modes in the FRF band (the filter poles excluded) matched within "
-          "5 % in frequency; the next section lists the rest.", "",
-          "| model | kind | states | in x out | SPE, validation [dB] | SPE per output [dB] | "
-          "SPE mean-normalised [dB] | simulation fit, validation [dB] | FRF max / RMS [dB] | "
-          "phase max / RMS [deg] | H1 vs true RMS [dB] | modes found (in band) | seconds |",
-          "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for m in s["models"]:
-        mc = m.get("modes_check") or {}
-        L.append(f"| {m['name']} | {m['kind']} | {m['states']} | {m['inputs']} x "
-                 f"{m['outputs']} | {_f(m['signal_to_prediction_error_db'])} | "
-                 f"{', '.join(_f(v, '.1f') for v in m['signal_to_prediction_error_db_per_output'])}"
-                 f" | {_f(m['signal_to_prediction_error_db_mean_normalised'])} | "
-                 f"{_f(m.get('simulation_fit_db'))} | "
-                 f"{_f(m['frf_max_error_db'])} / {_f(m['frf_rms_error_db'])} | "
-                 f"{_f(m.get('frf_max_error_deg'), '.1f')} / {_f(m.get('frf_rms_error_deg'), '.1f')} | "
-                 f"{_f(m['h1_error_vs_true']['rms_db'])} | "
-                 f"{mc.get('found', '-')} / {mc.get('total', '-')} | "
-                 f"{m['seconds']:.1f} |")
-    L += lacks_lines(s)
-    L += ["", "## How each model was identified", "",
-          "`plid.multipass.identify_reduced`: PLID at the model's order and at higher "
-          "orders reduced to it (input-weighted balanced truncation, then one PLID pass); "
-          "the candidate with the best one-step ratio on the *identification* record is "
-          "kept (marked). Candidates with poles outside the unit circle compete with those "
-          "poles reflected in (`stabilised`).", ""]
-    for m in s["models"]:
-        ident = m.get("identification") or {}
-        rows = ident.get("candidates") or []
-        L += [f"**{m['name']}**: {m.get('method', '')}", "",
-              "| candidate | one-step, identification record (in-sample) [dB] | seconds |",
-              "| --- | --- | --- |"]
-        for r in rows:
-            mark = " (kept)" if r.get("label") == ident.get("chosen") else ""
-            score = r.get("identification_ratio_db")
-            txt = _f(score) if score is not None else (r.get("error") or "unstable")
-            L.append(f"| {r.get('label', '')}{mark} | {txt} | {r.get('seconds', 0):.1f} |")
-        L.append("")
-    L += ["", "## Figures", ""]
-    for m in s["models"]:
-        n = m["name"]
-        bodes = [f for f in s["files"]["figures"] if f.startswith(f"bode_{n}")]
-        L += [f"### {n}", ""]
-        L += [f"![Bode overlay]({b})" for b in bodes]
-        L += ["", f"![poles and zeros](poles_{n}.png)", "",
-              f"![measured vs predicted](trace_{n}.png)", "",
-              "Poles in the FRF band (true -> identified):", "",
-              "| true f [Hz] | true damping | identified f [Hz] | identified damping |",
-              "| --- | --- | --- | --- |"]
-        lo, hi = st["frf_band"]
-        for r in m["poles"]:
-            if r["true_frequency_hz"] is not None and lo <= r["true_frequency_hz"] <= hi:
-                L.append(f"| {r['true_frequency_hz']:.2f} | {r['true_damping']:.5f} | "
-                         f"{_f(r['frequency_hz'])} | {_f(r['damping'], '.5f')} |")
-        L.append("")
-    L += ["### Convergence", "", "![convergence](convergence.png)", "",
-          "The top panel is the *mean-normalised* one-step ratio of each model's last PLID "
-          "pass on its identification record (in-sample), not the headline SPE of the table "
-          "above.", ""]
-    L += ["## Files", "", "Data: " + ", ".join(s["files"]["data"]), "",
-          "Models: " + ", ".join(s["files"]["models"]), "",
-          "All metrics: `summary.json`.", ""]
-    return "\n".join(L)
-
-
-def provenance_lines(pv: dict) -> list:
-    """The report's provenance paragraph."""
-    if not pv:
-        return []
-    load = pv.get("load_average_start")
-    return ["## Provenance", "",
-            f"trussid {pv.get('trussid_version')}, commit {pv.get('commit') or 'unknown'}; "
-            f"seed {pv.get('seed')}; command `{pv.get('command') or '(from Python)'}`; "
-            f"machine {pv.get('machine')} ({pv.get('platform')}, {pv.get('cpus')} CPUs, Python "
-            f"{pv.get('python')}), load average "
-            f"{'-' if not load else ', '.join(f'{v:.2f}' for v in load)} at the start; "
-            f"{pv.get('date_utc')}. The seconds below depend on that load.", ""]
-
-
-def lacks_lines(s: dict) -> list:
-    """What each model lacks (true modes missing) and adds (spurious or lightly damped
-    poles anywhere, reflected poles), and the H1 coherence."""
-    # Long: one report section, read top to bottom.
-    L = ["", "## What the models lack, and what they add", ""]
-    for m in s["models"]:
-        mc = m.get("modes_check")
-        if not mc:
-            continue
-        lo, hi = mc["band_hz"]
-        xlo, xhi = mc["excited_band_hz"]
-        L += [f"**{m['name']}**: found {mc['found']} of the {mc['total']} true structural "
-              f"modes in {lo:g}-{hi:g} Hz ({mc['filter_poles_in_band']} filter/amplifier "
-              "poles in the band are not counted)."]
-        if mc["missing"]:
-            L += [f"Missing ({len(mc['missing'])}): "
-                  + ", ".join(f"{f:.2f} Hz" for f in mc["missing"]) + "."]
-        else:
-            L += ["Missing: none."]
-        st = m.get("stabilised") or {}
-        if st.get("applied"):
-            L += [f"Stabilised: {st.get('reflected_poles', 0)} unstable pole(s) reflected into "
-                  "the unit circle (magnitude kept, phase changed)."]
-        if m.get("unstable_poles"):
-            L += [f"**Unstable**: {m['unstable_poles']} pole(s) on or outside the unit circle."]
-        rows = {(e["frequency_hz"], e["damping"]): e for e in mc["spurious"] + mc["lightly_damped"]}
-        L += [""]
-        if rows:
-            L += ["Spurious modes (no true mode within 5 %) and lightly damped modes "
-                  f"(damping under {100 * mc['rules']['light_damping_below']:g} %), anywhere "
-                  f"up to Nyquist (excited band {xlo:g}-{xhi:g} Hz):", "",
-                  "| identified f [Hz] | damping [%] | nearest true mode [Hz] | spurious | "
-                  "in excited band |", "| --- | --- | --- | --- | --- |"]
-            for (f, z), e in sorted(rows.items()):
-                near = "-" if e["nearest_true_hz"] is None else f"{e['nearest_true_hz']:.2f}"
-                L.append(f"| {f:.2f} | {100 * z:.3f} | {near} | "
-                         f"{'yes' if e['spurious'] else 'no'} | "
-                         f"{'yes' if e['in_excited_band'] else '**no**'} |")
-        else:
-            L += ["No spurious or lightly damped identified modes."]
-        coh = m.get("h1_coherence")
-        if coh:
-            above = coh.get("mean_above_excited_band")
-            L += ["", f"H1 multiple coherence, mean per output: "
-                  + ", ".join(f"{v:.3f}" for v in coh["mean_in_excited_band"])
-                  + f" in the excited band {xlo:g}-{xhi:g} Hz"
-                  + ("; " + ", ".join(f"{v:.3f}" for v in above)
-                     + " above it, where the H1 estimate is noise (shaded band in the Bode "
-                       "plots)" if above else "") + "."]
-        L += [""]
-    return L
 
 
 __all__ = ["DemoSettings", "demo_settings", "build_plant", "run_experiments", "take_record",
