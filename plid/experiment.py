@@ -26,8 +26,9 @@ import control
 import numpy as np
 import scipy.signal
 
-from trussid.plid.datafile import IOData
+from trussid.plid.data import IOData
 from trussid.plid.errors import DataError
+from trussid.plid.stability import require_stable
 
 EXCITATIONS = ("white", "prbs", "chirp", "multisine")
 
@@ -344,7 +345,6 @@ def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: s
         if bits is not None and full is None:
             raise DataError(f"{which}_bits={bits} needs {which}_full_scale, the converter's "
                             "range +-V")
-    from trussid.plid.stability import require_stable
 
     require_stable(plant, "the plant", "a simulation of it diverges")
     fs = 1.0 / plant.dt
