@@ -77,6 +77,7 @@ import scipy.sparse as sp
 from trussid.fem.assembly import System, assemble
 from trussid.fem.elements import frame_matrices, local_axes
 from trussid.fem.errors import ModelError
+from trussid.fem.modal import Modes
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
 
@@ -639,6 +640,49 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
     return np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi), X
 
 
+def design_at_walls(tbm: TestbedModel, basis: WallBasis, walls, n_modes: int = 30
+                    ) -> tuple[TestbedModel, Modes]:
+    """The testbed at other strut walls, without rebuilding it: its FE model and its modes.
+
+    Parameters
+    ----------
+    tbm : TestbedModel
+        The testbed at the reference walls.
+    basis : WallBasis
+        Its wall basis (:func:`wall_basis` of ``tbm``).
+    walls : (6,) float
+        Wall thicknesses [m], each in ``(0, r_out)``.
+    n_modes : int
+        Lowest modes wanted.
+
+    Returns
+    -------
+    design : TestbedModel
+        ``tbm`` at ``walls``: a real :class:`trussid.fem.Model` whose strut elements have the
+        tube's ``A_t``, ``I_t`` (``J_t = 2 I_t``) moved by :meth:`WallBasis.coefficients`
+        (the one rule of how a wall changes a section), and ``testbed.struts.walls`` set.
+    modes : fem.modal.Modes
+        Its lowest modes from the wall basis (:func:`wall_modes`), mass-normalised.
+    """
+    w = basis.check_walls(walls)
+    dA, dI = basis.coefficients(w)
+    b = tbm.model.beams
+    strut = tbm.map.strut_of_element(b.ids)
+    on = strut >= 0
+    da, di = np.zeros(len(strut)), np.zeros(len(strut))
+    da[on], di[on] = dA[strut[on]], dI[strut[on]]
+    model = tbm.model.with_beam_sections(b.A + da, b.Iy + di, b.Iz + di, b.J + 2 * di)
+    f, X = wall_modes(basis, w, n_modes)
+    system = basis.system
+    modes = Modes(frequencies_hz=f, omega=2 * np.pi * f, shapes=X, shapes_full=system.T @ X,
+                  node_ids=system.node_ids, xyz=system.xyz, n_dof=basis.n,
+                  method="dense" if basis.n <= DENSE_MAX_DOF else "shift-invert")
+    design = TestbedModel(model=model, map=tbm.map,
+                          testbed=tbm.testbed.with_walls(tuple(float(v) for v in w)),
+                          elements_per_segment=tbm.elements_per_segment)
+    return design, modes
+
+
 def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | None = None,
                         max_frequency_hz: float | None = None):
     """Lowest modes of a testbed model as :class:`trussid.fem.modal.Modes`, by dense subset
@@ -652,8 +696,6 @@ def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | N
     modes below a frequency by value, which the plant uses. The testbed has no
     zero-frequency mode (clamped, or hung on bungees).
     """
-    from trussid.fem.modal import Modes
-
     system = assemble(tbm.model) if system is None else system
     if system.n_dof > DENSE_MAX_DOF:
         return _sparse_modes(system, n_modes, max_frequency_hz)
@@ -689,4 +731,4 @@ def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | N
 
 __all__ = ["TestbedMap", "solve_testbed_modes", "TestbedModel", "build_testbed", "strut_stations", "tube_properties",
            "tube_property_derivatives", "adapter_constant_properties", "WallBasis", "wall_basis",
-           "wall_matrices", "wall_modes", "ELEMENTS_PER_SEGMENT", "DENSE_MAX_DOF"]
+           "wall_matrices", "wall_modes", "design_at_walls", "ELEMENTS_PER_SEGMENT", "DENSE_MAX_DOF"]
