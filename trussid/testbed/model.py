@@ -68,7 +68,7 @@ rigid-body work per design.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as la
@@ -77,7 +77,7 @@ import scipy.sparse as sp
 from trussid.fem.assembly import System, assemble
 from trussid.fem.elements import frame_matrices, local_axes
 from trussid.fem.errors import ModelError
-from trussid.fem.modal import Modes
+from trussid.fem.modal import Modes, solve_modes
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
 
@@ -496,6 +496,35 @@ class WallBasis:
         out[self.rows, self.cols] = data
         return out
 
+    def projected(self, V: np.ndarray) -> "WallBasis":
+        """The basis Ritz-projected onto the columns of ``V`` (n, r): every matrix ``B``
+        becomes ``V^T B V``, stored densely (the pattern is all ``(r, c)``).
+
+        The result is still affine in the tube properties, so it is exact in how the walls
+        enter and :func:`wall_modes` and the wall sensitivities work on it unchanged; its
+        only error is the Ritz error of the fixed subspace. Its shapes are amplitudes of
+        ``V``'s columns: ``V q`` expands them to this basis's DOFs (``system`` stays the
+        full model's).
+
+        Raises
+        ------
+        ModelError
+            If ``V`` is not (n, r) with 1 <= r <= n.
+        """
+        V = np.asarray(V, float)
+        if V.ndim != 2 or V.shape[0] != self.n or not 1 <= V.shape[1] <= self.n:
+            raise ModelError(f"a Ritz basis for {self.n} DOFs must be ({self.n}, r) with "
+                             f"1 <= r <= {self.n}, got shape {V.shape}")
+        r = V.shape[1]
+
+        def proj(data):
+            return (V.T @ (self.sparse(data) @ V)).ravel()
+
+        rr, cc = np.divmod(np.arange(r * r), r)
+        return replace(self, n=r, rows=rr, cols=cc, K_ref=proj(self.K_ref), M_ref=proj(self.M_ref),
+                       KA=np.array([proj(d) for d in self.KA]), KI=np.array([proj(d) for d in self.KI]),
+                       MA=np.array([proj(d) for d in self.MA]), MI=np.array([proj(d) for d in self.MI]))
+
 
 def _reduced_data(T: sp.csr_matrix, Tt: sp.csr_matrix, blocks: np.ndarray, dofs: np.ndarray, n_full: int):
     """``T^T B T`` of element blocks summed into full DOFs, as a COO-ish (rows, cols, data)."""
@@ -579,10 +608,6 @@ DENSE_MAX_DOF = 600
 def _sparse_modes(system: System, n_modes: int, max_frequency_hz: float | None):
     """:func:`trussid.fem.modal.solve_modes` for a count, or for every mode below a
     frequency by doubling the count until one lies above it."""
-    from dataclasses import replace
-
-    from trussid.fem.modal import solve_modes
-
     if max_frequency_hz is None:
         return solve_modes(system, n_modes)
     k = max(int(n_modes), 1)
@@ -623,8 +648,6 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
         ``shapes.T @ M @ shapes = I`` on the reduced DOFs (``basis.system.T`` expands them).
     """
     if basis.n > DENSE_MAX_DOF:
-        from dataclasses import replace
-
         k_data, m_data = basis.data(walls)
         system = replace(basis.system, K=basis.sparse(k_data), M=basis.sparse(m_data))
         modes = _sparse_modes(system, n_modes, None)
