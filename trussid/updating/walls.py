@@ -15,7 +15,7 @@ from trussid.plid.greybox import fit_parameters
 from trussid.plid.modal import mac as modal_assurance
 from trussid.plid.modal import mode_groups, pair_modes
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.model import WallBasis, build_testbed, solve_testbed_modes, wall_basis, wall_modes
+from trussid.testbed.model import WallBasis, build_testbed, design_at_walls, wall_basis, wall_modes
 from trussid.updating.errors import UpdateError
 from trussid.updating.fit import (WALL_NAMES, WallPairing, cluster_span, damping_estimate, global_fit,
                                   wall_intervals)
@@ -169,7 +169,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         identified pole may be any blend of them; a strut's two bending planes are
         0.05-0.1 Hz apart).
     labels : bool
-        Label the paired modes (builds the model at the updated walls: ~1 s).
+        Label the paired modes (on the design at the updated walls, by the wall basis).
     threads : int or None
         BLAS threads during the fits (:func:`trussid._util.threads.blas_threads`; None leaves
         the setting). One by default: the fits are thousands of small eigen-solutions,
@@ -239,7 +239,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         zeta, ziv = damping_estimate(m.z_all, m.zsig_all, used, unres, f, confidence)
         idx_used = np.flatnonzero(used)
         k_all = m.f_all.size
-        lab = _labels(tb, tbm, walls, n_model, idx_used, j, k_all) if labels else [""] * k_all
+        lab = _labels(tbm, basis, walls, n_model, idx_used, j, k_all) if labels else [""] * k_all
         return UpdateReport(
             walls=walls, nominal=nominal, intervals=intervals, std_log=std_log, interval_source=source,
             measured_hz=m.f_all, used=used, pairing=_scatter(j, idx_used, k_all, fill=-1, dtype=int),
@@ -325,12 +325,12 @@ def _unresolved(full_modes: ModelModes, start: dict, f, zeta, sh, allowed, zeta_
     return span / math.sqrt(3)
 
 
-def _labels(tb, tbm, walls, n_model, idx_used, j, k_all) -> list:
-    """The label of the model mode paired with each measured mode, on the model rebuilt at
-    the updated walls (~1 s)."""
-    tbm_u = build_testbed(tb.with_walls(tuple(float(x) for x in walls)),
-                          elements_per_segment=tbm.elements_per_segment)
-    ml = label_testbed_modes(tbm_u, solve_testbed_modes(tbm_u, n_model)).labels
+def _labels(tbm, basis, walls, n_model, idx_used, j, k_all) -> list:
+    """The label of the model mode paired with each measured mode, on the design at the
+    updated walls (:func:`trussid.testbed.model.design_at_walls`: the same wall-basis modes
+    the fit paired, so mode ``j`` is the one paired)."""
+    design, modes = design_at_walls(tbm, basis, walls, n_model)
+    ml = label_testbed_modes(design, modes).labels
     lab = [""] * k_all
     for i, jj in zip(idx_used, j):
         lab[i] = ml[jj]
