@@ -59,13 +59,14 @@ def main() -> None:
 
     import control
 
-    from trussid.campaign.control import (control_study, report_markdown, summary, truths)
+    from trussid.campaign.control import (LoopSettings, control_study, report_markdown, summary,
+                                          truths)
     from trussid._util.jsonio import json_safe
     from trussid.campaign.demo import build_plant, demo_settings, identify_model, run_experiments
 
     load0 = os.getloadavg()
     settings = demo_settings(quick=args.quick, simo_channels=())
-    tp = build_plant(settings)
+    tp = build_plant()
     rid, _ = run_experiments(tp, settings)["mimo"]
     d = rid.data
     fit, w_id, c_id = timed(identify_model, d.u, d.y, settings.mimo_order, d.dt,
@@ -74,7 +75,8 @@ def main() -> None:
     model = control.ss(m.A, m.B, m.C, m.D, m.dt, inputs=d.input_names, outputs=d.output_names)
     plants, w_tr, c_tr = timed(truths, stretch=True)
     study, w_st, c_st = timed(control_study, model, d.u, d.y, K=fit.K, plants=plants,
-                              baselines=True, progress=print)
+                              baselines=True, settings=LoopSettings.for_lab(tp.lab),
+                              progress=print)
     load1 = os.getloadavg()
     t = study["timings_s"]
     kind = "quick (18 states)" if args.quick else "full (36 states)"
