@@ -76,6 +76,7 @@ its data gives one strong mode per strut, with a shape that names the strut.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 
 import control
@@ -88,6 +89,15 @@ from trussid._util.errors import UserError
 from trussid.plid.errors import DataError
 from trussid.plid.modal import mac as modal_assurance
 from trussid.plid.modal import mode_groups, pair_modes, pole_parameters, pole_std
+from trussid._util.threads import blas_threads
+from trussid.fem.sensors import sensor_matrix
+from trussid.geometry.spec import Testbed
+from trussid.plid.estimator import PLIDWarning
+from trussid.plid.greybox import fit_parameters
+from trussid.plid.multipass import identify
+from trussid.testbed.labels import label_testbed_modes
+from trussid.testbed.model import build_testbed, solve_testbed_modes, wall_basis, wall_matrices, wall_modes
+from trussid.testbed.sensitivity import eigenvalue_sensitivities
 
 __all__ = [
     "UpdateError",
@@ -312,8 +322,6 @@ def reduced_wall_basis(basis, n_vectors: int = 40, designs=(1.0, 0.85, 1.15)):
     V : (n, r) float
         The projection (reduced shapes ``q`` expand to ``V q``).
     """
-    from trussid.testbed.model import wall_matrices
-
     k = min(int(n_vectors), basis.n)
     cols = []
     for d in designs:
@@ -346,9 +354,6 @@ class _ModelModes:
         self.evaluations = 0
 
     def __call__(self, walls):
-        from trussid.testbed.model import wall_modes
-        from trussid.testbed.sensitivity import eigenvalue_sensitivities
-
         w = np.asarray(walls, float)
         key = w.tobytes()
         if key != self._key:
@@ -459,11 +464,6 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
         ``identification`` (full record), ``segment_models``, ``std_fallback`` (modes
         whose PLID variance was not positive and took the largest of the others).
     """
-    import warnings
-
-    from trussid.plid.estimator import PLIDWarning
-    from trussid.plid.multipass import identify
-
     if uncertainty not in ("plid", "segments", "none"):
         raise UpdateError(f"uncertainty must be 'plid', 'segments' or 'none', got {uncertainty!r}")
     u = np.asarray(u, float).reshape(len(u), -1)
@@ -599,8 +599,6 @@ def _global_fit(residual, jac, initial, lo, hi, n_starts, seed, confidence, know
     threshold; with unknown sigma, the residual variance of the best fit): an arrangement
     the data cannot decide.
     """
-    from trussid.plid.greybox import fit_parameters
-
     bnds = {n: (a, b) for n, a, b in zip(WALL_NAMES, lo, hi)}
     best = fit_parameters(residual, initial, bounds=bnds, jac=jac, n_starts=n_starts, seed=seed,
                           confidence=confidence, min_obs=1)
@@ -794,12 +792,6 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
     # Long: the procedure (gate, stage-1 global fit, unresolved-mode sigma, stage-2 fit)
     # shares the pairing closures below between its stages; input checks, intervals and
     # damping are their own functions, the rest would pass a dozen arrays between steps.
-    from trussid.fem.sensors import sensor_matrix
-    from trussid.testbed.model import build_testbed, wall_basis, wall_modes
-    from trussid.geometry.spec import Testbed
-    from trussid.plid.greybox import fit_parameters
-    from trussid._util.threads import blas_threads
-
     f_all, sig_all, z_all, zsig_all, sh_all = _checked_inputs(
         measured_freqs_hz, frequency_std_hz, damping, damping_std, shapes, sensors, prior_range,
         confidence)
@@ -936,9 +928,6 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
             mac_all[idx_used] = mac[np.arange(k), j]
         lab = [""] * k_all
         if labels:
-            from trussid.testbed.labels import label_testbed_modes
-            from trussid.testbed.model import solve_testbed_modes
-
             tbm_u = build_testbed(tb.with_walls(tuple(float(x) for x in walls)),
                                   elements_per_segment=tbm.elements_per_segment)
             ml = label_testbed_modes(tbm_u, solve_testbed_modes(tbm_u, n_model)).labels

@@ -44,6 +44,7 @@ from scipy.optimize import linear_sum_assignment
 
 from .errors import ControlError
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
+from trussid.plid.metrics import choose_predictor
 
 FORMS = ("predictor", "filter")
 ESTIMATORS = ("record", "model")
@@ -245,8 +246,6 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     """
     # One function over 80 lines: the four steps of the recipe (module docstring) in order,
     # with the input checks before them; each step is a few lines calling a helper.
-    from trussid.plid.metrics import choose_predictor
-
     if not (isinstance(target_damping, (int, float)) and 0 < target_damping < 1):
         raise ControlError(f"target damping must lie in (0, 1), got {target_damping!r}")
     if form not in FORMS:

@@ -79,6 +79,10 @@ from trussid.fem.elements import frame_matrices, local_axes
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
+from trussid.fem.modal import solve_modes
+from trussid.geometry.layout import testbed_layout
+from trussid.geometry.solids import base_rigid_body, udf_rigid_body
+from trussid.geometry.spec import Testbed
 
 #: Default number of frame elements on each bare tube segment (base-adapter, adapter-top).
 #: Chosen by a mesh study (tests/fem/test_testbed.py): doubling it moves no frequency below
@@ -314,10 +318,6 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
     """
     # Long: the testbed is built in the order it is assembled in the lab (struts, adapters,
     # flexures, UDF, base, bungees, sensors), each step adding to the same model and map.
-    from trussid.geometry.layout import testbed_layout
-    from trussid.geometry.solids import base_rigid_body, udf_rigid_body
-    from trussid.geometry.spec import Testbed
-
     tb = Testbed() if tb is None else tb
     lay = testbed_layout(tb)
     s, kinds = strut_stations(tb, elements_per_segment)
@@ -579,8 +579,6 @@ def _sparse_modes(system: System, n_modes: int, max_frequency_hz: float | None):
     """:func:`trussid.fem.modal.solve_modes` for a count, or for every mode below a
     frequency by doubling the count until one lies above it."""
     from dataclasses import replace
-
-    from trussid.fem.modal import solve_modes
 
     if max_frequency_hz is None:
         return solve_modes(system, n_modes)
