@@ -296,6 +296,25 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         identification data (:func:`trussid.plid.metrics.best_predictor`: candidates
         ``K = 0``, i.e. free-run simulation, the recursion's own gain and steady-state
         Kalman gains); ``provenance.predictor`` lists them with their scores.
+
+    Examples
+    --------
+    Two modes, 50 and 120 Hz at 2 % damping, sampled at 1 kHz: PLID recovers them from 2000
+    samples of white-noise response.
+
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import excitation, identify, modal_table, simulate
+    >>> s = control.tf("s")
+    >>> G = sum(g * (2 * np.pi * f) ** 2 / (s**2 + 0.04 * 2 * np.pi * f * s + (2 * np.pi * f) ** 2)
+    ...         for f, g in ((50.0, 1.0), (120.0, 0.5)))
+    >>> plant = control.c2d(control.ss(G), 1e-3)
+    >>> u = excitation("white", 2000, fs=1000.0, seed=1)
+    >>> y = simulate(plant, u)
+    >>> fit = identify(u, y, order=4, dt=1e-3, progress=False)
+    >>> modes = modal_table(fit.model)
+    >>> print(np.round(modes.frequencies_hz, 2), np.round(100 * modes.damping, 2))
+    [ 50. 120.] [2. 2.]
     """
     u, y = check_data(u, y, dt)
     p = y.shape[1]
