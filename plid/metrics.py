@@ -25,19 +25,22 @@ FRF error
 Poles
     Discrete poles z map to s = ln(z) / dt; frequency |s| / 2 pi [Hz], damping -Re(s)/|s|.
     Identified and true poles (one of each complex pair) are matched by minimum total
-    s-plane distance (Hungarian assignment, scipy.optimize.linear_sum_assignment).
+    s-plane distance (Hungarian assignment, :func:`trussid.plid.modal.assign_pairs`).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import control
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 
+from trussid.plid._linalg import lstsq, modal_regressors
 from trussid.plid.errors import DataError
 from trussid.plid.experiment import simulate
 from trussid.plid.frf import FRF, frequency_response
+from trussid.plid.modal import assign_pairs, pole_parameters, s_plane
 
 
 def _check_sizes(sys, u, y=None):
@@ -175,9 +178,7 @@ def _long_ar_innovations(r: np.ndarray, lags: int) -> np.ndarray:
     N, p = r.shape
     lags = int(max(1, min(lags, (N // 4) // max(p, 1))))
     Phi = np.hstack([r[lags - i - 1:N - i - 1] for i in range(lags)])   # (N - lags, p lags)
-    from trussid.plid.subspace import _lstsq
-
-    coef = _lstsq(Phi, r[lags:])
+    coef = lstsq(Phi, r[lags:])
     e = np.zeros_like(r)
     e[lags:] = r[lags:] - Phi @ coef
     return e
@@ -200,7 +201,6 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: 
     list of ndarray (n, p)
         The gain after each iteration whose predictor ``A - K C`` is stable.
     """
-    from trussid.plid.subspace import _lstsq, _modal_regressors
 
     u, y = _check_sizes(model, u, y)
     A, C = np.asarray(model.A, float), np.asarray(model.C, float)
@@ -217,9 +217,9 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: 
     for it in range(iterations):
         if it:
             e = y - one_step_predict(model, u, y, K=K)
-        R = _modal_regressors(A, C, e, x0=True)          # (N, p, n p + n)
+        R = modal_regressors(A, C, e, x0=True)          # (N, p, n p + n)
         Rm = (R * w[None, :, None]).reshape(-1, R.shape[2])
-        theta = _lstsq(Rm, ((y - y_u - e) * w).ravel())
+        theta = lstsq(Rm, ((y - y_u - e) * w).ravel())
         K = theta[: n * p].reshape(p, n).T
         if not _stable_predictor(A, C, K):
             break
@@ -379,16 +379,6 @@ def simulation_fit(sys, u, y_clean, skip: int = 0) -> dict:
             "nrmse_percent": nrmse.tolist()}
 
 
-def s_plane(poles, dt: float | None) -> np.ndarray:
-    """Continuous-time (s-plane) images of poles: ``s = ln(z) / dt`` for a discrete model
-    (``dt`` > 0), the poles themselves for a continuous one (``dt`` None or 0)."""
-    poles = np.asarray(poles)
-    if not dt:
-        return poles.astype(complex)
-    z = np.where(np.abs(poles) < 1e-300, 1e-300, poles)
-    return np.log(z.astype(complex)) / dt
-
-
 def modal_parameters(sys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frequencies [Hz], damping ratios and s-plane poles of ``sys``, one per complex pair.
 
@@ -404,11 +394,9 @@ def modal_parameters(sys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     keep = s.imag >= -1e-12 * np.maximum(np.abs(s), 1)
     s = s[keep]
     s = np.where(np.abs(s.imag) < 1e-12 * np.maximum(np.abs(s), 1), s.real + 0j, s)
-    wn = np.abs(s)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        zeta = np.where(wn > 0, -s.real / wn, 1.0)
-    order = np.argsort(wn, kind="stable")
-    return wn[order] / (2 * np.pi), zeta[order], s[order]
+    f, zeta, _ = pole_parameters(s)
+    order = np.argsort(np.abs(s), kind="stable")
+    return f[order], zeta[order], s[order]
 
 
 def prediction_burn_in(model, K, n_samples: int) -> int:
@@ -437,7 +425,34 @@ def prediction_burn_in(model, K, n_samples: int) -> int:
     return int(min(max(k, 10 * n), n_samples // 4))
 
 
-def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) -> list[dict]:
+@dataclass(frozen=True)
+class PoleMatch:
+    """One row of a pole comparison: a true pole, its identified match, or both.
+
+    Attributes
+    ----------
+    true_frequency_hz, true_damping : float or None
+        The true pole's frequency [Hz] and damping ratio [-]; None for an identified pole
+        that matches no true one (or when there is no truth).
+    frequency_hz, damping : float or None
+        The identified pole's; None for a true pole that nothing identified matches.
+    frequency_error_percent : float or None
+        ``100 (f - f_true) / f_true`` of a matched pair.
+    """
+
+    true_frequency_hz: float | None = None
+    true_damping: float | None = None
+    frequency_hz: float | None = None
+    damping: float | None = None
+    frequency_error_percent: float | None = None
+
+    @property
+    def matched(self) -> bool:
+        """A true pole with its identified match."""
+        return self.true_frequency_hz is not None and self.frequency_hz is not None
+
+
+def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) -> list[PoleMatch]:
     """Match identified poles to true ones and list frequencies and damping side by side.
 
     Parameters
@@ -450,11 +465,9 @@ def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) 
 
     Returns
     -------
-    list of dict
-        One per true pole (sorted by true frequency) with ``true_frequency_hz``,
-        ``true_damping``, ``frequency_hz``, ``damping`` (None when unmatched) and
-        ``frequency_error_percent``; unmatched identified poles follow with the true fields
-        None.
+    list of PoleMatch
+        One per true pole (sorted by true frequency), its identified fields None when
+        unmatched; unmatched identified poles follow with the true fields None.
     """
     fi, zi, si = modal_parameters(identified)
     ft, zt, st = modal_parameters(truth)
@@ -462,25 +475,20 @@ def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) 
     match = {}
     if si.size and st.size:
         cost = np.abs(si[:, None] - st[None, :])
-        r, c = scipy.optimize.linear_sum_assignment(cost)
-        for i, j in zip(r.tolist(), c.tolist()):
-            if max_relative_distance is None or cost[i, j] <= max_relative_distance * abs(st[j]):
+        for i, j in enumerate(assign_pairs(cost).tolist()):
+            if j >= 0 and (max_relative_distance is None
+                           or cost[i, j] <= max_relative_distance * abs(st[j])):
                 match[j] = i
     for j in range(st.size):
         i = match.get(j)
-        row = {"true_frequency_hz": float(ft[j]), "true_damping": float(zt[j]),
-               "frequency_hz": None, "damping": None, "frequency_error_percent": None}
-        if i is not None:
-            row.update(frequency_hz=float(fi[i]), damping=float(zi[i]),
-                       frequency_error_percent=float(100 * (fi[i] - ft[j]) / ft[j])
-                       if ft[j] > 0 else None)
-        rows.append(row)
+        if i is None:
+            rows.append(PoleMatch(true_frequency_hz=float(ft[j]), true_damping=float(zt[j])))
+        else:
+            rows.append(PoleMatch(float(ft[j]), float(zt[j]), float(fi[i]), float(zi[i]),
+                                  float(100 * (fi[i] - ft[j]) / ft[j]) if ft[j] > 0 else None))
     used = set(match.values())
-    for i in range(si.size):
-        if i not in used:
-            rows.append({"true_frequency_hz": None, "true_damping": None,
-                         "frequency_hz": float(fi[i]), "damping": float(zi[i]),
-                         "frequency_error_percent": None})
+    rows += [PoleMatch(frequency_hz=float(fi[i]), damping=float(zi[i]))
+             for i in range(si.size) if i not in used]
     return rows
 
 
@@ -550,6 +558,6 @@ def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
     return out
 
 
-__all__ = ["predictor_gain", "default_noise_covariances", "one_step_predict",
+__all__ = ["PoleMatch", "predictor_gain", "default_noise_covariances", "one_step_predict",
            "prediction_ratio_db", "choose_predictor", "simulation_fit", "modal_parameters", "compare_poles",
            "frf_error", "prediction_burn_in", "s_plane", "best_predictor", "refine_predictor_gain"]

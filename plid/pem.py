@@ -17,7 +17,7 @@ Gauss-Newton / Levenberg-Marquardt on the maximum-likelihood criterion of Gaussi
 innovations with unknown covariance, ``log det(E^T E / N)`` (MATLAB ``ssest``'s
 ``OutputWeight`` 'noise'), minimised as a weighted sum of squares whose weight is the
 inverse residual covariance re-estimated after every accepted step. The Jacobian is the
-project's modal regressors (:func:`trussid.plid.subspace._modal_regressors`): with
+project's modal regressors (:func:`trussid.plid._linalg.modal_regressors`): with
 ``e = y - yhat``, ``d yhat / d K[t, c] = C (zI - A + K C)^-1 e_t`` applied to ``e_c``, and
 ``d yhat / d x0 = C (A - K C)^k``. A step is rejected when the predictor's spectral radius
 would reach ``margin`` (a predictor at the unit circle forgets its start and its errors
@@ -44,7 +44,7 @@ from trussid.plid.bases import basis_for, model_frequencies
 from trussid.plid.canonical import from_statespace
 from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.experiment import simulate
-from trussid.plid.subspace import _modal_regressors
+from trussid.plid._linalg import modal_regressors
 
 __all__ = ["GainFit", "InnovationsFit", "refine_gain", "refine_innovations",
            "gain_iterations"]
@@ -253,7 +253,7 @@ def refine_gain(model: control.StateSpace, u, y, K0, *, iterations: int | None =
     _, E, Ap, r = evaluate(K, x0, np.eye(p))
     W = _ml_weight(E)
     # x0 first (linear, one least squares): otherwise the first step is spent on the start
-    Jx = _modal_regressors(Ap, C, np.zeros((N, 0)), x0=True)
+    Jx = modal_regressors(Ap, C, np.zeros((N, 0)), x0=True)
     Jxw = (Jx.transpose(0, 2, 1) @ W.T).transpose(0, 2, 1).reshape(N * p, n)
     x0 = np.linalg.lstsq(Jxw, (E @ W.T).ravel(), rcond=None)[0]
     cost, E, Ap, r = evaluate(K, x0, W)
@@ -262,7 +262,7 @@ def refine_gain(model: control.StateSpace, u, y, K0, *, iterations: int | None =
     ld0 = _logdet(E)
     lm, it, converged = 1e-4, 0, False
     for _ in range(iterations):
-        J = _modal_regressors(Ap, C, E, x0=True)      # (N, p, n p + n): vec K, then x0
+        J = modal_regressors(Ap, C, E, x0=True)      # (N, p, n p + n): vec K, then x0
         H, g = _normal_equations(J, E, W)
         for _retry in range(8):
             d = _solve(H, g, lm)

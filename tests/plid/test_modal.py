@@ -1,13 +1,13 @@
 """Modal conventions: MAC, the modal parameter table against a closed-form 2-DOF system,
-and the stabilisation diagram on a simulated structure with known modes."""
+poles as frequency and damping, pairing of two sets of modes."""
 
 import control
 import numpy as np
 import pytest
 import scipy.linalg
 
-from trussid.plid.errors import DataError, IdentificationError
-from trussid.plid.modal import mac, mark_stability, modal_table, stabilisation
+from trussid.plid.errors import DataError
+from trussid.plid.modal import mac, modal_table, mode_groups, pair_modes, pole_parameters
 
 
 def test_mac_of_identical_shapes_is_one_to_1e_12(rng):
@@ -80,71 +80,60 @@ def test_discrete_models_give_the_continuous_frequencies_and_damping():
     np.testing.assert_allclose(modes.damping, zeta, rtol=1e-8)
 
 
-def structure(fs=400.0):
-    """Three lightly damped modes (23, 61, 118 Hz), 2 inputs, 2 outputs, discrete."""
-    f = np.array([23.0, 61.0, 118.0])
-    z = np.array([0.01, 0.015, 0.02])
-    blocks, Bs, Cs = [], [], []
-    rng = np.random.default_rng(5)
-    for fk, zk in zip(f, z):
-        w = 2 * np.pi * fk
-        blocks.append(np.array([[0, 1], [-w * w, -2 * zk * w]]))
-        Bs.append(np.vstack([np.zeros(2), rng.standard_normal(2) * w]))
-        Cs.append(np.column_stack([rng.standard_normal(2) * w, np.zeros(2)]))
-    sysc = control.ss(scipy.linalg.block_diag(*blocks), np.vstack(Bs), np.hstack(Cs),
-                      np.zeros((2, 2)))
-    return control.c2d(sysc, 1 / fs), f, z
+# --------------------------------------------------------------------- pairing
 
 
-def _n4sid(u, y, n, dt):
-    from trussid.plid.subspace import n4sid
-
-    return n4sid(u, y, n, 20, dt).zero_d
-
-
-def test_stabilisation_marks_the_true_modes_stable_and_refuses_nothing_silently(rng):
-    sys, f_true, z_true = structure()
-    u = rng.standard_normal((3000, 2))
-    y = control.forced_response(sys, U=u.T).outputs.T
-    y = y + 1e-4 * np.std(y) * rng.standard_normal(y.shape)
-
-    def identify(u_, y_, n, dt):
-        if n % 2:
-            raise IdentificationError(f"order {n} is not a multiple of the 2 outputs")
-        return _n4sid(u_, y_, n, dt)
-
-    stab = stabilisation(u, y, sys.dt, [6, 7, 8, 10, 12], identify=identify, progress=False,
-                         output_names=["a1", "a2"], input_names=["f1", "f2"])
-    assert stab.orders == [6, 8, 10, 12]
-    assert stab.failed == [(7, "order 7 is not a multiple of the 2 outputs")]
-    assert np.all(stab.status[0] == "new")  # nothing below the first order to compare with
-    # at order 12 a noise pole near 146 Hz matches its neighbour at 10 once: stable for one
-    # step only, where the three true modes have been stable over all 3 steps (6 to 12)
-    assert stab.stable_poles().n_modes == 4
-    assert list(stab.runs[-1][stab.status[-1] == "s"]) == [3, 3, 3, 1]
-    stable = stab.stable_poles(min_run=2)
-    assert stable.n_modes == 3
-    np.testing.assert_allclose(stable.frequencies_hz, f_true, rtol=1e-3)
-    np.testing.assert_allclose(stable.damping, z_true, rtol=5e-2)
-    assert stable.labels == ["a1", "a2"]
+def test_pairing_by_frequency_is_the_order_preserving_assignment():
+    measured = np.array([50.3, 50.1, 80.0])
+    model = np.array([49.0, 50.05, 50.35, 79.0, 120.0])
+    assert pair_modes(measured, model).tolist() == [2, 1, 3]
 
 
-def test_a_pole_that_moves_is_not_stable():
-    from trussid.plid.modal import ModeShapes
+def test_mac_overrides_a_closer_frequency():
+    """Two modes 0.2 % apart: the shape decides, not the frequency."""
+    measured = np.array([50.0])
+    model = np.array([50.0, 50.1])
+    shapes_meas = np.array([[0.0], [1.0j]])  # complex scale is irrelevant to MAC
+    shapes_model = np.array([[1.0, 0.0], [0.0, 2.0]])
+    m = mac(shapes_meas, shapes_model)
+    np.testing.assert_allclose(m, [[0.0, 1.0]])
+    assert pair_modes(measured, model, mac=m).tolist() == [1]
 
-    prev = ModeShapes(np.array([10.0, 50.0]), np.array([0.01, 0.02]), np.eye(2))
-    cur = ModeShapes(np.array([10.05, 52.0]), np.array([0.0102, 0.02]),
-                     np.array([[1.0, 0.0], [0.1, 1.0]]))
-    # 10 Hz: 0.5 % in f, 2 % in damping, MAC 0.990: stable; 50 -> 52 Hz is 4 %: new
-    assert list(mark_stability(prev, cur, 0.01, 0.05, 0.98)) == ["s", "new"]
-    assert list(mark_stability(prev, cur, 0.01, 0.01, 0.98)) == ["fv", "new"]
-    assert list(mark_stability(prev, cur, 0.01, 0.05, 0.995)) == ["fd", "new"]
+
+def test_modes_the_sensors_cannot_separate_take_one_measured_mode():
+    """Two bending planes of one strut (0.06 Hz apart, same shape at the sensors) form a
+    group: two measured modes near them pair with that group and the next strut, not
+    both with the one strut."""
+    model = np.array([50.0, 50.06, 50.2, 50.26])
+    shapes = np.array([[1.0, 0.95, 0.0, 0.05], [0.05, 0.1, 1.0, 0.9]])  # strut A, strut B
+    groups = mode_groups(model, shapes, bandwidth_hz=0.25)
+    assert groups.tolist() == [0, 0, 1, 1]
+    measured = np.array([50.03, 50.05])
+    assert pair_modes(measured, model).tolist() == [0, 1]  # frequency alone: one strut twice
+    got = pair_modes(measured, model, groups=groups)
+    assert sorted(groups[got].tolist()) == [0, 1]
 
 
-def test_stabilisation_with_no_model_at_all_says_why(rng):
-    def never(u, y, n, dt):
-        raise IdentificationError("always fails")
+def test_disallowed_pairs_are_left_unpaired():
+    allowed = np.array([[True, False], [False, False]])
+    assert pair_modes([10.0, 20.0], [10.0, 20.0], allowed=allowed).tolist() == [0, -1]
 
-    with pytest.raises(IdentificationError, match="no order gave a model: order 2: always"):
-        stabilisation(np.ones((10, 1)), np.ones((10, 1)), 1.0, [2], identify=never,
-                      progress=False)
+
+def test_a_shape_no_sensor_sees_has_mac_zero_when_asked():
+    """Pairing asks for MAC 0 where a shape is zero; the default names the mode."""
+    got = mac(np.array([[1.0, 0.0], [0.0, 0.0]]), np.eye(2), zero_shape="zero")
+    np.testing.assert_array_equal(got, [[1.0, 0.0], [0.0, 0.0]])
+    with pytest.raises(DataError, match="mode 2 of the first set"):
+        mac(np.array([[1.0, 0.0], [0.0, 0.0]]), np.eye(2))
+
+
+def test_pole_parameters_are_those_of_the_continuous_pole():
+    """z = exp(s dt) with s = -zeta wn + j wn sqrt(1 - zeta^2): frequency wn / 2 pi and
+    damping zeta come back, and a continuous pole is taken as it is."""
+    wn, zeta, dt = 2 * np.pi * 37.0, 0.02, 1 / 1600
+    s = -zeta * wn + 1j * wn * np.sqrt(1 - zeta**2)
+    f, z, s_back = pole_parameters([np.exp(s * dt)], dt)
+    np.testing.assert_allclose([f[0], z[0]], [37.0, 0.02], rtol=1e-12)
+    np.testing.assert_allclose(s_back, [s], rtol=1e-12)
+    f_c, z_c, _ = pole_parameters([s])
+    np.testing.assert_allclose([f_c[0], z_c[0]], [37.0, 0.02], rtol=1e-12)

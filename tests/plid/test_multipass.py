@@ -72,7 +72,7 @@ def test_scratch_multipass_converges_on_noiseless_data(simo):
     ident = identify(u, y, 6, 1 / FS, start="scratch", R=1e-10)
     err = frf_error(ident.model, simo, band=(30, 790))
     assert err["rms_db"] < 1e-4
-    assert len(ident.info["passes"]) == 4
+    assert len(ident.provenance.passes) == 4
 
 
 def test_a_pass_started_at_the_truth_with_a_tight_prior_stays_there(simo):
@@ -162,18 +162,18 @@ def test_identify_reduced_returns_the_candidate_with_the_best_identification_pre
     plant = modal_plant([70.0, 150.0, 260.0, 380.0, 520.0, 690.0], 0.01, 1, 2, seed=3)
     u, y = data(plant, 3000, snr_db=50, seed=4)
     idn = identify_reduced(u, y, 4, 1 / FS, via=(8, 12))
-    rows = idn.info["candidates"]
+    rows = idn.provenance.candidates
     assert [r["label"] for r in rows] == ["direct 4", "via 8, refined", "via 12, refined"]
     assert all(r["states"] == 4 for r in rows)
     scored = [r for r in rows if r["identification_ratio_db"] is not None]
     best = max(scored, key=lambda r: r["identification_ratio_db"])
-    assert idn.info["chosen"] == best["label"]
+    assert idn.provenance.chosen == best["label"]
     assert idn.model.nstates == 4
     assert np.max(np.abs(np.linalg.eigvals(np.asarray(idn.model.A)))) < 1
     # the score is the winner's one-step ratio with its chosen candidate gain (as
     # choose_predictor scores: identification record, after its burn-in); the returned
     # gain is that candidate refined by prediction error, which predicts at least as well
-    kinfo = idn.info["predictor"]
+    kinfo = idn.provenance.predictor
     start = kinfo["pem"]["start"]
     assert kinfo["identification_ratio_db"][start] == pytest.approx(
         best["identification_ratio_db"], rel=1e-12)
@@ -201,8 +201,8 @@ def test_identify_reduced_never_simulates_worse_than_identify_at_the_same_order(
     for order in (3, 6):
         plain = identify(u, y, order, plant.dt)
         red = identify_reduced(u, y, order, plant.dt)
-        assert red.info["direct"]["estimated"]
-        assert not any("reduced" in r["label"] for r in red.info["candidates"])
+        assert red.provenance.direct.estimated
+        assert not any("reduced" in r["label"] for r in red.provenance.candidates)
         assert fit(red.model, uv, yv) >= fit(plain.model, uv, yv) - 0.5
 
 
@@ -230,9 +230,9 @@ def test_identify_reduced_survives_a_failed_candidate_and_names_total_failure(si
 
     monkeypatch.setattr(mp, "identify", direct_fails)
     idn = mp.identify_reduced(u, y, 6, 1 / FS, via=(8,))
-    rows = {r["label"]: r for r in idn.info["candidates"]}
+    rows = {r["label"]: r for r in idn.provenance.candidates}
     assert "diverged" in rows["direct 6"]["error"]
-    assert idn.info["chosen"].startswith("via 8") and idn.model.nstates == 6
+    assert idn.provenance.chosen.startswith("via 8") and idn.model.nstates == 6
 
     def all_fail(*a, **k):
         raise IdentificationError("PLID diverged in its first pass (estimate not finite)")
@@ -310,27 +310,27 @@ def test_identify_recovers_an_accelerometers_direct_term_within_the_noise():
     plant = accelerometer_plant()
     u, y = record(plant, 2500, 40, seed=11)
     ident = identify(u, y, 6, plant.dt)
-    d = ident.info["direct"]
-    assert d["estimated"] and d["mode"] == "auto"
+    d = ident.provenance.direct
+    assert d.estimated and d.mode == "auto"
     err = np.abs(np.asarray(ident.model.D) - plant.D)
     # within four least-squares standard errors, and small against D itself
-    assert np.all(err <= 4 * np.asarray(d["D_std"]) + 1e-12)
+    assert np.all(err <= 4 * np.asarray(d.D_std) + 1e-12)
     assert np.abs(ident.model.D - plant.D).max() < 0.02 * np.abs(plant.D).max()
 
 
 def test_identify_chooses_no_direct_term_for_a_strictly_proper_plant(simo):
     u, y = data(simo, 2000, snr_db=40, seed=12)
     ident = identify(u, y, 6, 1 / FS)
-    assert not ident.info["direct"]["estimated"]
+    assert not ident.provenance.direct.estimated
     assert not np.any(ident.model.D)
-    test = ident.info["direct"]["test"]
+    test = ident.provenance.direct.test
     assert test["held_out_nmse_with"] > (1 - test["margin"]) * test["held_out_nmse_without"]
 
 
 def test_identify_can_be_told_to_estimate_or_omit_D(simo):
     u, y = data(simo, 2000, snr_db=40, seed=13)
-    assert identify(u, y, 6, 1 / FS, direct=True).info["direct"]["estimated"]
-    assert not identify(u, y, 6, 1 / FS, direct=False).info["direct"]["estimated"]
+    assert identify(u, y, 6, 1 / FS, direct=True).provenance.direct.estimated
+    assert not identify(u, y, 6, 1 / FS, direct=False).provenance.direct.estimated
     with pytest.raises(IdentificationError, match="direct"):
         identify(u, y, 6, 1 / FS, direct="sometimes")
 
@@ -343,7 +343,7 @@ def test_returned_predictor_is_never_worse_than_free_run_simulation_on_the_ident
     from trussid.plid.metrics import prediction_ratio_db
 
     ident = identify(u, y, 4, plant.dt)          # under-modelled: K has work to do
-    kinfo = ident.info["predictor"]
+    kinfo = ident.provenance.predictor
     scores = kinfo["identification_ratio_db"]
     start = kinfo["pem"]["start"]                # the best candidate, refined by PEM
     assert scores[start] >= scores["none (free-run simulation)"]
@@ -374,7 +374,7 @@ def test_prediction_error_gain_predicts_better_than_every_candidate_and_keeps_th
     pem = identify(ui, yi, 6, plant.dt)
     for M in "ABCD":                            # the plant is the same model
         assert np.array_equal(getattr(cand.model, M), getattr(pem.model, M))
-    assert pem.info["predictor"]["pem"]["logdet_end"] < pem.info["predictor"]["pem"]["logdet_start"]
+    assert pem.provenance.predictor["pem"]["logdet_end"] < pem.provenance.predictor["pem"]["logdet_start"]
     skip = 200
     r_c = prediction_ratio_db(cand.model, uv, yv, K=cand.K, skip=skip)["mean_normalised"]
     r_p = prediction_ratio_db(pem.model, uv, yv, K=pem.K, skip=skip)["mean_normalised"]
@@ -394,7 +394,7 @@ def test_orders_that_are_not_multiples_of_the_outputs_are_identified_by_reductio
     u, y = data(simo, 1200, snr_db=40, seed=15)
     ident = identify(u, y, order, 1 / FS)
     assert ident.model.nstates == order
-    assert "reduced to" in ident.info["structure"]
+    assert "reduced to" in ident.provenance.structure
     assert np.max(np.abs(np.linalg.eigvals(ident.model.A))) < 1
     assert ident.K.shape == (order, 2)
 

@@ -14,11 +14,12 @@ from dataclasses import dataclass, field
 
 import control
 import numpy as np
-from scipy.optimize import linear_sum_assignment
+
+from trussid.plid.frf import frequency_response
+from trussid.plid.modal import assign_pairs, s_plane
 
 from .errors import ControlError
 from .modal import freq_damping, modal_data
-
 
 
 def check_pair(plant, controller, label: str = "plant") -> None:
@@ -153,14 +154,11 @@ def damping_table(plant, controller, *, band=(40.0, 450.0), dominant_fraction: f
     # share of each closed-loop eigenvector's plant part in each open-loop plant mode
     proj = np.abs(ol.Vinv @ V[:npl])
     share = proj / np.maximum(np.linalg.norm(proj, axis=0, keepdims=True), 1e-300)
-    r, c = linear_sum_assignment(-share)
-    tracked = np.full(npl, -1)
-    tracked[r] = c
+    tracked = assign_pairs(-share)  # every open-loop mode gets a closed-loop pole
     is_ctrl = np.ones(lam.size, bool)
-    is_ctrl[c] = False
+    is_ctrl[tracked[tracked >= 0]] = False
     f_cl, z_cl = freq_damping(lam, dt)
-    s_ol = np.log(np.where(np.abs(ol.poles) > 0, ol.poles, 1e-300).astype(complex)) / dt
-    s_cl = np.log(np.where(np.abs(lam) > 0, lam, 1e-300).astype(complex)) / dt
+    s_ol, s_cl = s_plane(ol.poles, dt), s_plane(lam, dt)
     # every closed-loop pole also belongs to the open-loop mode nearest in the s-plane: a
     # pole whose eigenvector the assignment gave to a neighbour still rings at this mode
     owner = np.argmin(np.abs(s_ol[None, :] - s_cl[:, None]), axis=1)
@@ -205,25 +203,6 @@ def h2_norm(sys) -> float:
     X = (Bt @ Bt.conj().T) / (1 - lam[:, None] * lam.conj()[None, :])
     val = np.real(np.trace(Ct @ X @ Ct.conj().T)) + np.sum(D**2)
     return float(math.sqrt(max(val, 0.0)))
-
-
-def frequency_response(sys, f) -> np.ndarray:
-    """Response (n_freq, p, m) of a discrete system through its eigendecomposition.
-
-    O(n) per frequency after one eigendecomposition (python-control solves an n x n system
-    per frequency); falls back to python-control when the eigenvectors are ill-conditioned.
-    """
-    A, B, C, D = (np.asarray(M, dtype=float) for M in (sys.A, sys.B, sys.C, sys.D))
-    f = np.atleast_1d(np.asarray(f, dtype=float))
-    z = np.exp(2j * np.pi * f * sys.dt)
-    if A.shape[0] == 0:
-        return np.broadcast_to(D, (f.size,) + D.shape).astype(complex)
-    lam, V = np.linalg.eig(A)
-    if np.linalg.cond(V) > 1e8:
-        H = np.asarray(sys(z, squeeze=False))
-        return np.moveaxis(H.reshape(sys.noutputs, sys.ninputs, f.size), -1, 0)
-    CV, ViB = C @ V, np.linalg.solve(V, B)
-    return np.einsum("ps,fs,sm->fpm", CV, 1.0 / (z[:, None] - lam[None, :]), ViB) + D[None]
 
 
 def margin_grid(systems, dt: float, n_base: int = 1500) -> np.ndarray:
