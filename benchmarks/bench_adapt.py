@@ -36,7 +36,7 @@ from results_io import finish, stamp, write_json  # noqa: E402
 from trussid.campaign.adapt import adapt_settings, nominal_closed_loop  # noqa: E402
 from trussid.campaign.control import design_controller  # noqa: E402
 from trussid.campaign.demo import (build_plant, conditioner_steps, demo_settings,  # noqa: E402
-                                   identify_model, run_experiments, sensor_noise_volts)
+                                   identify_model, run_experiments)
 
 NOISE_FACTORS = (1, 10, 30)
 #: Issue 27, acceptance 1.
@@ -58,9 +58,8 @@ def main() -> int:
     args = ap.parse_args()
     st = stamp()
     settings = demo_settings(quick=args.quick, simo_channels=())
-    tp = build_plant(settings)
+    tp = build_plant()
     truth = tp.discrete
-    tb = tp.tbm.testbed
     rid, _ = run_experiments(tp, settings)["mimo"]
     d = rid.data
     fit, w_id, c_id = timed(identify_model, d.u, d.y, settings.mimo_order, d.dt,
@@ -73,14 +72,14 @@ def main() -> int:
     rows, guards = [], []
 
     def ranging(rms):   # the demo's conditioner ranging
-        return conditioner_steps(rms, tb.daq.full_scale, settings.range_target,
+        return conditioner_steps(rms, tp.lab.daq.full_scale, settings.range_target,
                                  settings.gain_steps)
 
     for k in NOISE_FACTORS:
         sk = replace(s, noise_factor=float(k))
-        noise_v = sensor_noise_volts(tb, settings) * k
+        noise_v = tp.lab.accelerometers.noise_volts * k
         nom, w, c = timed(nominal_closed_loop, truth, des.controller, sk, noise_v,
-                          tb.daq.full_scale, ranging, model, print, tb.daq.bits)
+                          tp.lab.daq.full_scale, ranging, model, print, tp.lab.daq.bits)
         row = {"noise_factor": k, "noise_v": noise_v, "wall_s": w, "cpu_s": c,
                "frf_rms_db": nom.frf_rms_db, "truth": nom.truth_dominant,
                "plid": nom.identified_dominant["plid"], "n4sid": nom.identified_dominant["n4sid"],

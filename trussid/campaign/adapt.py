@@ -207,11 +207,13 @@ class AdaptStudy:
     cpu_seconds: dict = field(default_factory=dict)
 
 
-def adapt_study(truth, tb, model, K, data, demo_settings, noise_v: float, ranging,
+def adapt_study(truth, tb, lab, model, K, data, demo_settings, ranging,
                 progress=None) -> AdaptStudy:
-    """The whole closed-loop campaign from the demo's truth, testbed, MIMO model (with its
-    predictor gain ``K``) and identification record ``data`` (:class:`trussid.plid.data.IOData`);
-    ``noise_v``: the demo's sensor noise [V]; ``ranging``: as :func:`adc_ranges` takes it."""
+    """The whole closed-loop campaign from the demo's truth, testbed ``tb`` (changed for the
+    changed truths), its lab ``lab`` (:class:`trussid.geometry.lab.LabSpec`: converters and
+    sensor noise of every record), MIMO model (with its predictor gain ``K``) and
+    identification record ``data`` (:class:`trussid.plid.data.IOData`); ``ranging``: as
+    :func:`adc_ranges` takes it."""
     say = progress or (lambda msg: None)
     s = adapt_settings(demo_settings)
     cpu = {}
@@ -221,10 +223,10 @@ def adapt_study(truth, tb, model, K, data, demo_settings, noise_v: float, rangin
     des, _, _ = design_controller(m, data.u, data.y, K=K, baselines=False)
     ctrl = des.controller
     cpu["nominal_design"] = time.process_time() - c0
-    noise_v = noise_v * s.noise_factor
+    noise_v = lab.accelerometers.noise_volts * s.noise_factor
     c0 = time.process_time()
-    nom = nominal_closed_loop(truth, ctrl, s, noise_v, tb.daq.full_scale, ranging, m, say,
-                              tb.daq.bits)
+    nom = nominal_closed_loop(truth, ctrl, s, noise_v, lab.daq.full_scale, ranging, m, say,
+                              lab.daq.bits)
     cpu["nominal_closed_loop"] = time.process_time() - c0
     ref_hz = nearest_modes(nom.plid.model, [f for f, _ in nom.truth_dominant])
     ref_hz = [f for f, _ in ref_hz]
@@ -236,7 +238,7 @@ def adapt_study(truth, tb, model, K, data, demo_settings, noise_v: float, rangin
         cpu[f"truth_{name}"] = time.process_time() - c0
         res = run_change(name, label, tr, ctrl, ref_hz, s, noise_v, nom.adc_full_scale,
                          progress=lambda msg: say("  " + msg),
-                         dac_full_scale=tb.daq.full_scale, bits=tb.daq.bits)
+                         dac_full_scale=lab.daq.full_scale, bits=lab.daq.bits)
         study.changes.append(res)
         cpu[f"adapt_{name}"] = res.cpu_seconds
     return study
@@ -501,10 +503,10 @@ def damping_figure(study: AdaptStudy):
     return fig
 
 
-def demo_section(truth, tb, model, K, data, demo_settings, noise_v, ranging, progress=None):
+def demo_section(truth, tb, lab, model, K, data, demo_settings, ranging, progress=None):
     """``trussid demo --adapt``'s hook: ``(markdown, {file name: Figure}, summary, study)``
     (arguments as :func:`adapt_study`'s)."""
-    study = adapt_study(truth, tb, model, K, data, demo_settings, noise_v, ranging, progress)
+    study = adapt_study(truth, tb, lab, model, K, data, demo_settings, ranging, progress)
     figs = {"adapt_timeline.png": timeline_figure(study),
             "adapt_damping.png": damping_figure(study),
             "adapt_damping_time.png": damping_time_figure(study)}
