@@ -22,7 +22,8 @@ _LAZY = {
     "nearest_modes": "identify",
     "ModeDamping": "supervisor", "mode_damping": "supervisor",
     "SupervisorSettings": "supervisor", "Verdict": "supervisor", "redesign": "supervisor",
-    "check_candidate": "supervisor", "AdaptSettings": "supervisor", "AdaptRun": "supervisor",
+    "check_candidate": "supervisor", "check_fresh": "supervisor", "detect": "supervisor",
+    "AdaptSettings": "supervisor", "AdaptRun": "supervisor", "Event": "supervisor",
     "adapt": "supervisor",
 }
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)

@@ -154,3 +154,6 @@ def closed_loop_record(plant, controller, n: int, *, dither_rms: float = 2.0,
     return run_loop(plant, controller, d, noise_rms, adc_full_scale=adc_full_scale,
                     dac_full_scale=dac_full_scale, bits=bits, seed=seed + 1, x_plant=x_plant,
                     x_controller=x_controller)
+
+
+__all__ = ["ClosedLoopRecord", "dither", "run_loop", "trial_rms", "closed_loop_record"]

@@ -95,3 +95,6 @@ def nearest_modes(model, frequencies_hz) -> list:
         k = up[np.argmin(np.abs(md.frequency_hz[up] - f0))]
         out.append((float(md.frequency_hz[k]), float(md.damping[k])))
     return out
+
+
+__all__ = ["ClosedLoopModel", "identify_plid", "identify_n4sid", "nearest_modes"]

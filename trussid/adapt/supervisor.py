@@ -507,3 +507,8 @@ def _candidate(run: AdaptRun, fit, rec, running, t, sv, say):
 
 def _rho(truth, controller) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(np.asarray(closed_loop(truth, controller).A)))))
+
+
+__all__ = ["MODE_DAMPING_MAX", "ModeDamping", "plant_modes", "mode_damping",
+           "SupervisorSettings", "Verdict", "redesign", "check_candidate", "check_fresh",
+           "AdaptSettings", "Event", "AdaptRun", "detect", "adapt"]

@@ -512,3 +512,10 @@ def demo_section(truth, tb, lab, model, K, data, demo_settings, ranging, progres
             "adapt_damping_time.png": damping_time_figure(study)}
     md = report_markdown(study) + "\n" + "\n".join(f"![{n}]({n})" for n in figs) + "\n"
     return md, figs, summary(study), study
+
+
+__all__ = ["CHANGES", "THRESHOLDS", "AdaptDemoSettings", "adapt_settings", "changed_truth",
+           "adc_ranges", "NominalClosedLoop", "nominal_closed_loop", "ChangeResult",
+           "run_change", "AdaptStudy", "adapt_study", "write_files", "checks", "summary",
+           "report_markdown", "timeline_figure", "damping_time_figure", "damping_figure",
+           "demo_section"]
