@@ -43,6 +43,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import control
 import numpy as np
 
 from trussid.fem.errors import ModelError
@@ -268,8 +269,6 @@ def io_plant(model, spec: IOSpec, *, n_modes: int | None = None, damping: float 
         The modes solved (the plant keeps the first ``n_kept``).
     n_kept : int
     """
-    import control
-
     damping = spec.damping if damping is None else damping
     damping = 0.02 if damping is None else float(damping)
     if not 0 <= damping < 1:

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import control
 import numpy as np
+from tqdm.auto import tqdm
 
 from trussid.plid.bases import basis_for, data_frequencies, model_frequencies
 from trussid.plid.canonical import ObserverBasis
@@ -542,8 +543,6 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
 
     # One bar over the candidates (the PLID passes inside show their own when slow): the
     # whole search took 77 s silent in the API on a 6000-sample record (newcomer audit).
-    from tqdm.auto import tqdm
-
     m = u.shape[1]
     show = (progress if progress is not None
             else u.shape[0] * float(max(via, default=order) * (m + p)) ** 2 > PLID.PROGRESS_WORK)
