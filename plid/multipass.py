@@ -40,8 +40,8 @@ from trussid.plid.metrics import (best_predictor, choose_predictor, default_nois
                                   predictor_gain)
 from trussid.plid.reduce import balanced_truncation
 from trussid.plid.stability import stabilise
-from trussid.plid.subspace import (direct_term_test, output_error_fit, refit_input_matrix,
-                                   subspace_prior)
+from trussid.plid.subspace import (SubspaceChoice, direct_term_test, output_error_fit,
+                                   refit_input_matrix, subspace_prior)
 
 __all__ = ["Pass", "multipass", "identify", "identify_reduced", "fit_model", "default_via",
            "Identification", "Provenance", "Stabilised", "DirectTerm", "Candidate", "RECIPES",
@@ -152,7 +152,7 @@ class Provenance:
 
     Attributes
     ----------
-    subspace : dict or None
+    subspace : SubspaceChoice or None
         The N4SID prior's choice of block rows (:func:`trussid.plid.subspace.subspace_prior`).
     subspace_seconds, recursion_seconds, recursion_cpu_seconds, seconds : float or None
         Wall seconds of the prior, wall and CPU seconds of the PLID recursion alone (the
@@ -175,7 +175,7 @@ class Provenance:
         The estimator's warnings (:func:`fit_model`).
     """
 
-    subspace: dict | None = None
+    subspace: SubspaceChoice | None = None
     subspace_seconds: float | None = None
     passes: list = field(default_factory=list)
     recursion_seconds: float | None = None

@@ -435,7 +435,8 @@ class IdentifyEvaluator(Evaluator):
             else:
                 ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1], progress=False)
         out = _score(ident.model, case, val, time.perf_counter() - t0, opts, K=ident.K)
-        out["block_rows"] = (ident.provenance.subspace or {}).get("block_rows") or -1
+        sub = ident.provenance.subspace
+        out["block_rows"] = sub.block_rows if sub is not None else -1
         return out
 
 
