@@ -16,10 +16,11 @@ from trussid._util.files import atomic_directory
 from trussid.campaign import demo as demo_mod
 from trussid.campaign.demo import mode_audit
 from trussid.geometry.lab import LabSpec
+from trussid.plid.metrics import PoleMatch
 
 
 def row(ft, zt, fi, zi):
-    return {"true_frequency_hz": ft, "true_damping": zt, "frequency_hz": fi, "damping": zi}
+    return PoleMatch(true_frequency_hz=ft, true_damping=zt, frequency_hz=fi, damping=zi)
 
 
 POLES = [

@@ -17,6 +17,8 @@ from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, Cl
                                       DemoSummary, ExperimentRow, ModeAudit, ModelSummary,
                                       PlantSummary, Provenance, ReportFiles)
 from trussid.geometry.lab import LabSpec
+from trussid.plid.metrics import PoleMatch
+from trussid.plid.multipass import Stabilised
 
 
 def _audit():
@@ -43,9 +45,9 @@ def _model(name="mimo", kind="MIMO"):
         h1_error_vs_true={"max_db": 2.0, "rms_db": 0.77, "max_deg": 4.0, "rms_deg": 2.0},
         simulation_fit_db=24.21, simulation_fit_db_per_output=[24.0, 25.0, 23.0], seconds=12.3,
         method="PLID (direct form)", unstable_poles=0,
-        stabilised={"applied": True, "reflected_poles": 2},
-        poles=[{"true_frequency_hz": 166.0, "true_damping": 0.0025, "frequency_hz": 166.2,
-                "damping": 0.0024}],
+        stabilised=Stabilised(applied=True, reflected_poles=2),
+        poles=[PoleMatch(true_frequency_hz=166.0, true_damping=0.0025, frequency_hz=166.2,
+                         damping=0.0024, frequency_error_percent=0.12)],
         poles_in_band_matched=1, poles_in_band_true=1, validation_output_rms_v=[1.0, 1.1, 1.2],
         h1_coherence={"excited_band_hz": [0.0, 400.0], "mean_in_excited_band": [0.987, 0.9, 0.9],
                       "mean_above_excited_band": [0.123, 0.1, 0.1]},
@@ -137,8 +139,8 @@ def test_summary_json_holds_exactly_the_typed_fields():
             if not any(k.startswith(p + "/") for p in
                        # plain dicts inside the typed object keep their own keys
                        ("/timings_s", "/control", "/models/0/frf_error_vs_h1",
-                        "/models/0/h1_error_vs_true", "/models/0/stabilised",
-                        "/models/0/poles", "/models/0/h1_coherence", "/models/0/identification",
+                        "/models/0/h1_error_vs_true",
+                        "/models/0/h1_coherence", "/models/0/identification",
                         "/models/0/modes_check/rules"))}
     assert keys - {"/control"} == typed
     assert s.to_dict()["control"] == {"nominal": "nominal"}

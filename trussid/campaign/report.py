@@ -119,9 +119,9 @@ def report_markdown(s: DemoSummary) -> str:
               "| --- | --- | --- | --- |"]
         lo, hi = st.frf_band
         for r in m.poles:
-            if r["true_frequency_hz"] is not None and lo <= r["true_frequency_hz"] <= hi:
-                L.append(f"| {r['true_frequency_hz']:.2f} | {r['true_damping']:.5f} | "
-                         f"{_f(r['frequency_hz'])} | {_f(r['damping'], '.5f')} |")
+            if r.true_frequency_hz is not None and lo <= r.true_frequency_hz <= hi:
+                L.append(f"| {r.true_frequency_hz:.2f} | {r.true_damping:.5f} | "
+                         f"{_f(r.frequency_hz)} | {_f(r.damping, '.5f')} |")
         L.append("")
     L += ["### Convergence", "", "![convergence](convergence.png)", "",
           "The top panel is the *mean-normalised* one-step ratio of each model's last PLID "
@@ -164,8 +164,8 @@ def lacks_lines(s: DemoSummary) -> list:
         else:
             L += ["Missing: none."]
         st = m.stabilised
-        if st.get("applied"):
-            L += [f"Stabilised: {st.get('reflected_poles', 0)} unstable pole(s) reflected into "
+        if st.applied:
+            L += [f"Stabilised: {st.reflected_poles} unstable pole(s) reflected into "
                   "the unit circle (magnitude kept, phase changed)."]
         if m.unstable_poles:
             L += [f"**Unstable**: {m.unstable_poles} pole(s) on or outside the unit circle."]

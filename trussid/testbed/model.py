@@ -80,6 +80,8 @@ from trussid.fem.errors import ModelError
 from trussid.fem.modal import Modes, solve_modes
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
+from trussid.geometry.layout import testbed_layout
+from trussid.geometry.spec import Testbed
 
 #: Default number of frame elements on each bare tube segment (base-adapter, adapter-top).
 #: Chosen by a mesh study (tests/fem/test_testbed.py): doubling it moves no frequency below
@@ -142,8 +144,6 @@ class TestbedMap:
         Rigid-body ids (``base_body`` is -1 when clamped).
     """
 
-    __test__ = False
-
     strut_nodes: np.ndarray
     strut_elements: np.ndarray
     strut_s: np.ndarray
@@ -183,8 +183,6 @@ class TestbedModel:
     testbed : geometry.testbed.Testbed
     elements_per_segment : int
     """
-
-    __test__ = False
 
     model: Model
     map: TestbedMap
@@ -315,9 +313,7 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
     """
     # Long: the testbed is built in the order it is assembled in the lab (struts, adapters,
     # flexures, UDF, base, bungees, sensors), each step adding to the same model and map.
-    from trussid.geometry.layout import testbed_layout
-    from trussid.geometry.solids import base_rigid_body, udf_rigid_body
-    from trussid.geometry.spec import Testbed
+    from trussid.geometry.solids import base_rigid_body, udf_rigid_body  # trimesh: heavy, built models only
 
     tb = Testbed() if tb is None else tb
     lay = testbed_layout(tb)

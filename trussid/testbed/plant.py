@@ -47,8 +47,6 @@ class TestbedPlant:
         records and closed loops (:func:`trussid.campaign.control.LoopSettings.for_lab`).
     """
 
-    __test__ = False
-
     continuous: control.StateSpace
     discrete: control.StateSpace
     structure: control.StateSpace
@@ -258,9 +256,6 @@ def testbed_plant(design: Testbed | TestbedModel | None = None, *, n_modes: int 
                         modes=modes, loads=F,
                         capacitance=tb.pzt.wafers_per_strut * wafer.capacitance, chain=chain, tbm=tbm,
                         lab=tb.lab.at_rate(chain.sample_rate))
-
-
-testbed_plant.__test__ = False  # a builder, not a pytest test, despite its name
 
 
 def plant_summary(plant: TestbedPlant) -> dict:
