@@ -33,6 +33,14 @@ def parse_dofs(dofs: str | Iterable[int]) -> np.ndarray:
 
     ``dofs`` is a NASTRAN-style digit string (``"123"`` = translations, ``"123456"`` = all)
     or an iterable of 0-based component indices.
+
+    Examples
+    --------
+    >>> from trussid.fem import parse_dofs
+    >>> parse_dofs("123")                         # NASTRAN digits: the translations
+    array([ True,  True,  True, False, False, False])
+    >>> parse_dofs([3, 4, 5])                     # 0-based components: the rotations
+    array([False, False, False,  True,  True,  True])
     """
     mask = np.zeros(6, dtype=bool)
     if isinstance(dofs, str):
@@ -251,11 +259,15 @@ class Model:
 
     Examples
     --------
-    >>> from fem import Model, Section, ALUMINIUM
+    A 1 m aluminium tube clamped at node 1 (12 DOFs, 6 of them supported):
+
+    >>> from trussid.fem import ALUMINIUM, Model, Section
     >>> m = Model()
     >>> m.add_nodes([1, 2], [[0, 0, 0], [1, 0, 0]])
     >>> m.add_beams([1], [[1, 2]], Section.tube(0.00635, 0.001), ALUMINIUM, orient=[0, 0, 1])
     >>> m.fix(1)
+    >>> m.n_nodes, m.n_dof
+    (2, 12)
     """
 
     def __init__(self, beam_theory: Literal["euler-bernoulli", "timoshenko"] = "euler-bernoulli",

@@ -77,6 +77,15 @@ def excitation(kind: str, n_samples: int, n_channels: int = 1, fs: float = 1.0,
     Returns
     -------
     ndarray, shape (N, m)
+
+    Examples
+    --------
+    >>> from trussid.plid import excitation
+    >>> u = excitation("white", 8000, n_channels=3, fs=1600.0, rms=2.5, band=(0.0, 400.0), seed=3)
+    >>> u.shape
+    (8000, 3)
+    >>> print(u.std(axis=0).round(3))             # [V], exactly the RMS asked for
+    [2.5 2.5 2.5]
     """
     if kind not in EXCITATIONS:
         raise DataError(f"unknown excitation '{kind}' (use {', '.join(EXCITATIONS)})")
@@ -154,6 +163,18 @@ def quantize(x: np.ndarray, bits: int, full_scale: float):
     clipped : ndarray of int, shape (k,) (or scalar for 1-D x)
         Samples per channel that fell beyond the last code by more than LSB/2 and were
         clipped.
+
+    Examples
+    --------
+    A 12-bit +-10 V converter: LSB 4.88 mV, codes rounded to the nearest, beyond full scale clipped:
+
+    >>> import numpy as np
+    >>> from trussid.plid.experiment import lsb, quantize
+    >>> print(f"{1e3 * lsb(12, 10.0):.4f} mV")
+    4.8828 mV
+    >>> xq, clipped = quantize(np.array([0.0012, 0.0049, -0.0074, 12.0]), bits=12, full_scale=10.0)
+    >>> print(np.round(xq / lsb(12, 10.0), 3), clipped)
+    [   0.    1.   -2. 2047.] 1
     """
     bits = int(bits)
     if not 1 <= bits <= 32:
@@ -189,6 +210,15 @@ def simulate(plant: control.StateSpace, u: np.ndarray, x0=None) -> np.ndarray:
     ``control.forced_response`` (scipy's ``dlsim``) does the same recursion with two
     products and more Python work per sample, about 10x slower, and identification
     scores many candidate models with it.
+
+    Examples
+    --------
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import simulate
+    >>> G = control.ss([[0.5]], [[1.0]], [[2.0]], [[0.0]], 1.0)   # x' = 0.5 x + u, y = 2 x
+    >>> simulate(G, np.ones((4, 1))).ravel().tolist()
+    [0.0, 2.0, 3.0, 3.5]
     """
     if not control.isdtime(plant, strict=True):
         raise DataError("the plant must be discrete-time (dt > 0); discretise it first")

@@ -71,7 +71,7 @@ def test_a_stabilised_winner_reports_the_poles_reflected_in_itself(monkeypatch):
     higher-order PLID pass instead of on the reduced model that was stabilised."""
     import trussid.plid.multipass as mp
     from trussid.campaign import demo
-    from trussid.plid.multipass import Identification
+    from trussid.plid.multipass import Identification, Provenance, Stabilised
 
     dt = 1 / 1600
     rng = np.random.default_rng(1)
@@ -88,15 +88,15 @@ def test_a_stabilised_winner_reports_the_poles_reflected_in_itself(monkeypatch):
         finite = True
 
     Result.model = high
-    info = {"chosen": "via 4, reduced, stabilised", "passes": [],
-            "stabilised": {"applied": True, "reflected_poles": 1},
-            "predictor": {"chosen": "kalman Q/R ratio 1"}}
+    prov = Provenance(chosen="via 4, reduced, stabilised",
+                      stabilised=Stabilised(applied=True, reflected_poles=1),
+                      predictor={"chosen": "kalman Q/R ratio 1"})
     idn = Identification(Result, model, np.zeros((2, 1)), "subspace", None, np.ones(1), None,
-                         info)
+                         prov)
     monkeypatch.setattr(mp, "identify_reduced", lambda *a, **k: idn)
     u, y = rng.standard_normal((200, 1)), rng.standard_normal((200, 1))
     fit = demo.identify_model(u, y, 2, dt)
-    assert fit.info["stabilised"] == {"applied": True, "reflected_poles": 1}
+    assert fit.info["stabilised"] == Stabilised(applied=True, reflected_poles=1)
 
 
 # --------------------------------------------------------------------------- the report

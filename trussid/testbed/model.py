@@ -81,6 +81,7 @@ from trussid.fem.modal import Modes, solve_modes
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
 from trussid.geometry.layout import testbed_layout
+from trussid.geometry.solids import base_rigid_body, udf_rigid_body
 from trussid.geometry.spec import Testbed
 
 #: Default number of frame elements on each bare tube segment (base-adapter, adapter-top).
@@ -313,8 +314,6 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
     """
     # Long: the testbed is built in the order it is assembled in the lab (struts, adapters,
     # flexures, UDF, base, bungees, sensors), each step adding to the same model and map.
-    from trussid.geometry.solids import base_rigid_body, udf_rigid_body  # trimesh: heavy, built models only
-
     tb = Testbed() if tb is None else tb
     lay = testbed_layout(tb)
     s, kinds = strut_stations(tb, elements_per_segment)
@@ -642,6 +641,23 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
     frequencies_hz : (n_modes,) float
     shapes : (n, n_modes) float
         ``shapes.T @ M @ shapes = I`` on the reduced DOFs (``basis.system.T`` expands them).
+
+    Examples
+    --------
+    The strut modes of the default testbed at its nominal walls, and with every wall 50 %
+    thicker (stiffer struts, higher frequencies), without rebuilding the model:
+
+    >>> import numpy as np
+    >>> from trussid.testbed.model import build_testbed, wall_basis, wall_modes
+    >>> tbm = build_testbed()
+    >>> basis = wall_basis(tbm)
+    >>> walls = np.array(tbm.testbed.struts.walls)
+    >>> print(np.round(1e3 * walls, 4))                     # [mm]
+    [0.7112 0.889  1.0668 1.2446 1.4732 1.651 ]
+    >>> print(np.round(wall_modes(basis, walls, 10)[0][6:9], 2))
+    [50.43 50.49 53.02]
+    >>> print(np.round(wall_modes(basis, 1.5 * walls, 10)[0][6:9], 2))
+    [54.89 54.96 56.65]
     """
     if basis.n > DENSE_MAX_DOF:
         k_data, m_data = basis.data(walls)
