@@ -150,8 +150,8 @@ class ModelSummary:
     seconds: float
     method: str
     unstable_poles: int
-    stabilised: Stabilised
-    poles: list                   # matched pole rows (plid.evaluate.compare)
+    stabilised: Stabilised        # poles reflected into the unit circle, if any
+    poles: list                   # of trussid.plid.metrics.PoleMatch (plid.evaluate.compare)
     poles_in_band_matched: int
     poles_in_band_true: int
     validation_output_rms_v: list
