@@ -302,6 +302,25 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     Identification
         ``K`` the predictor gain; ``provenance.predictor`` lists the candidates with their
         scores and, for ``"pem"``, the refinement (``provenance.predictor["pem"]``).
+
+    Examples
+    --------
+    Two modes, 50 and 120 Hz at 2 % damping, sampled at 1 kHz: PLID recovers them from 2000
+    samples of white-noise response.
+
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import excitation, identify, modal_table, simulate
+    >>> s = control.tf("s")
+    >>> G = sum(g * (2 * np.pi * f) ** 2 / (s**2 + 0.04 * 2 * np.pi * f * s + (2 * np.pi * f) ** 2)
+    ...         for f, g in ((50.0, 1.0), (120.0, 0.5)))
+    >>> plant = control.c2d(control.ss(G), 1e-3)
+    >>> u = excitation("white", 2000, fs=1000.0, seed=1)
+    >>> y = simulate(plant, u)
+    >>> fit = identify(u, y, order=4, dt=1e-3, progress=False)
+    >>> modes = modal_table(fit.model)
+    >>> print(np.round(modes.frequencies_hz, 2), np.round(100 * modes.damping, 2))
+    [ 50. 120.] [2. 2.]
     """
     u, y = check_data(u, y, dt)
     p = y.shape[1]
