@@ -64,7 +64,7 @@ from trussid._util.jsonio import json_safe
 from trussid.campaign.control import LoopSettings, demo_section
 from trussid.campaign.report import report_markdown
 from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
-                                      DemoSummary, ExperimentRow, ModeAudit, ModelSummary,
+                                      DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
                                       PlantSummary, Provenance, ReportFiles)
 from trussid.geometry.lab import G0, lab_record
 from trussid.plid.datafile import with_channels, write_data
@@ -76,6 +76,7 @@ from trussid.plid.metrics import choose_predictor
 from trussid.plid.modelfile import save_model
 from trussid.plid.multipass import Stabilised, default_via, fit_model
 from trussid.plid.stability import stabilise
+from trussid.plid.uncertainty import mode_intervals
 from trussid.plots import save_figure
 from trussid.testbed.plant import testbed_plant
 
@@ -277,6 +278,7 @@ class Identified:
     theta_history: np.ndarray          # (k, q)
     history_index: np.ndarray          # (k,)
     info: dict = field(default_factory=dict)
+    modes: list = field(default_factory=list)  # plid.uncertainty.ModeInterval per mode
 
 
 def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
@@ -330,8 +332,9 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
             **{k: v for k, v in prov.as_dict().items() if k not in ("passes", "predictor")},
             "passes": prov.passes}
     method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
+    modes = mode_intervals(model, res.model, res.theta_cov)
     return Identified(model, K, K_source, time.perf_counter() - t0, method,
-                      res.innovations, hist, hidx, info)
+                      res.innovations, hist, hidx, info, modes)
 
 
 def _history_of_last_pass(idn, u, y, order, dt):
@@ -401,8 +404,32 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
         validation_output_rms_v=y_rms.tolist(),
         h1_coherence=coherence,
         modes_check=mode_audit(c.poles, settings.frf_band, settings.excitation_band),
+        mode_checks=_mode_checks(c.poles, fit.modes, model, tcols),
         identification=json_safe(fit.info),
     )
+
+
+def _mode_checks(poles, modes, model, truth) -> list[ModeCheck]:
+    """Per matched pole pair: the identified mode's 95 % intervals
+    (:mod:`trussid.plid.uncertainty`) and the MAC of the true (FE) mode shape against the
+    identified one at the sensors (:func:`trussid.plid.modal.mac`)."""
+    from trussid.plid.modal import mac, modal_table
+
+    ident, true = modal_table(model), modal_table(truth)
+    rows = []
+    for r in poles:
+        if not r.matched:
+            continue
+        i = int(np.argmin(np.abs(ident.frequencies_hz - r.frequency_hz)))
+        j = int(np.argmin(np.abs(true.frequencies_hz - r.true_frequency_hz)))
+        m = min(modes, key=lambda q: abs(q.frequency_hz - r.frequency_hz)) if modes else None
+        ci = (m.as_dict() if m is not None
+              and abs(m.frequency_hz - r.frequency_hz) < 1e-6 * r.frequency_hz else {})
+        rows.append(ModeCheck(
+            r.true_frequency_hz, r.frequency_hz,
+            float(mac(ident.shapes[:, [i]], true.shapes[:, [j]], zero_shape="zero")[0, 0]),
+            ci.get("frequency_ci95_hz"), ci.get("damping_ratio_ci95")))
+    return rows
 
 
 #: A true or identified pole with a damping ratio above this is not a structural mode (the

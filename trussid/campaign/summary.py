@@ -158,6 +158,20 @@ class ModelSummary:
     h1_coherence: dict
     modes_check: ModeAudit
     identification: dict          # the identification's provenance (JSON-safe)
+    mode_checks: list = field(default_factory=list)  # ModeCheck per matched pole
+
+
+@dataclass(frozen=True)
+class ModeCheck:
+    """A matched true (FE) and identified mode: the identified mode's 95 % intervals
+    (:mod:`trussid.plid.uncertainty`; None without one) and the MAC of the two mode shapes
+    at the sensors (:func:`trussid.plid.modal.mac`)."""
+
+    true_frequency_hz: float
+    frequency_hz: float
+    mac: float
+    frequency_ci95_hz: list | None = None
+    damping_ratio_ci95: list | None = None
 
 
 @dataclass
