@@ -51,6 +51,13 @@ import numpy as np
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
+from trussid._util.files import atomic_path
+from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transform
+from trussid.fem.elements import frame_matrices, local_axes, to_global
+
+__all__ = ["SUPPORTED_CARDS", "RAW_CARDS", "IGNORED_CARDS", "THERMAL_CARDS", "HANDLED_PARAMS",
+           "OUTPUT_PARAMS", "ROD_SHEAR_FACTOR", "SECTION_TYPES", "EigenRequest", "BdfInfo",
+           "read_bdf", "coord_axes", "offset_spring_matrix", "write_bdf"]
 
 #: Bulk-data cards :func:`read_bdf` translates.
 SUPPORTED_CARDS = frozenset({
@@ -99,10 +106,19 @@ IGNORED_CARDS = frozenset({
 #: temperatures (TEMP/TEMPD), when they would change the stiffness and are refused.
 THERMAL_CARDS = frozenset({"MATT1", "TABLEM1", "TABLEM2", "TABLEM3", "TABLEM4", "TEMPD", "TEMP"})
 
-#: PARAMs read, and PARAMs without effect on the model's real modes (output and solver
-#: book-keeping, damping, aeroelastic and shell-only settings), accepted and listed in
-#: :attr:`BdfInfo.ignored`. Any other PARAM is refused like an unsupported card.
+#: PARAMs read. Every other PARAM is accepted and listed in :attr:`BdfInfo.ignored`
+#: unless it is one of :data:`MODE_PARAMS`: NASTRAN has hundreds of PARAMs (and MYSTRAN,
+#: NASTRAN-95 their own), and those that change a beam model's real modes are few.
 HANDLED_PARAMS = frozenset({"WTMASS", "COUPMASS", "AUTOSPC"})
+
+#: PARAMs that change the real modes and are not translated: the scale factors of direct
+#: input matrices (K2GG, M2GG... through CK1-CK3, CM1-CM2, CP1-CP2, CB1-CB2). Refused unless
+#: they keep their default 1.0.
+MODE_PARAMS = frozenset({"CK1", "CK2", "CK3", "CM1", "CM2", "CP1", "CP2", "CB1", "CB2"})
+
+#: PARAMs known to have no effect on the real modes of a beam model (output and solver
+#: book-keeping, damping, aeroelastic and shell-only settings): listed like any other
+#: accepted PARAM; kept as the documented list of those checked.
 OUTPUT_PARAMS = frozenset({
     "POST", "PRTMAXIM", "GRDPNT", "OGEOM", "NOCOMPS", "PATVER", "SRCOMPS", "EST", "OUGCORD",
     "MAXRATIO", "BAILOUT", "NEWSEQ", "LMODES", "RESVEC", "PRGPST", "SEMAPPRT", "USETPRT",
@@ -115,9 +131,16 @@ OUTPUT_PARAMS = frozenset({
     "PRTGPTT", "PRTMGG", "PRTPG", "ERROR", "DBCDIAG", "TINY", "XFLAG",
 })
 
-#: Shear factor K1 = K2 of a PBARL/PBEAML ROD, as recent NASTRAN builds convert it (see
-#: :func:`_properties`).
-ROD_SHEAR_FACTOR = 0.9
+#: Build conventions :func:`read_bdf` can follow (``conventions=``), default first.
+CONVENTIONS = ("nx", "msc")
+
+#: Shear factor K1 = K2 of a PBARL/PBEAML ROD by build conventions (see :func:`_properties`):
+#: 0.9 as NX/Simcenter and the newer MSC builds convert it, 6/7 as an MSC 2012 build did.
+ROD_SHEAR_FACTOR = {"nx": 0.9, "msc": 6.0 / 7.0}
+
+#: Shear factor of a PBARL/PBEAML BAR: 5/6, as NASTRAN converts it (MSC 2012.2 on a deep
+#: CBEAM cantilever: bending modes 1e-4..7e-4 off with Cowper's 10(1+nu)/(12+11nu), 1e-6 with 5/6).
+BAR_SHEAR_FACTOR = 5.0 / 6.0
 
 #: PBARL/PBEAML shapes with a matching :class:`trussid.fem.sections.Section` constructor.
 SECTION_TYPES = ("ROD", "TUBE", "BAR", "BOX")
@@ -169,6 +192,8 @@ class BdfInfo:
         Whether DOFs with neither stiffness nor mass should be removed (NASTRAN's AUTOSPC,
         on by default in SOL 103; ``PARAM,AUTOSPC,NO`` turns it off).
     autospc_reason : str
+    conventions : {"nx", "msc"}
+        The NASTRAN build conventions followed (see :func:`read_bdf`).
     cards : dict of str to int
         Bulk-data cards read, with counts.
     ignored : list of str
@@ -189,13 +214,15 @@ class BdfInfo:
     spc_reason: str = ""
     autospc: bool = True
     autospc_reason: str = ""
+    conventions: str = "nx"
     cards: dict = field(default_factory=dict)
     ignored: list = field(default_factory=list)
     notes: list = field(default_factory=list)
 
 
 # ======================================================================= reading
-def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[Model, BdfInfo]:
+def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
+             conventions: str = "nx") -> tuple[Model, BdfInfo]:
     """Read a NASTRAN bulk-data deck into a :class:`trussid.fem.Model`.
 
     Parameters
@@ -204,6 +231,10 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[M
         A deck (.bdf/.dat/.nas...), with or without executive and case control.
     beam_theory : {"euler-bernoulli", "timoshenko"}, optional
         Override the theory chosen from the shear factors (see the module notes).
+    conventions : {"nx", "msc"}
+        Whose element conventions to follow where NASTRAN builds differ: the PBARL/PBEAML
+        ROD shear factor is 0.9 with "nx" (NX/Simcenter, and the newer MSC builds: the
+        default) and 6/7 with "msc" (an MSC 2012 build). Recorded in ``info.conventions``.
 
     Returns
     -------
@@ -229,15 +260,17 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[M
     :func:`_nastran_mass_conventions` and the PBARL/PBEAML ROD shear factor).
     """
     path = Path(path)
+    if conventions not in CONVENTIONS:
+        raise ModelError(f"conventions must be one of {', '.join(CONVENTIONS)}, got {conventions!r}")
     bdf = _parse(path)
-    info = BdfInfo(path=str(path), cards=dict(sorted(bdf.card_count.items())))
+    info = BdfInfo(path=str(path), cards=dict(sorted(bdf.card_count.items())), conventions=conventions)
     _check_cards(bdf, path, info)
     _read_params(bdf, info)
 
     node_ids, xyz, frames = _nodes(bdf)
     nodes = _NodeTable(node_ids, xyz, frames)
     mats = _materials(bdf, info.wtmass)
-    props = _properties(bdf, mats, info.wtmass)
+    props = _properties(bdf, mats, info.wtmass, conventions)
 
     if beam_theory is None:
         used = {e.pid for e in bdf.elements.values() if e.type in ("CBAR", "CBEAM")}
@@ -275,6 +308,59 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None) -> tuple[M
     return model, info
 
 
+@dataclass
+class _RawParam:
+    """A PARAM entry from its raw fields (pyNastran validates PARAM values against its own
+    lists and refuses legal ones, e.g. ``PARAM,EXTOUT,MATRIXPCH`` or MYSTRAN's EQCHECK)."""
+
+    name: str
+    values: list
+
+
+def _nastran_value(text: str):
+    """A field as NASTRAN reads it: int, real (also ``1.5-3`` = 1.5e-3), or the string."""
+    t = text.strip()
+    for conv in (int, float):
+        try:
+            return conv(t)
+        except ValueError:
+            pass
+    m = re.fullmatch(r"([+-]?(?:\d+\.?\d*|\.\d+))([+-]\d+)", t)
+    if m:
+        return float(f"{m.group(1)}e{m.group(2)}")
+    return t.upper()
+
+
+def _executive(text: str, path: Path) -> tuple[str, str, list[str]]:
+    """(executive control, rest, notes): the executive control is dropped before pyNastran.
+
+    trussid needs nothing from it but the solution (read here), and pyNastran refuses
+    statements it does not know (NASTRAN-95's ``APP AERO``, ``APP DISP``, DMAP ALTERs).
+    """
+    m = re.search(r"^\s*CEND\b.*$", text, re.IGNORECASE | re.MULTILINE)
+    if m is None:
+        return "", text, []
+    return text[:m.start()], text[m.end() + 1:], []
+
+
+def _solution(executive: str) -> tuple[str | None, str | None]:
+    """(SOL value, APP value) of an executive control, upper case, or None."""
+    sol = re.search(r"^\s*SOL\s+([^\s$]+)", executive, re.IGNORECASE | re.MULTILINE)
+    app = re.search(r"^\s*APP\s+([^\s$]+)", executive, re.IGNORECASE | re.MULTILINE)
+    return (sol.group(1).upper() if sol else None), (app.group(1).upper() if app else None)
+
+
+def _check_solution(path: Path, sol: str | None, app: str | None) -> None:
+    """Refuse solutions whose printed modes are not the structure's real modes, naming them."""
+    if sol is None:
+        return
+    number = sol.split(",")[0]
+    if app in (None, "DISP", "DISPLACEMENT", "AERO") and number == "13":
+        raise ModelError(f"{path}: SOL 13 (NASTRAN-95 rigid format 13, normal modes with differential "
+                         f"stiffness): its modes are those of the structure preloaded by the static subcase, "
+                         f"which trussid does not compute (differential stiffness is not supported)")
+
+
 def _parse(path: Path):
     """pyNastran's BDF of ``path``, quietly; any failure becomes a one-line ModelError."""
     from cpylog import SimpleLogger
@@ -288,11 +374,6 @@ def _parse(path: Path):
         text = path.read_text(errors="replace")
     except OSError as exc:
         raise ModelError(f"{path}: cannot read ({exc.strerror})") from None
-    # Without executive/case control pyNastran must be told the file is bulk data only; a
-    # lone BEGIN BULK (no CEND before it) it refuses either way, so such a deck gets an
-    # empty executive deck in front (read from memory: INCLUDEs then resolve from the
-    # current directory).
-    source: str | io.StringIO = str(path)
     flags = re.IGNORECASE | re.MULTILINE
     # INCLUDE files are relative to the deck. Checked here so that a missing one is named
     # (pyNastran would also leave a crash file in the working directory).
@@ -300,29 +381,83 @@ def _parse(path: Path):
     for inc in includes:
         if not (path.parent / inc).is_file():
             raise ModelError(f"{path}: INCLUDE '{inc}': no such file (looked in {path.parent})")
+    notes = []
+    executive, rest, _ = _executive(text, path)
+    sol, app = _solution(executive)
+    _check_solution(path, sol, app)
     punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, flags) is None
-    if not punch and re.search(r"^\s*CEND\b", text, flags) is None:
-        # Read from memory, where pyNastran resolves INCLUDEs from the working directory:
-        # make them absolute.
+    if not punch:
+        # The deck goes to pyNastran from memory, with an empty executive control (see
+        # _executive) and INCLUDEs made absolute (pyNastran resolves them from the working
+        # directory when reading from memory).
         text = re.sub(r"^(\s*INCLUDE\s+')([^']+)(')",
                       lambda m: m.group(1) + str((path.parent / m.group(2)).resolve()) + m.group(3),
-                      text, flags=flags)
-        source = io.StringIO("CEND\n" + text)
+                      rest, flags=flags)
+        # A repeated BEGIN BULK (MSC's HA144D) is accepted by NASTRAN; pyNastran reads the
+        # second as a superelement header.
+        heads = list(re.finditer(r"^\s*BEGIN\s+BULK\b.*$\n?", text, flags))
+        if len(heads) > 1:
+            for h in reversed(heads[1:]):
+                text = text[:h.start()] + text[h.end():]
+            notes.append(f"BEGIN BULK repeated {len(heads)} times: read once, as NASTRAN")
+        source: str | io.StringIO = io.StringIO("CEND\n" + text)
+    else:
+        source = str(path)
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     # Cards this reader does not translate are only counted, never parsed, so that a
-    # malformed one is reported as unsupported rather than failing the parse.
-    bdf.disable_cards(sorted(set(bdf.cards_to_read) - SUPPORTED_CARDS))
+    # malformed one is reported as unsupported rather than failing the parse; those read
+    # from their raw fields (RAW_CARDS, PARAM) too.
+    bdf.disable_cards(sorted((set(bdf.cards_to_read) - SUPPORTED_CARDS) | RAW_CARDS | {"PARAM"}))
     try:
         # pyNastran also print()s some complaints; keep them off the user's terminal (the
         # exception carries the message).
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             bdf.read_bdf(source, xref=False, validate=False, punch=punch)
     except Exception as exc:  # pyNastran raises many types for malformed decks
-        msg = " ".join(str(exc).split())[:300] or type(exc).__name__
-        raise ModelError(f"{path}: not a readable bulk-data deck ({msg})") from None
+        raise ModelError(f"{path}: not a readable bulk-data deck ({_parser_message(exc)})") from None
     if not bdf.card_count:
         raise ModelError(f"{path}: no bulk-data cards found")
+    bdf.params = _raw_params(bdf)
+    bdf.trussid_notes = notes
+    bdf.trussid_solution = (sol, app)
     return bdf
+
+
+def _parser_message(exc: Exception) -> str:
+    """pyNastran's message in user terms: the entry and its id, without its internals.
+
+    pyNastran words its complaints as ``field 'x' (field #3) on card must be ...
+    card=['CBAR', '1', ...]``: the list is the raw card; the entry name and id (its first
+    two fields) are what a user can find in the deck.
+    """
+    msg = " ".join(str(exc).split())
+    card = re.search(r"card=\[\s*'([A-Z0-9*]+)'\s*,\s*'?([^',\]]*)'?", msg)
+    msg = re.sub(r"\s*card=\[.*$", "", msg)
+    msg = re.sub(r"\s*\b(uline|allowed_methods|allowed|len\(\w+ card\))\s*=.*$", "", msg)
+    msg = msg.strip(" ;,.") or type(exc).__name__
+    if card:
+        name, ident = card.group(1), card.group(2).strip()
+        msg = f"{name} {ident}: {msg}" if ident else f"{name}: {msg}"
+    return msg[:300]
+
+
+def _card_lines(lines: list[str]) -> list[str]:
+    """A rejected card's lines without the comment lines pyNastran keeps in front."""
+    return [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("$")]
+
+
+def _raw_params(bdf) -> dict:
+    """PARAM name -> :class:`_RawParam` from the raw lines (the last entry of a name wins)."""
+    params = {}
+    for lines in getattr(bdf, "reject_lines", []):
+        body = _card_lines(lines)
+        if not body or not re.match(r"\s*PARAM\b", body[0], re.IGNORECASE):
+            continue
+        f = _raw_fields(body, "PARAM")
+        if len(f) < 2 or not f[1]:
+            raise ModelError(f"PARAM: no name ({body[0].strip()!r})")
+        params[f[1]] = _RawParam(f[1], [_nastran_value(v) for v in f[2:] if v.strip()])
+    return params
 
 
 def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
@@ -343,10 +478,12 @@ def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
         else:
             bad[name] = n
     for name in sorted(bdf.params):
-        if name in OUTPUT_PARAMS:
-            ignored[f"PARAM,{name}"] = 1
-        elif name not in HANDLED_PARAMS:
+        if name in HANDLED_PARAMS:
+            continue
+        if name in MODE_PARAMS and bdf.params[name].values not in ([], [1], [1.0]):
             bad[f"PARAM,{name}"] = 1
+        else:
+            ignored[f"PARAM,{name}"] = 1
     info.ignored = [f"{k} ({v})" if not k.startswith("PARAM,") else k for k, v in sorted(ignored.items())]
     if not bad:
         return
@@ -602,7 +739,7 @@ def _sec(A, Iy, Iz, J, Asy=math.inf, Asz=math.inf) -> dict:
             "Asy": float(Asy), "Asz": float(Asz)}
 
 
-def _properties(bdf, mats: dict, wtmass: float) -> dict:
+def _properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict:
     props = {}
     for pid, p in bdf.properties.items():
         label = f"{p.type} {pid}"
@@ -660,7 +797,9 @@ def _properties(bdf, mats: dict, wtmass: float) -> dict:
                 # newest builds (Simcenter 2019.2, NX 2022 ~0.898, MSC 2012-13 OP2s); one
                 # MSC 2012 build used 6/7. Cowper's 6(1+nu)/(7+6nu) (0.886 at nu = 0.33)
                 # sits between them; 0.9 is what the recent decks of the corpus were run with.
-                asy = asz = ROD_SHEAR_FACTOR * s.A
+                asy = asz = ROD_SHEAR_FACTOR[conventions] * s.A
+            elif shape == "BAR":
+                asy = asz = BAR_SHEAR_FACTOR * s.A
             props[pid] = _Prop(label, "bar", _sec(s.A, s.Iy, s.Iz, s.J, asy, asz), mat,
                                nsm * wtmass, True)
         elif p.type == "PROD":
@@ -763,8 +902,6 @@ def _add_pin_flags(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarra
     unpinned element is added as an element matrix, so the beam itself stays a plain beam.
     The mass is unchanged (NASTRAN's pin flags act on the stiffness).
     """
-    from trussid.fem.elements import frame_matrices, local_axes, to_global
-
     eids = np.array([e.eid for e in elems], dtype=np.int64)
     L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
     sec, mat = prop.section, prop.mat
@@ -985,8 +1122,6 @@ def offset_spring_matrix(xa, xb, p, frame, k) -> np.ndarray:
     ``S_X`` the rigid map from grid X to ``p`` and ``F6 = diag(F, F)`` (rows of ``frame``
     are the spring axes), so ``K = B^T F6^T diag(k) F6 B`` with ``B = [-S_A, S_B]``.
     """
-    from trussid.fem.constraints import rigid_transform
-
     B = np.concatenate([-rigid_transform(np.asarray(p) - xa), rigid_transform(np.asarray(p) - xb)], axis=1)
     F6 = np.zeros((6, 6))
     F6[:3, :3] = F6[3:, 3:] = frame
@@ -1067,8 +1202,6 @@ def _comps(text, card: str) -> list[int]:
 def _add_rigid_element(model: Model, nodes: _NodeTable, eid: int, grids, independent, dependent,
                        label: str) -> None:
     """A rigid element given by (grid, component) lists: a linear constraint of the model."""
-    from trussid.fem.constraints import rigid_element
-
     grids = list(dict.fromkeys(grids))
     pos = {g: i for i, g in enumerate(grids)}
     xyz = nodes.coords(grids, label.split()[0], [eid] * len(grids))
@@ -1082,8 +1215,6 @@ def _add_rigid_element(model: Model, nodes: _NodeTable, eid: int, grids, indepen
 
 def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
     """RBE2 (rigid body), RBAR (rigid bar, any independent set) and RBE3 (interpolation)."""
-    from trussid.fem.constraints import rbe3_constraint
-
     for eid, e in sorted(bdf.rigid_elements.items()):
         card = f"{e.type} {eid}"
         if e.type == "RBE2":
@@ -1161,7 +1292,7 @@ def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
     GI GM CM: a rigid pin-ended rod, component CM of GM keeps the distance GI-GM.
     """
     for lines in getattr(bdf, "reject_lines", []):
-        body = [ln for ln in lines if ln.strip()]
+        body = _card_lines(lines)
         name = body[0][:8].strip().rstrip("*").upper() if body else ""
         if "," in name:
             name = name.split(",")[0]
@@ -1319,11 +1450,11 @@ def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict,
       in :func:`_add_bars`, exactly, by reading its structural mass as non-structural mass;
     * coupled CROD/CONROD: axial ``m [[5/12, 1/12], [1/12, 5/12]]``, transverse lumped
       ``m / 2`` (the textbook rod interpolates all three translations linearly);
-    * coupled shear-flexible CBEAM (NX): the Euler-Bernoulli cubic translational mass
-      without rotary inertia, on the shear-flexible stiffness.
+    * coupled shear-flexible CBEAM (NX) and CBAR (MSC 2013 and the MSC NAS102 workshop run):
+      the Euler-Bernoulli cubic translational mass without rotary inertia, on the
+      shear-flexible stiffness (CBAR frames 1.7e-4 and 4.1e-4 off with the Timoshenko
+      mass, 4e-7 and 7e-6 with this).
     """
-    from trussid.fem.elements import frame_matrices, local_axes
-
     b = model.beams
     if len(b) == 0:
         return
@@ -1362,7 +1493,7 @@ def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict,
         model.add_matrices(b.ids[rod], b.nodes[rod], M=dM, label="CROD coupled mass (NASTRAN)")
         info.notes.append(f"CROD coupled mass: axial 5/12, 1/12 and lumped transverse mass "
                           f"({int(rod.sum())} rods), as NASTRAN")
-    shear = cbeam & (np.isfinite(b.Asy) | np.isfinite(b.Asz))
+    shear = (cbeam | cbar) & (np.isfinite(b.Asy) | np.isfinite(b.Asz))
     if model.beam_theory == "timoshenko" and shear.any():
         s = shear
         Ls, R = local_axes(xa[s], xb[s], b.orient[s], b.ids[s])
@@ -1372,9 +1503,9 @@ def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict,
         M_t = frame_matrices(*args, **kw, theory="timoshenko")[1]
         dM = M_eb - M_t
         dM = 0.5 * (dM + dM.transpose(0, 2, 1))
-        model.add_matrices(b.ids[s], b.nodes[s], M=dM, label="CBEAM coupled mass (NASTRAN)")
-        info.notes.append(f"CBEAM coupled mass with shear flexibility: Euler-Bernoulli cubic mass "
-                          f"without rotary inertia ({int(s.sum())} elements), as NX NASTRAN")
+        model.add_matrices(b.ids[s], b.nodes[s], M=dM, label="CBAR/CBEAM coupled mass (NASTRAN)")
+        info.notes.append(f"CBAR/CBEAM coupled mass with shear flexibility: Euler-Bernoulli cubic mass "
+                          f"without rotary inertia ({int(s.sum())} elements), as NASTRAN")
 
 
 def _case_values(bdf, key: str) -> list:
@@ -1504,8 +1635,6 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     from cpylog import SimpleLogger
     from pyNastran.bdf.bdf import BDF
     from pyNastran.bdf.case_control_deck import CaseControlDeck
-
-    from trussid._util.files import atomic_path
 
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     ids, xyz = model.node_ids, model.xyz

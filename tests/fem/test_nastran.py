@@ -368,6 +368,24 @@ def _add_nastran_rod_mass(model: Model) -> None:
         model.add_matrices([1000 + i], [b.nodes[i]], M=[M])
 
 
+def _add_nastran_shear_bar_mass(model: Model) -> None:
+    """Add (Euler-Bernoulli cubic mass - Timoshenko-consistent mass) to ``model``'s bars: a
+    shear-flexible CBAR's coupled mass in NASTRAN is the cubic one (no shear terms)."""
+    from trussid.fem.elements import frame_matrices, local_axes
+
+    b = model.beams
+    bar = ~np.asarray(b.rod, bool)
+    xyz = dict(zip(model.node_ids.tolist(), model.xyz))
+    xa = np.array([xyz[int(n)] for n in b.nodes[bar, 0]])
+    xb = np.array([xyz[int(n)] for n in b.nodes[bar, 1]])
+    L, R = local_axes(xa, xb, b.orient[bar], b.ids[bar])
+    args = (L, b.A[bar], b.Iy[bar], b.Iz[bar], b.J[bar], b.E[bar], b.G[bar], b.rho[bar])
+    kw = dict(nsm=b.nsm[bar], Asy=b.Asy[bar], Asz=b.Asz[bar], R=R, mass="consistent")
+    dM = (frame_matrices(*args, **kw, theory="euler-bernoulli")[1]
+          - frame_matrices(*args, **kw, theory="timoshenko")[1])
+    model.add_matrices(2000 + np.flatnonzero(bar), b.nodes[bar], M=0.5 * (dM + dM.transpose(0, 2, 1)))
+
+
 def test_pin_flags_equal_a_hinge_built_from_a_duplicate_grid(tmp_path):
     """CBAR PA=456 (rotations released at end A) is the same beam starting at its own grid
     that follows grid 4 in translation only (RBE2 123): the model without the entry. The
@@ -395,6 +413,8 @@ def test_written_deck_reads_back_to_the_same_frequencies(tmp_path, theory, mass)
         # inertia and a coupled CROD its own mass.
         model = _frame_model(theory, mass, nastran_bars=True)
         _add_nastran_rod_mass(model)
+        if theory == "timoshenko":
+            _add_nastran_shear_bar_mass(model)
     f0 = solve_modes(model, n_modes=12).frequencies_hz
     f1 = solve_modes(back, n_modes=12, autospc=info.autospc).frequencies_hz
     np.testing.assert_allclose(f1, f0, rtol=1e-10)
@@ -447,23 +467,23 @@ def test_writer_refuses_a_spring_nastran_cannot_express_and_leaves_no_file(tmp_p
 
 # ----------------------------------------------------------------- bad input
 def test_unsupported_cards_are_all_listed_with_counts(tmp_path):
-    deck = cantilever_deck(n_el=2, extra="DMIG,STIF,0,6,1,0\nCONM1,90,3\nPARAM,NOSUCH,1")
+    deck = cantilever_deck(n_el=2, extra="DMIG,STIF,0,6,1,0\nCONM1,90,3\nPARAM,CK1,2.0")
     with pytest.raises(ModelError) as exc:
         read_bdf(write(tmp_path, deck))
     msg = str(exc.value)
-    for item in ("DMIG (1)", "CONM1 (1)", "PARAM,NOSUCH"):
+    for item in ("DMIG (1)", "CONM1 (1)", "PARAM,CK1"):
         assert item in msg
     assert "\n" not in msg
 
 
 def test_shell_and_solid_elements_are_named_first_in_one_line(tmp_path):
     deck = cantilever_deck(n_el=2, extra="CQUAD4,100,1,1,2,3,1\nCQUAD4,101,1,1,2,3,1\n"
-                                         "CTRIA3,102,1,1,2,3\nPSHELL,1,1,0.1\nPARAM,NOSUCH,1")
+                                         "CTRIA3,102,1,1,2,3\nPSHELL,1,1,0.1\nPARAM,CM1,2.0")
     with pytest.raises(ModelError) as exc:
         read_bdf(write(tmp_path, deck))
     msg = str(exc.value)
     assert "unsupported element entries: CQUAD4 (2), CTRIA3 (1)" in msg
-    assert "also unsupported: PARAM,NOSUCH (1), PSHELL (1)" in msg
+    assert "also unsupported: PARAM,CM1 (1), PSHELL (1)" in msg
     assert "\n" not in msg
 
 

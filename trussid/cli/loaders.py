@@ -47,16 +47,25 @@ class LoadedStructure:
     testbed: object | None = None
 
 
-def load_structure(path: str | os.PathLike | None) -> LoadedStructure:
-    """Load MODEL as the command line gives it: None, a .toml testbed file or a bulk-data deck."""
+def load_structure(path: str | os.PathLike | None, conventions: str | None = None) -> LoadedStructure:
+    """Load MODEL as the command line gives it: None, a .toml testbed file or a bulk-data deck.
+
+    ``conventions`` ("nx" or "msc", default "nx") is the NASTRAN build whose element
+    conventions a deck is read with (:func:`trussid.fem.nastran.read_bdf`); it has no
+    meaning for a testbed and is refused there.
+    """
     if path is None:
+        if conventions is not None:
+            raise UserError("--conventions applies to NASTRAN decks, not to the default testbed")
         return testbed_structure(None)
     p = Path(path)
     suffix = p.suffix.lower()
+    if suffix in BULK_SUFFIXES:
+        return deck_structure(p, conventions)
+    if conventions is not None:
+        raise UserError(f"--conventions applies to NASTRAN decks ({', '.join(BULK_SUFFIXES)}), not to {p}")
     if suffix == ".toml":
         return testbed_structure(p)
-    if suffix in BULK_SUFFIXES:
-        return deck_structure(p)
     raise UserError(f"{p}: unknown model file type {suffix or '(no suffix)'!r}; give a NASTRAN deck "
                     f"({', '.join(BULK_SUFFIXES)}) or a testbed parameter file (.toml)")
 
@@ -98,12 +107,14 @@ def testbed_structure(path: Path | None) -> LoadedStructure:
                            notes=notes, testbed=tbm)
 
 
-def deck_structure(path: Path) -> LoadedStructure:
-    """A NASTRAN deck through :func:`trussid.fem.nastran.read_bdf`."""
+def deck_structure(path: Path, conventions: str | None = None) -> LoadedStructure:
+    """A NASTRAN deck through :func:`trussid.fem.nastran.read_bdf` (conventions default "nx")."""
     from trussid.fem.nastran import read_bdf
 
-    model, info = read_bdf(path)
-    notes = [f"mass: {info.mass} ({info.mass_reason})",
+    model, info = read_bdf(path, conventions=conventions or "nx")
+    notes = [f"conventions: {info.conventions} ({'given' if conventions else 'the default'}; "
+             f"PBARL/PBEAML ROD shear factor {'6/7' if info.conventions == 'msc' else '0.9'})",
+             f"mass: {info.mass} ({info.mass_reason})",
              f"beam theory: {info.beam_theory} ({info.beam_theory_reason})",
              f"supports: {info.spc_reason}"]
     if info.wtmass != 1.0:

@@ -29,6 +29,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--n", type=int, default=None, metavar="N",
                    help=f"number of modes (default: the deck's EIGRL ND, else {DEFAULT_N_MODES})")
     p.add_argument("--json", action="store_true", help="print a JSON object instead of a table")
+    p.add_argument("--conventions", choices=("nx", "msc"), default=None,
+                   help="NASTRAN build whose element conventions a deck follows where builds "
+                   "differ (PBARL/PBEAML ROD shear factor: nx 0.9, msc 6/7); default nx")
     p.add_argument("--op2", metavar="OUT.op2", default=None,
                    help="also write the eigenvalues and mass-normalised eigenvectors as a NASTRAN "
                    "OP2 file (OUGV1 eigenvector table, each grid in its CD system; 32-bit reals)")
@@ -41,7 +44,7 @@ def run(args) -> int:
 
     if args.n is not None and args.n < 1:
         raise UserError(f"--n must be at least 1, got {args.n}")
-    loaded = load_structure(args.model)
+    loaded = load_structure(args.model, args.conventions)
     n = args.n or loaded.n_modes or DEFAULT_N_MODES
     system = assemble(loaded.model, autospc=loaded.autospc)
     labels = None
@@ -70,6 +73,7 @@ def run(args) -> int:
             "n_dof": int(system.n_dof),
             "mass": model.mass_formulation,
             "beam_theory": model.beam_theory,
+            "conventions": getattr(loaded.info, "conventions", None),
             "units": loaded.units,
             "autospc_removed": len(system.autospc),
             "notes": loaded.notes,

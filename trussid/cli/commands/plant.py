@@ -40,6 +40,9 @@ def add_parser(subparsers) -> None:
                    "file's [plant] damping, else 0.02)")
     p.add_argument("--plot", default=None, metavar="BODE.png", help="also write a Bode plot")
     p.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
+    p.add_argument("--conventions", choices=("nx", "msc"), default=None,
+                   help="with --io: the NASTRAN build whose element conventions the deck follows "
+                   "where builds differ (PBARL/PBEAML ROD shear factor: nx 0.9, msc 6/7); default nx")
     p.set_defaults(func=run)
 
 
@@ -65,6 +68,8 @@ def run(args) -> int:
         raise UserError(f"--fs must be positive, got {args.fs}")
     if args.io is not None:
         return run_io(args, out)
+    if args.conventions is not None:
+        raise UserError("--conventions applies to a NASTRAN deck (with --io), not to a testbed")
     if args.model is not None and Path(args.model).suffix.lower() != ".toml":
         raise UserError(f"{args.model}: a plant needs actuators and sensors: give them with "
                         "--io IO.toml for a NASTRAN deck, or a testbed parameter file (.toml), "
@@ -133,7 +138,7 @@ def run_io(args, out: Path) -> int:
     if args.plot and (args.fs or spec.fs) is None:
         raise UserError("--plot draws the discrete plant: give a sample rate (--fs HZ or "
                         f"[plant] fs in {args.io})")
-    loaded = deck_structure(Path(args.model))
+    loaded = deck_structure(Path(args.model), args.conventions)
     sc, sd, modes, n = io_plant(loaded.model, spec, n_modes=args.modes, damping=args.damping,
                                 fs=args.fs, autospc=loaded.autospc)
     main = sd if sd is not None else sc
@@ -152,7 +157,7 @@ def run_io(args, out: Path) -> int:
          "states": int(main.nstates), "sample_rate_hz": args.fs or spec.fs,
          "modes_kept": n, "mode_frequencies_hz": f.tolist(),
          "damping": args.damping if args.damping is not None else (spec.damping or 0.02),
-         "stable": stable, "notes": loaded.notes}
+         "stable": stable, "conventions": loaded.info.conventions, "notes": loaded.notes}
     if args.json:
         print(dumps(s), end="")
         return 0
