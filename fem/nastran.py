@@ -42,13 +42,15 @@ import io
 import math
 import os
 import re
+import warnings
 from collections import defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from trussid.fem.errors import ModelError
+from trussid.fem.errors import ModelError, UnitsWarning
+from trussid.fem.materials import wave_speed_problem
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
 from trussid._util.files import atomic_path
@@ -270,6 +272,7 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     node_ids, xyz, frames = _nodes(bdf)
     nodes = _NodeTable(node_ids, xyz, frames)
     mats = _materials(bdf, info.wtmass)
+    _check_units(bdf, mats, info.wtmass)
     props = _properties(bdf, mats, info.wtmass, conventions)
 
     if beam_theory is None:
@@ -678,6 +681,23 @@ def coord_axes(coord, xyz: np.ndarray, label: str) -> np.ndarray:
         loc = np.stack([np.stack([st * cp_, st * sp_, ct], 1), np.stack([ct * cp_, ct * sp_, -st], 1),
                         np.stack([-sp_, cp_, 0 * cp_], 1)], axis=1)
     return loc @ R
+
+
+def _check_units(bdf, mats: dict, wtmass: float) -> None:
+    """Warn (:class:`UnitsWarning`, once per deck) when a material used by an element has an
+    E and a density that no consistent unit system gives a solid (:func:`wave_speed_problem`):
+    NASTRAN would run such a deck too, with frequencies off by orders of magnitude."""
+    used = set()
+    for p in bdf.properties.values():
+        mid = getattr(p, "mid", None)
+        if mid is not None:
+            used.add(int(mid))
+    for mid in sorted(used & set(mats)):
+        m = mats[mid]
+        why = wave_speed_problem(m["E"], m["rho"], wtmass)
+        if why:
+            warnings.warn(f"MAT1 {mid}: {why}", UnitsWarning, stacklevel=3)
+            return
 
 
 def _materials(bdf, wtmass: float) -> dict:
