@@ -242,7 +242,8 @@ def check(row: dict, nominal: bool, thresholds: dict | None = None) -> dict:
 
 
 def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band=None,
-                      form: str = "predictor", baselines: bool = True, progress=None):
+                      form: str = "predictor", baselines: bool = True, progress=None,
+                      n_modes=None):
     """The LQG from the identified ``model`` and its record, and the baselines' gains tuned
     on the same model (:func:`trussid.lqg.tune_baseline`).
 
@@ -259,7 +260,8 @@ def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band
     say = progress or (lambda msg: None)
     timings = {}
     t0 = time.perf_counter()
-    des = design_lqg(model, u, y, target_damping=target_damping, band=band, form=form, K=K)
+    des = design_lqg(model, u, y, target_damping=target_damping, band=band, form=form, K=K,
+                     n_modes=n_modes)
     timings["design"] = time.perf_counter() - t0
     freqs = ", ".join(f"{t['frequency_hz']:.0f}" for t in des.target_modes)
     say(f"LQG designed on {des.design_model.nstates} states ({freqs} Hz) "
@@ -587,10 +589,12 @@ def write_report(out, study: dict) -> list:
     return ["report.md", "summary.json", *figs]
 
 
-def demo_section(model, K, data, truth, quick: bool, progress=None):
+def demo_section(model, K, data, truth, quick: bool, progress=None, *, testbed: bool = True,
+                 excitation_rms=None):
     """``trussid demo``'s hook: the LQG from its MIMO model and identification record on
     the FE truth (and, unless ``quick``, on the perturbed truths with the baselines beside
-    it).
+    it). ``testbed`` False: any other structure, on its one true plant, graded in its own
+    units (:func:`plant_loop_settings`, the record's ``excitation_rms`` per command).
 
     Returns ``(markdown, {file name: Figure}, summary dict)`` (:func:`report_section`).
     """
@@ -600,10 +604,23 @@ def demo_section(model, K, data, truth, quick: bool, progress=None):
                    inputs=list(data.input_names), outputs=list(data.output_names))
     from trussid.lqg.errors import ControlError
 
-    plants = [("nominal", truth)] if quick else None
+    plants = [("nominal", truth)] if quick or not testbed else None
     try:
-        study = control_study(m, data.u, data.y, K=K, plants=plants, baselines=not quick,
-                              progress=progress)
+        if testbed:
+            study = control_study(m, data.u, data.y, K=K, plants=plants, baselines=not quick,
+                                  progress=progress)
+        else:
+            des, base, t_design = design_controller(m, data.u, data.y, K=K,
+                                                    baselines=not quick, progress=progress)
+            settings = plant_loop_settings(
+                truth, input_rms=None if excitation_rms is None else
+                np.broadcast_to(excitation_rms, (m.ninputs,)),
+                output_rms=np.std(data.y, axis=0),
+                target_damping=des.info["target_damping"],
+                targets_hz=[t["frequency_hz"] for t in des.target_modes])
+            study = robustness(des.controller, plants, base, settings, progress)
+            study["design"] = des
+            study["timings_s"] = {**t_design, **study["timings_s"]}
     except ControlError as exc:  # e.g. a model too small to hold a lightly damped mode
         md = f"## Closed loop: active damping\n\nNo controller designed: {exc}.\n"
         return md, {}, {"error": str(exc)}

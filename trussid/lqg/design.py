@@ -102,7 +102,7 @@ def excited_band(u, fs: float, floor_db: float = -20.0) -> tuple[float, float]:
 
 
 def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping: float = 0.05,
-                 excited=None, u_scale=None, y_scale=None):
+                 excited=None, u_scale=None, y_scale=None, n_modes=None):
     """Indices of the target blocks of :func:`modal.real_modal_basis` and a table of all modes.
 
     Parameters
@@ -118,6 +118,10 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
         has spurious ones at 441-667 Hz, above its 400 Hz excitation).
     excited : (float, float), optional
         Band the identification record excited [Hz] (:func:`excited_band`).
+    n_modes : int, optional
+        Target the ``n_modes`` lightly damped modes with the largest residue (in ``band``
+        when given, else in the ``excited`` band) instead of all the dominant ones (or all
+        those in ``band``).
     u_scale, y_scale : (m,), (p,) float, optional
         Typical level of each input and output (the record's RMS) in their own units: the
         residues are compared in these units, so that a shaker in N beside a PZT in V, or
@@ -140,6 +144,8 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
         if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
             raise ControlError(f"band: need 0 <= LO < HI [Hz], got {lo:g} {hi:g}")
         sel = [r["block"] for r in cand if lo <= r["frequency_hz"] <= hi]
+        if sel and n_modes is not None:
+            sel = sorted(sel, key=lambda b: -rows[b]["residue"])[:int(n_modes)]
         if not sel:
             near = ", ".join(f"{r['frequency_hz']:.1f}" for r in cand)
             nyq = 0.5 / model.dt
@@ -154,7 +160,10 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
                                + ("" if excited is None else
                                   f" in the excited band {excited[0]:.0f}-{excited[1]:.0f} Hz"))
         rmax = max(r["residue"] for r in cand)
-        sel = [r["block"] for r in cand if r["residue"] >= dominant_fraction * rmax]
+        if n_modes is not None:
+            sel = [r["block"] for r in sorted(cand, key=lambda r: -r["residue"])[:int(n_modes)]]
+        else:
+            sel = [r["block"] for r in cand if r["residue"] >= dominant_fraction * rmax]
     return sorted(sel, key=lambda b: rows[b]["frequency_hz"]), rows
 
 
@@ -209,7 +218,7 @@ def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
 def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
                form: str = "predictor", estimator: str = "record",
                dominant_fraction: float = 0.25, K=None, verify: bool = True,
-               min_fraction: float = 0.5) -> LQGDesign:
+               min_fraction: float = 0.5, n_modes: int | None = None) -> LQGDesign:
     """Design a discrete LQG damping controller from an identified model and its record.
 
     Parameters
@@ -235,6 +244,8 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
         leaves a target mode below ``min_fraction`` of ``target_damping``
         (:func:`verify_design`).
     min_fraction : float
+    n_modes : int, optional
+        Target this many modes, those with the largest residue (:func:`select_modes`).
 
     Returns
     -------
@@ -269,7 +280,8 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     # dividing by it would hide the low ones.
     u_rms = _levels(u)
     y_rms = _levels(y)
-    sel, rows = select_modes(model, band, dominant_fraction, excited=excited, u_scale=u_rms)
+    sel, rows = select_modes(model, band, dominant_fraction, excited=excited, u_scale=u_rms,
+                             n_modes=n_modes)
     dm, kept = modal_truncation(model, sel)
     A, B, C = (np.asarray(M, dtype=float) for M in (dm.A, dm.B, dm.C))
     blocks = [np.array([2 * k, 2 * k + 1]) for k in range(len(kept))]
@@ -311,7 +323,8 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
                for b, z, w in zip(sel, zeta_sf, q)]
     info = {"form": form, "estimator": estimator, "estimator_choice": kinfo,
             "target_damping": target_damping, "band": None if band is None else list(band),
-            "dominant_fraction": dominant_fraction, "lqr_iterations": iters,
+            "dominant_fraction": dominant_fraction, "n_modes": n_modes,
+            "lqr_iterations": iters,
             "excited_band_hz": list(excited),
             "design_states": int(A.shape[0]), "model_states": int(model.nstates),
             "estimator_min_damping": float(np.min(zeta_est)) if zeta_est.size else None,

@@ -40,6 +40,9 @@ def add_parser(subparsers):
                    help="target every lightly damped mode in this band [Hz] (default: the "
                    "dominant modes, residue >= 25 %% of the largest with each input at its "
                    "record's RMS, in the band the record excited)")
+    p.add_argument("--modes", type=int, metavar="N",
+                   help="target the N modes with the largest residue (in --band when given, "
+                   "else in the band the record excited) instead of every dominant one")
     p.add_argument("--form", choices=FORMS, default="predictor",
                    help="predictor: u[k] from y up to k-1 (one sample to compute, as the "
                    "thesis's PC); filter: u[k] from y[k] (no computation time)")
@@ -66,6 +69,8 @@ def run(args) -> int:
         raise UserError(f"--out {args.out}: the controller file must end in .npz")
     if not (math.isfinite(args.target_damping) and 0 < args.target_damping < 1):
         raise UserError(f"--target-damping must lie in (0, 1), got {args.target_damping:g}")
+    if args.modes is not None and args.modes < 1:
+        raise UserError(f"--modes must be a positive integer, got {args.modes}")
     model, meta = load_model(args.model, which="discrete")
     data = read_data(args.data, inputs=meta["input_names"], outputs=meta["output_names"])
     if not math.isclose(data.fs, 1.0 / meta["dt"], rel_tol=1e-6):
@@ -73,7 +78,8 @@ def run(args) -> int:
                         f"{1.0 / meta['dt']:g} Hz")
     des, base, timings = design_controller(
         model, data.u, data.y, K=meta["K"], target_damping=args.target_damping,
-        band=args.band, form=args.form, baselines=not args.no_baselines, progress=print)
+        band=args.band, form=args.form, baselines=not args.no_baselines, progress=print,
+        n_modes=args.modes)
     info = json_safe({"form": des.form, "target_modes": des.target_modes,
                       "info": {k: v for k, v in des.info.items() if k != "model_modes"},
                       "model": str(args.model), "data": str(args.data), "timings_s": timings})
