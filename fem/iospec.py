@@ -50,7 +50,7 @@ from trussid.fem.actuators import strain_actuator_loads, Wafer
 from trussid.fem.assembly import assemble
 from trussid.fem.modal import solve_modes
 from trussid.fem.plant import modal_plant
-from trussid.fem.sensors import Sensor
+from trussid.fem.sensors import Sensor, sensor_matrix
 
 __all__ = ["IOSpec", "PointLoad", "StrainActuator", "read_io", "io_loads", "io_plant"]
 
@@ -259,8 +259,6 @@ def _check_channels_act(model, system, spec: IOSpec, loads: np.ndarray) -> None:
     """Refuse an actuator that moves no free DOF, or a sensor that reads none: its channel
     of the plant would be identically zero (a load on a clamped node, a sensor on a node
     without elements), which is never what was meant."""
-    from trussid.fem.sensors import sensor_matrix
-
     T = system.T
     acting = np.abs(T.T @ loads).max(axis=0) if loads.size else np.zeros(0)
     for j, a in enumerate(spec.actuators):

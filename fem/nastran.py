@@ -54,6 +54,7 @@ from trussid.fem.materials import wave_speed_problem
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
 from trussid._util.files import atomic_path
+from trussid.fem.assembly import _coo, beam_matrices, general_blocks, mass_blocks
 from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transform
 from trussid.fem.elements import frame_matrices, local_axes, to_global
 
@@ -1722,8 +1723,6 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
 
 def _global_mass(model: Model):
     """The model's unconstrained mass matrix (6 DOFs per node, in node-id order) [kg, kg m^2]."""
-    from trussid.fem.assembly import _coo, beam_matrices, general_blocks, mass_blocks
-
     _, Mb, db = beam_matrices(model)
     ms, dm = mass_blocks(model)
     _, mg, dg = general_blocks(model)

@@ -56,8 +56,10 @@ from pathlib import Path
 
 import numpy as np
 
+from trussid._util.errors import UserError
 from trussid._util.files import atomic_path
 from trussid._util.jsonio import json_safe
+from trussid.campaign.structure import DEFAULT_SNR_DB, testbed_campaign_plant
 
 #: Standard gravity [m/s^2], to give sensor noise in g.
 G0 = 9.80665
@@ -191,8 +193,6 @@ def derived_settings(cp, quick: bool = False, **overrides):
 def build_plant(settings: DemoSettings, tb=None):
     """The default testbed's plant at 1600 Hz with its lab
     (:class:`trussid.campaign.structure.CampaignPlant`)."""
-    from trussid.campaign.structure import testbed_campaign_plant
-
     return testbed_campaign_plant(tb)
 
 
@@ -206,8 +206,7 @@ def sensor_noise(cp, settings: DemoSettings):
     """Sensor noise RMS per output in plant output units: the testbed's accelerometer noise
     (:func:`sensor_noise_volts`), the lab's, or :data:`trussid.campaign.structure.
     DEFAULT_SNR_DB` under each output in a noise-free trial of the all-channel record."""
-    from trussid.campaign.structure import DEFAULT_SNR_DB
-    from trussid.plid.experiment import simulate
+    from trussid.plid.experiment import simulate  # as range_conditioners
 
     if cp.testbed is not None:
         return sensor_noise_volts(cp.testbed, settings)
@@ -215,8 +214,6 @@ def sensor_noise(cp, settings: DemoSettings):
     if cp.lab.sensor_noise is not None:
         v = np.asarray(cp.lab.sensor_noise, dtype=float)
         if v.size not in (1, p):
-            from trussid._util.errors import UserError
-
             raise UserError(f"{cp.lab.source}: sensor_noise has {v.size} values for {p} "
                             f"sensors")
         return np.broadcast_to(v, (p,)).copy()
@@ -428,8 +425,8 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
 def _subspace_with_d(u, y, order: int, dt: float, block_rows):
     """The best N4SID model with a direct term over ``block_rows`` by one-step prediction on
     ``(u, y)``: ``(model, K, dB, skip, block rows)``, or None if none is stable."""
-    from trussid.plid.metrics import choose_predictor, prediction_ratio_db
-    from trussid.plid.subspace import n4sid
+    from trussid.plid.metrics import choose_predictor, prediction_ratio_db  # as identify_model
+    from trussid.plid.subspace import n4sid  # as identify_model: plid loads with the campaign
 
     best = None
     for br in block_rows:
@@ -743,8 +740,6 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
 
 def check_out(out, force: bool) -> Path:
     """Refuse a report directory that cannot be written, before any computation."""
-    from trussid._util.errors import UserError
-
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out} exists and is not a directory")

@@ -34,6 +34,10 @@ from pathlib import Path
 import numpy as np
 
 from trussid._util.errors import UserError
+from trussid.fem.iospec import io_plant, read_io
+from trussid.fem.modal import Modes
+from trussid.fem.nastran import read_bdf
+from trussid.testbed.plant import testbed_plant
 
 #: Keys of a LAB file's [lab] table.
 LAB_KEYS = {"fs", "bits", "full_scale", "sensor_noise", "damping"}
@@ -159,8 +163,6 @@ class CampaignPlant:
 
 def testbed_campaign_plant(tb=None) -> CampaignPlant:
     """The default testbed (or ``tb``) at its lab's rate, converters and noise."""
-    from trussid.testbed.plant import testbed_plant
-
     tp = testbed_plant(tb)
     t = tp.tbm.testbed
     lab = Lab(fs=1.0 / tp.discrete.dt, bits=t.daq.bits, full_scale=t.daq.full_scale,
@@ -173,9 +175,6 @@ def deck_campaign_plant(deck, io, lab_path=None, *, n_modes=None) -> CampaignPla
 
     Every mode below the Nyquist frequency is kept (``n_modes`` to keep fewer).
     """
-    from trussid.fem.iospec import io_plant, read_io
-    from trussid.fem.nastran import read_bdf
-
     model, info = read_bdf(deck)
     spec = read_io(io)
     lab = read_lab(lab_path, spec)
@@ -189,7 +188,5 @@ def deck_campaign_plant(deck, io, lab_path=None, *, n_modes=None) -> CampaignPla
 
 def replace_frequencies(modes, n):
     """``modes`` cut to the first ``n`` (only what the campaign reads)."""
-    from trussid.fem.modal import Modes
-
     return Modes(modes.frequencies_hz[:n], modes.omega[:n], modes.shapes[:, :n],
                  modes.shapes_full[:, :n], modes.node_ids, modes.xyz, modes.n_dof, modes.method)
