@@ -29,6 +29,7 @@ import numpy as np
 import pyarrow as pa
 
 from trussid.plid.frf import frequency_response
+from trussid.study.deck import DeckModesEvaluator
 from trussid.study.spec import StudyError
 
 WALLS = tuple(f"wall{i}" for i in range(6))
@@ -463,7 +464,7 @@ def _score(model, case, val, seconds, opts, K=None) -> dict:
 
 
 EVALUATORS = {e.name: e for e in (ModesEvaluator(), SensitivitiesEvaluator(), PlantEvaluator(),
-                                  IdentifyEvaluator())}
+                                  IdentifyEvaluator(), DeckModesEvaluator())}
 
 
 def get_evaluator(name: str, where: str = "spec") -> Evaluator:
