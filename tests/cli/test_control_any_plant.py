@@ -116,7 +116,7 @@ def test_closed_loop_simulation_with_feed_through_matches_the_linear_loop():
     des = design_lqg(plant, u, y)
     ctrl = des.controller
     d = np.random.default_rng(0).normal(size=(600, 2))
-    sim = simulate_loop(plant, ctrl, d, 0.0, bits=None)
+    sim = simulate_loop(plant, ctrl, d, 0.0, bits=None, dac_full_scale=1.0, adc_full_scale=1.0)
     cl = closed_loop(plant, ctrl)
     ref = control.forced_response(cl[:3, :2], U=d.T).outputs.T
     assert np.allclose(sim["y"], ref, rtol=1e-9, atol=1e-9 * np.abs(ref).max())

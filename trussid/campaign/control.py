@@ -69,12 +69,21 @@ def truths(tb=None, stretch: bool = False, progress=None) -> list:
 
 @dataclass(frozen=True)
 class LoopSettings:
-    """How a loop is exercised and graded: excitation at the actuators, sensor noise,
-    converters, thresholds. The defaults are the testbed demo's (issue 14);
-    :func:`plant_loop_settings` derives them for any other plant.
+    """How a loop is exercised and graded: the lab's converters, excitation at the
+    actuators, sensor noise, thresholds. The other defaults are the testbed demo's (issue
+    14); :func:`plant_loop_settings` derives them for any other plant.
+
+    The converters have no default: they are the lab's (:meth:`for_lab`, from a
+    :class:`trussid.geometry.lab.LabSpec`: the testbed's ``tb.lab``, a plant's
+    ``TestbedPlant.lab`` or the lab recorded in a plant file); ``bits=None``: ideal
+    converters (no quantising, no clipping).
 
     Attributes
     ----------
+    bits, full_scale : int, float
+        D/A and A/D resolution [-] and range +-``full_scale`` [V].
+    sample_rate : float
+        The converters' rate [Hz]; a plant sampled at another rate is refused.
     band : (float, float)
         Modes tabulated [Hz] (the issue's 40-450 Hz).
     excitation_rms : float or sequence of float
@@ -85,8 +94,6 @@ class LoopSettings:
         Sensor noise RMS, in each sensor's unit.
     n_samples : int
         Length of the time simulation (at the plant's rate).
-    bits, full_scale : int or None, float
-        Converters (12-bit, +-10 V); ``bits=None``: ideal (no quantising, no clipping).
     seed : int
     thresholds : dict
         Acceptance thresholds (:data:`THRESHOLDS`); ``command_rms_v`` ``None`` grades no
@@ -100,13 +107,14 @@ class LoopSettings:
         Unit names in the report ("V" on the testbed, "unit" for a plant's own units).
     """
 
+    bits: int
+    full_scale: float
+    sample_rate: float
     band: tuple = (40.0, 450.0)
     excitation_rms: object = 2.5
     excitation_band_hz: float = 400.0
     noise_rms: object = 0.0245
     n_samples: int = 8000
-    bits: object = 12
-    full_scale: float = 10.0
     seed: int = 14
     thresholds: dict = field(default_factory=lambda: dict(THRESHOLDS))
     watch_hz: tuple = (118.0, 138.0)
@@ -114,15 +122,23 @@ class LoopSettings:
     input_unit: str = "V"
     output_unit: str = "V"
 
+    @classmethod
+    def for_lab(cls, lab, **overrides) -> "LoopSettings":
+        """The settings with ``lab``'s converters (a :class:`~trussid.geometry.lab.LabSpec`);
+        ``overrides`` set the other fields."""
+        return cls(bits=lab.daq.bits, full_scale=lab.daq.full_scale,
+                   sample_rate=lab.daq.sample_rate, **overrides)
+
 
 def plant_loop_settings(plant, *, input_rms=None, output_rms=None, target_damping=None,
-                        targets_hz=(), n_samples: int = 8000, seed: int = 14) -> LoopSettings:
+                        targets_hz=(), n_samples: int = 8000, seed: int = 14,
+                        lab=None) -> LoopSettings:
     """:class:`LoopSettings` for any discrete plant, graded in its own units.
 
     Every mode up to the Nyquist frequency is tabulated; the excitation is white up to 0.4
     of the sample rate at ``input_rms`` per actuator (the identification record's levels,
     default 1 unit), the sensor noise 1 % of ``output_rms`` (default none); the converters
-    are ideal (the plant file says nothing of them); the design's target modes
+    are ``lab``'s (a :class:`~trussid.geometry.lab.LabSpec`), ideal without one; the design's target modes
     (``targets_hz``) are the dominant ones and pass at half its ``target_damping`` (default
     7 %); every other mode keeps 80 % of its damping; no command level and no H2 change is
     graded (no unit is known to compare the one with, and the other depends on how many
@@ -135,18 +151,30 @@ def plant_loop_settings(plant, *, input_rms=None, output_rms=None, target_dampin
              h2_reduction_db=None)
     exc = 1.0 if input_rms is None else [float(v) for v in np.ravel(input_rms)]
     noise = 0.0 if output_rms is None else [0.01 * float(v) for v in np.ravel(output_rms)]
+    bits, full = (None, 1.0) if lab is None else (lab.daq.bits, lab.daq.full_scale)
     return LoopSettings(band=(0.0, 0.5 * fs), excitation_rms=exc, excitation_band_hz=0.4 * fs,
-                        noise_rms=noise, n_samples=n_samples, bits=None, seed=seed,
+                        noise_rms=noise, n_samples=n_samples, bits=bits, full_scale=full,
+                        sample_rate=fs, seed=seed,
                         thresholds=t, watch_hz=(), targets_hz=tuple(map(float, targets_hz)),
                         input_unit="unit", output_unit="unit")
 
 
-def evaluate_loop(plant, controller, settings: LoopSettings = LoopSettings(),
+def evaluate_loop(plant, controller, settings: LoopSettings,
                   margins: bool = True, simulate: bool = True) -> dict:
-    """Every figure of merit of ``controller`` on ``plant`` (one row of the tables)."""
+    """Every figure of merit of ``controller`` on ``plant`` (one row of the tables).
+
+    Raises
+    ------
+    ControlError
+        If ``plant`` is not sampled at the converters' rate ``settings.sample_rate``.
+    """
+    from trussid.lqg.errors import ControlError
     from trussid.lqg.evaluate import damping_table, disk_margins, h2_norm, simulate_loop
     from trussid.plid.experiment import excitation
 
+    if not np.isclose(1.0 / plant.dt, settings.sample_rate, rtol=1e-9):
+        raise ControlError(f"the plant is sampled at {1.0 / plant.dt:g} Hz but the lab's "
+                           f"converters run at {settings.sample_rate:g} Hz")
     t0 = time.perf_counter()
     tab = damping_table(plant, controller, band=settings.band)
     rows = tab["rows"]
@@ -210,6 +238,10 @@ def evaluate_loop(plant, controller, settings: LoopSettings = LoopSettings(),
         out["dac_clipped"] = sim["dac_clipped"]
         out["adc_clipped"] = sim["adc_clipped"]
         out["y_rms_closed"] = np.sqrt(np.mean(sim["y"][skip:] ** 2, axis=0)).tolist()
+        # what the simulated converters were, from the simulation itself
+        out["converters"] = {"sample_rate_hz": 1.0 / plant.dt, "dac_lsb_v": sim["dac_lsb"],
+                             "adc_lsb_v": sim["adc_lsb"], "bits": settings.bits,
+                             "full_scale_v": settings.full_scale}
     out["seconds"] = time.perf_counter() - t0
     return out
 
@@ -284,7 +316,7 @@ def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band
     return des, base, timings
 
 
-def robustness(controller, plants, baselines=None, settings: LoopSettings = LoopSettings(),
+def robustness(controller, plants, baselines, settings: LoopSettings,
                progress=None) -> dict:
     """``controller`` (and each baseline) on every plant of ``plants`` (the first nominal).
 
@@ -325,10 +357,11 @@ def robustness(controller, plants, baselines=None, settings: LoopSettings = Loop
 
 def control_study(model, u, y, *, K=None, target_damping: float = 0.07, band=None,
                   form: str = "predictor", stretch: bool = False, baselines: bool = True,
-                  settings: LoopSettings = LoopSettings(), tb=None, plants=None,
+                  settings: LoopSettings, tb=None, plants=None,
                   progress=None) -> dict:
     """Design from the identified ``model`` and record ``(u, y)``, evaluate on the truths
-    (:func:`truths`, or ``plants``: ``[(label, plant)]``, the first nominal).
+    (:func:`truths` of ``tb``, or ``plants``: ``[(label, plant)]``, the first nominal)
+    with the converters of ``settings`` (:meth:`LoopSettings.for_lab`).
 
     Returns
     -------
@@ -589,12 +622,14 @@ def write_report(out, study: dict) -> list:
     return ["report.md", "summary.json", *figs]
 
 
-def demo_section(model, K, data, truth, quick: bool, progress=None, *, testbed: bool = True,
-                 excitation_rms=None):
+def demo_section(model, K, data, truth, quick: bool, settings: LoopSettings, tb,
+                 progress=None, *, lab=None, excitation_rms=None):
     """``trussid demo``'s hook: the LQG from its MIMO model and identification record on
-    the FE truth (and, unless ``quick``, on the perturbed truths with the baselines beside
-    it). ``testbed`` False: any other structure, on its one true plant, graded in its own
-    units (:func:`plant_loop_settings`, the record's ``excitation_rms`` per command).
+    the FE truth (and, unless ``quick``, on the perturbed truths of testbed ``tb`` with the
+    baselines beside it), exercised with ``settings`` (the demo's lab and excitation).
+    ``tb`` None: any other structure, on its one true plant behind ``lab``'s converters,
+    graded in its own units (:func:`plant_loop_settings`, the record's ``excitation_rms``
+    per command; ``settings`` is not used).
 
     Returns ``(markdown, {file name: Figure}, summary dict)`` (:func:`report_section`).
     """
@@ -604,11 +639,11 @@ def demo_section(model, K, data, truth, quick: bool, progress=None, *, testbed: 
                    inputs=list(data.input_names), outputs=list(data.output_names))
     from trussid.lqg.errors import ControlError
 
-    plants = [("nominal", truth)] if quick or not testbed else None
+    plants = [("nominal", truth)] if quick or tb is None else None
     try:
-        if testbed:
+        if tb is not None:
             study = control_study(m, data.u, data.y, K=K, plants=plants, baselines=not quick,
-                                  progress=progress)
+                                  settings=settings, tb=tb, progress=progress)
         else:
             des, base, t_design = design_controller(m, data.u, data.y, K=K,
                                                     baselines=not quick, progress=progress)
@@ -617,7 +652,7 @@ def demo_section(model, K, data, truth, quick: bool, progress=None, *, testbed: 
                 np.broadcast_to(excitation_rms, (m.ninputs,)),
                 output_rms=np.std(data.y, axis=0),
                 target_damping=des.info["target_damping"],
-                targets_hz=[t["frequency_hz"] for t in des.target_modes])
+                targets_hz=[t["frequency_hz"] for t in des.target_modes], lab=lab)
             study = robustness(des.controller, plants, base, settings, progress)
             study["design"] = des
             study["timings_s"] = {**t_design, **study["timings_s"]}

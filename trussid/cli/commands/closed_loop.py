@@ -7,7 +7,9 @@ thresholds. With PLANT (a discrete model file whose inputs and outputs carry the
 controller's names, or those names without the ``u_``/``y_`` prefix of a CSV record), on
 that plant alone, graded in its own units (:func:`trussid.campaign.control.
 plant_loop_settings`): every mode up to Nyquist, excitation white to 0.4 of the sample rate
-at the identification record's levels, ideal converters, feed-through allowed.
+at the identification record's levels, behind the converters of the lab the plant file
+records (``trussid plant`` and the demo's ``plant_true.npz`` record theirs; ideal
+converters for a plant file without one, said on stderr), feed-through allowed.
 Writes ``report.md`` (damping table, robustness table, margins, baselines), ``sigma.png``,
 ``bode_<channel>.png``, ``impulse.png``, ``poles.png`` and ``summary.json``. Everything is
 computed before the first file is written.
@@ -56,6 +58,7 @@ def run(args) -> int:
     from trussid._util.errors import UserError
     from trussid.campaign.control import (LoopSettings, plant_loop_settings, robustness,
                                           truths, write_report)
+    from trussid.geometry.lab import recorded_lab
     from trussid.geometry.spec import Testbed
     from trussid.plid.modelfile import load_model
 
@@ -72,19 +75,20 @@ def run(args) -> int:
     ex = meta["extra"]
     design = json.loads(str(ex["design_json"])) if "design_json" in ex else {}
     if args.plant:
-        plant, _ = load_model(args.plant, which="discrete")
+        plant, pmeta = load_model(args.plant, which="discrete")
         plants = [(Path(args.plant).stem, plant)]
         ctrl, renamed = match_names(plant, ctrl)
         if renamed:
             print("controller channels matched to the plant's by dropping the record's u_/y_ "
                   "prefix: " + ", ".join(f"{a} -> {b}" for a, b in renamed))
+        lab = recorded_lab(pmeta["extra"], args.plant)
         di = design.get("info", {})
         settings = plant_loop_settings(plant, input_rms=di.get("input_rms"),
                                        output_rms=di.get("output_rms"),
                                        target_damping=di.get("target_damping"),
                                        targets_hz=[t["frequency_hz"] for t in
                                                    design.get("target_modes", [])],
-                                       n_samples=args.samples)
+                                       n_samples=args.samples, lab=lab)
     else:
         dt_tb = 1.0 / Testbed().daq.sample_rate
         if not math.isclose(ctrl.dt, dt_tb, rel_tol=1e-9):
@@ -92,9 +96,12 @@ def run(args) -> int:
                             f"(sampled at {1 / dt_tb:g} Hz), but it is sampled at "
                             f"{1 / ctrl.dt:g} Hz: give the plant file it was designed for")
         plants = truths(stretch=args.stretch)
-        settings = LoopSettings(n_samples=args.samples)
+        settings = LoopSettings.for_lab(Testbed().lab, n_samples=args.samples)
     for label, plant in plants:  # every mismatch before any work
         check_pair(plant, ctrl, label)
+    if args.plant and lab is None:  # a plant file that records no lab (a model, a deck's)
+        print(f"trussid closed-loop: note: {args.plant} records no lab; its loop runs behind "
+              "ideal converters", file=sys.stderr)
     base = {}
     if not args.no_baselines and "baseline_kinds" in ex:
         for k, g, b in zip(ex["baseline_kinds"], ex["baseline_gains"], ex["baseline_bands"]):

@@ -38,9 +38,10 @@ def add_parser(subparsers):
                    help="actuators, sensors and [plant] sample rate and damping of a deck "
                    "(the format of trussid plant --io)")
     p.add_argument("--lab", metavar="LAB.toml",
-                   help="the lab of a deck's campaign: [lab] fs, bits, full_scale, "
-                   "sensor_noise, damping (default: the IO file's [plant], 12-bit +-10 "
-                   "converters, sensor noise 60 dB under each output)")
+                   help="the lab of a deck's campaign, a lab file (trussid.geometry.lab."
+                   "LabSpec: [daq] sample_rate, bits, full_scale); default: the IO file's "
+                   "[plant] fs with 12-bit +-10 converters; sensor noise 60 dB under each "
+                   "output")
     p.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"),
                    help="excitation band [Hz] (default: the testbed's 0-400 Hz; a deck's "
                    "0 to 0.4 of the sample rate)")
@@ -87,16 +88,20 @@ def run(args) -> int:
     from pathlib import Path
 
     from trussid._util.errors import UserError
-    from trussid.campaign.demo import check_out, demo_settings, derived_settings, run_demo
+    from trussid.campaign.demo import demo_settings, derived_settings, run_demo
 
     overrides = _overrides(args)
-    check_out(args.out, args.force)  # before any computation
+    out = Path(args.out)  # refused before any computation (run_demo checks it again)
+    if out.exists() and (not out.is_dir() or not args.force):
+        raise UserError(f"--out {out} exists" + (" and is not a directory" if not out.is_dir()
+                        else "; give --force to replace it (it is replaced only once the "
+                        "new report is complete)"))
     t0 = time.perf_counter()
 
     def say(msg):
         print(f"[{time.perf_counter() - t0:6.1f} s] {msg}", flush=True)
 
-    plant = None
+    plant = testbed = None
     suffix = Path(args.model).suffix.lower() if args.model else ""
     if args.model and suffix != ".toml":
         from trussid.campaign.structure import deck_campaign_plant
@@ -116,15 +121,15 @@ def run(args) -> int:
             raise UserError("--io and --lab apply to a NASTRAN deck MODEL; the testbed's lab "
                             "is in its parameter file")
         if args.model:
-            from trussid.campaign.structure import testbed_campaign_plant
             from trussid.cli.loaders import testbed_spec
 
-            plant = testbed_campaign_plant(testbed_spec(args.model))
+            testbed = testbed_spec(args.model)
         settings = demo_settings(args.quick, **overrides)
 
     import shlex
 
     summary = run_demo(args.out, settings, progress=say, force=args.force, plant=plant,
+                       testbed=testbed,
                        command="trussid " + " ".join(
                            shlex.quote(a) for a in getattr(args, "argv", sys.argv[1:])))
     print()
@@ -132,15 +137,15 @@ def run(args) -> int:
           f"beside it)")
     print(f"{'model':<10} {'kind':<5} {'states':>6} {'SPE [dB]':>9} {'per output [dB]':>17} "
           f"{'FRF max':>8} {'FRF RMS':>8} {'seconds':>8}")
-    for m in summary["models"]:
+    for m in summary.models:
         def f(x, w=8, d=2):
             return f"{x:{w}.{d}f}" if x is not None else f"{'-':>{w}}"
-        print(f"{m['name']:<10} {m['kind']:<5} {m['states']:>6} "
-              f"{f(m['signal_to_prediction_error_db'], 9)} "
-              f"{', '.join(f'{v:.1f}' for v in m['signal_to_prediction_error_db_per_output']):>17} "
-              f"{f(m['frf_max_error_db'])} {f(m['frf_rms_error_db'])} {f(m['seconds'], 8, 1)}")
-    lo, hi = summary["settings"]["frf_band"]
+        print(f"{m.name:<10} {m.kind:<5} {m.states:>6} "
+              f"{f(m.signal_to_prediction_error_db, 9)} "
+              f"{', '.join(f'{v:.1f}' for v in m.signal_to_prediction_error_db_per_output):>17} "
+              f"{f(m.frf_max_error_db)} {f(m.frf_rms_error_db)} {f(m.seconds, 8, 1)}")
+    lo, hi = summary.settings.frf_band
     print(f"(SPE: one-step signal-to-prediction-error ratio on validation data; FRF errors "
           f"in dB against the true plant over {lo:g}-{hi:g} Hz)")
-    print(f"total {summary['timings_s']['total']:.1f} s", file=sys.stdout)
+    print(f"total {summary.timings_s['total']:.1f} s", file=sys.stdout)
     return 0
