@@ -42,16 +42,19 @@ import io
 import math
 import os
 import re
+import warnings
 from collections import defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from trussid.fem.errors import ModelError
+from trussid.fem.errors import ModelError, UnitsWarning
+from trussid.fem.materials import wave_speed_problem
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
 from trussid._util.files import atomic_path
+from trussid.fem.assembly import _coo, beam_matrices, general_blocks, mass_blocks
 from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transform
 from trussid.fem.elements import frame_matrices, local_axes, to_global
 
@@ -289,6 +292,7 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     node_ids, xyz, frames = _nodes(bdf)
     nodes = _NodeTable(node_ids, xyz, frames)
     mats = _materials(bdf, info.wtmass)
+    _check_units(bdf, mats, info.wtmass)
     props = _properties(bdf, mats, info.wtmass, conventions)
 
     if beam_theory is None:
@@ -697,6 +701,23 @@ def coord_axes(coord, xyz: np.ndarray, label: str) -> np.ndarray:
         loc = np.stack([np.stack([st * cp_, st * sp_, ct], 1), np.stack([ct * cp_, ct * sp_, -st], 1),
                         np.stack([-sp_, cp_, 0 * cp_], 1)], axis=1)
     return loc @ R
+
+
+def _check_units(bdf, mats: dict, wtmass: float) -> None:
+    """Warn (:class:`UnitsWarning`, once per deck) when a material used by an element has an
+    E and a density that no consistent unit system gives a solid (:func:`wave_speed_problem`):
+    NASTRAN would run such a deck too, with frequencies off by orders of magnitude."""
+    used = set()
+    for p in bdf.properties.values():
+        mid = getattr(p, "mid", None)
+        if mid is not None:
+            used.add(int(mid))
+    for mid in sorted(used & set(mats)):
+        m = mats[mid]
+        why = wave_speed_problem(m["E"], m["rho"], wtmass)
+        if why:
+            warnings.warn(f"MAT1 {mid}: {why}", UnitsWarning, stacklevel=3)
+            return
 
 
 def _materials(bdf, wtmass: float) -> dict:
@@ -1125,8 +1146,10 @@ def _add_scalar_masses(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> N
             value = float(p.mass)
         else:
             value = float(m.mass)
-        if not (math.isfinite(value) and value >= 0):
-            raise ModelError(f"{card}: mass must be finite and >= 0, got {value:g}")
+        # NASTRAN takes a negative scalar mass (write_bdf's mass corrections use them); the
+        # assembled mass is checked as a whole by the eigensolver
+        if not math.isfinite(value):
+            raise ModelError(f"{card}: mass must be finite, got {value:g}")
         ends.append(_scalar_ends(m, card, nodes))
         values.append(value * wtmass)
         eids.append(m.eid)
@@ -1728,6 +1751,68 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     bdf.case_control_deck = CaseControlDeck(lines, log=bdf.log)
     with atomic_path(path) as tmp:
         bdf.write_bdf(str(tmp), size=16, is_double=False, enddata=True)
+        n_scalar = _write_mass_corrections(bdf, model, tmp, eid_for)
+        if n_scalar:
+            bdf.write_bdf(str(tmp), size=16, is_double=False, enddata=True)
+
+
+def _global_mass(model: Model):
+    """The model's unconstrained mass matrix (6 DOFs per node, in node-id order) [kg, kg m^2]."""
+    _, Mb, db = beam_matrices(model)
+    ms, dm = mass_blocks(model)
+    _, mg, dg = general_blocks(model)
+    return _coo([Mb] + ms + mg, [db] + dm + dg, model.n_dof)
+
+
+#: Mass entries of the written deck's difference from the model below this fraction of
+#: ``sqrt(M_ii M_jj)`` are the round-off of 16-character fields, not a convention: no card.
+MASS_CORRECTION_FLOOR = 1e-11
+
+
+def _write_mass_corrections(bdf, model: Model, deck, eid_for) -> int:
+    """CMASS2 elements that make NASTRAN's mass of the written ``deck`` the model's own.
+
+    NASTRAN's coupled CBAR mass has no torsional inertia, its coupled CROD mass is not the
+    textbook rod's and its shear-flexible coupled mass drops the rotary inertia
+    (:func:`_nastran_mass_conventions`). The deck is read back as NASTRAN would run it and
+    the difference ``dM`` from the model's mass is added as scalar masses: ``-dM_ij``
+    between components ``i`` and ``j`` (a CMASS2 adds its value to both diagonals and
+    subtracts it off the diagonal), and on each diagonal the rest, grounded. NASTRAN takes
+    negative scalar masses; the sum is the model's positive semi-definite mass. Returns the
+    number of cards added.
+    """
+    back, _ = read_bdf(deck)
+    M0 = _global_mass(model).tocsr()
+    # the read-back model's DOFs in the model's node order
+    pos = {int(n): i for i, n in enumerate(back.node_ids)}
+    perm = np.array([pos[int(n)] for n in model.node_ids])
+    dof = (6 * perm[:, None] + np.arange(6)).ravel()
+    M1 = _global_mass(back).tocsr()[dof][:, dof]
+    dM = (M0 - M1).tocoo()
+    d0 = np.abs(M0.diagonal())
+    scale = np.sqrt(np.maximum(d0[dM.row] * d0[dM.col], 1e-300))
+    big = np.abs(dM.data) > MASS_CORRECTION_FLOOR * scale
+    if not big.any():
+        return 0
+    rows, cols, vals = dM.row[big], dM.col[big], dM.data[big]
+    ids = model.node_ids
+    diag = np.zeros(model.n_dof)
+    n = 0
+    for i, j, v in zip(rows.tolist(), cols.tolist(), vals.tolist()):
+        if i < j:
+            gi, gj = int(ids[i // 6]), int(ids[j // 6])
+            bdf.add_cmass2(eid_for(0), -v, [gi, gj], i % 6 + 1, j % 6 + 1,
+                           comment="" if n else "model mass minus NASTRAN's coupled element "
+                           "mass (trussid write_bdf)")
+            diag[i] += v
+            diag[j] += v
+            n += 1
+        elif i == j:
+            diag[i] += v
+    for i in np.flatnonzero(np.abs(diag) > MASS_CORRECTION_FLOOR * np.maximum(d0, 1e-300)):
+        bdf.add_cmass2(eid_for(0), float(diag[i]), [int(ids[i // 6]), None], int(i % 6 + 1), None)
+        n += 1
+    return n
 
 
 def _unique_rows(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

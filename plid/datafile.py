@@ -734,7 +734,9 @@ def write_data(data: IOData, path) -> Path:
         table = np.column_stack([t, data.u, data.y])
         with atomic_path(path) as tmp:
             with open(tmp, "w", newline="") as fh:
-                fh.write(",".join(["t", *in_names, *out_names]) + "\n")
+                # csv quotes a name holding a comma, a quote or a line break, which the
+                # reader takes back (a bare comma would split the name into two columns)
+                csv.writer(fh, lineterminator="\n").writerow(["t", *in_names, *out_names])
                 # %s of a float64 is its shortest exact form (0.000625, not %.17g's
                 # 0.00062500000000000001); the channels keep 17 digits, exact on reading
                 np.savetxt(fh, table, delimiter=",",

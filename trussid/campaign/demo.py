@@ -50,6 +50,7 @@ Identification data and validation data are separate records with different seed
 from __future__ import annotations
 
 import json
+import math
 import time
 import warnings
 from dataclasses import dataclass, field, replace
@@ -63,6 +64,7 @@ from trussid._util.files import atomic_directory, atomic_path
 from trussid._util.jsonio import json_safe
 from trussid.campaign.control import LoopSettings, demo_section
 from trussid.campaign.report import report_markdown
+from trussid.campaign.structure import DEFAULT_SNR_DB
 from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
                                       DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
                                       PlantSummary, Provenance, ReportFiles)
@@ -72,10 +74,12 @@ from trussid.plid.estimator import PLID, PLIDWarning
 from trussid.plid.evaluate import compare
 from trussid.plid.experiment import excitation, run_experiment, simulate
 from trussid.plid.frf import frequency_response, h1
-from trussid.plid.metrics import choose_predictor
+from trussid.plid.metrics import choose_predictor, prediction_ratio_db
+from trussid.plid.modal import mac, modal_table
 from trussid.plid.modelfile import save_model
 from trussid.plid.multipass import Stabilised, default_via, fit_model
 from trussid.plid.stability import stabilise
+from trussid.plid.subspace import n4sid
 from trussid.plid.uncertainty import mode_intervals
 from trussid.plots import save_figure
 from trussid.testbed.plant import testbed_plant
@@ -125,6 +129,11 @@ class DemoSettings:
         Welch segment length of the H1 estimate (resolution fs / nperseg).
     seed : int
         Seed of everything random (each record derives its own).
+    direct : {False, True, "auto"}
+        Direct term D of the identified models (:func:`trussid.plid.multipass.
+        identify_reduced`): the testbed's sensors see the structure through the lab's
+        low-pass filters (no feed-through, False); accelerometers on a bare structure
+        respond at once to a force ("auto": the data decide).
     """
 
     quick: bool = False
@@ -143,6 +152,7 @@ class DemoSettings:
     plot_band: tuple = (10.0, 450.0)
     h1_nperseg: int = 1024
     seed: int = 1997
+    direct: object = False
 
 
 def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
@@ -158,6 +168,41 @@ def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
         s = replace(s, quick=True, n_identification=6000, n_validation=4000,
                     simo_channels=(0,), mimo_order=18, h1_nperseg=512)
     return replace(s, **overrides)
+
+
+def derived_settings(cp, quick: bool = False, **overrides):
+    """The experiment for a deck's plant (:class:`trussid.campaign.structure.CampaignPlant`),
+    from its modes and sample rate (overridable):
+
+    - excitation white 0 to 0.4 of the sample rate, a quarter of the D/A range RMS per
+      driven channel (a crest factor of 4, as on the testbed);
+    - FRF band from half the first mode to the top of the excitation; Bode plots to 0.95
+      of Nyquist;
+    - records of 6000 + 4000 samples (quick) or 16000 + 8000, at least 100 periods of
+      the first mode;
+    - MIMO order twice the number of the plant's modes below Nyquist (at least 2), rounded
+      up to a multiple of the outputs (PLID's observer form), capped at 48 (quick: 36): the
+      model must hold every mode the records see, those just above the excitation band
+      too; SIMO models of every channel (quick: the first) at the same order; the direct
+      term estimated when the data show one (accelerometers).
+    """
+    fs = 1.0 / cp.discrete.dt
+    f = np.asarray(cp.modes.frequencies_hz, dtype=float)
+    f = f[f > 1e-6]
+    top = 0.4 * fs
+    p = cp.discrete.noutputs
+    order = int(min(p * math.ceil(max(2 * f.size, 2) / p), p * ((36 if quick else 48) // p)))
+    base = demo_settings(quick)
+    n_min = int(math.ceil(100 * fs / f[0])) if f.size else 0
+    lo = 0.5 * f[0] if f.size else 0.0
+    kw = dict(direct="auto", excitation_band=(0.0, top),
+              excitation_rms=0.25 * cp.lab.daq.full_scale, frf_band=(lo, top),
+              plot_band=(lo, 0.95 * 0.5 * fs), n_identification=max(base.n_identification, n_min),
+              n_validation=max(base.n_validation, n_min // 2), mimo_order=order,
+              simo_order=order,
+              simo_channels=(0,) if quick else tuple(range(cp.discrete.ninputs)))
+    kw.update(overrides)
+    return demo_settings(quick, **kw)
 
 
 # --------------------------------------------------------------------------- plant
@@ -237,13 +282,25 @@ def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels
     return Record(name, purpose, tuple(channels), exp, steps, adc_fs, seed)
 
 
+def sensor_noise(tp, settings: DemoSettings):
+    """Sensor noise RMS in plant output units: the testbed lab's accelerometer noise at the
+    nominal conditioning gain, or for a deck :data:`trussid.campaign.structure.
+    DEFAULT_SNR_DB` under each output in a noise-free trial of the all-channel record."""
+    if hasattr(tp, "tbm"):
+        return tp.lab.accelerometers.noise_volts
+    trial = drive(settings, tp.discrete, settings.n_identification,
+                  range(tp.discrete.ninputs), settings.seed + 99)
+    rms = np.sqrt(np.mean(simulate(tp.discrete, trial) ** 2, axis=0))
+    return rms * 10 ** (-DEFAULT_SNR_DB / 20)
+
+
 def run_experiments(tp, settings: DemoSettings, progress=None) -> dict:
     """All records of the campaign: ``{model name: (identification, validation)}``.
 
     Model names are ``simo_ch<k>`` (k = 1..3) and ``mimo``.
     """
     plant, lab = tp.discrete, tp.lab
-    noise_v = lab.accelerometers.noise_volts
+    noise_v = sensor_noise(tp, settings)
     plan = [(f"simo_ch{c + 1}", (c,)) for c in settings.simo_channels]
     if settings.mimo_order:
         plan.append(("mimo", tuple(range(plant.ninputs))))
@@ -282,7 +339,7 @@ class Identified:
 
 
 def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
-                   progress: bool = False, log=None) -> Identified:
+                   progress: bool = False, log=None, direct=False) -> Identified:
     """Identify an order-``order`` model from one record: the one switchable call.
 
     Runs the project's identification recipe for under-modelled structures,
@@ -303,7 +360,8 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         p = np.asarray(y).reshape(len(y), -1).shape[1]
         idn = fit_model(u, y, order, dt, start="subspace",
                         via=default_via(order, p) if via is None else via, progress=progress,
-                        log=log, block_rows=None if block_rows is None else list(block_rows))
+                        log=log, block_rows=None if block_rows is None else list(block_rows),
+                        direct=direct)
     res = idn.result
     model = idn.model
     prov = idn.provenance
@@ -321,6 +379,24 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     else:
         K, kinfo = idn.K, prov.predictor or {}
         K_source = kinfo.get("chosen", "")
+    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
+    alt_info = {}
+    if direct is not False:
+        # The recipe's N4SID prior is strictly proper (D = 0); on a plant with a large
+        # feed-through (accelerometers on a bare structure) PLID can stay far from the
+        # subspace fit with D. That fit is a candidate too, judged as the recipe judges
+        # its own: by the one-step prediction on the identification record.
+        alt = _subspace_with_d(u, y, order, dt, block_rows or (40, 80))
+        if alt is not None:
+            ours = prediction_ratio_db(model, u, y, K=K, skip=alt[3])["overall"]
+            if alt[2] > ours:
+                alt_info = {"subspace_with_d_db": alt[2], "plid_db": ours}
+                model, K = alt[0], alt[1]
+                K_source = "kalman (N4SID with D, chosen on the identification record)"
+                method = (f"N4SID with D (block rows {alt[4]}): {alt[2]:.1f} dB one-step on "
+                          f"the identification record against {ours:.1f} dB for PLID's "
+                          f"{chosen}")
+                chosen = f"subspace with D, {alt[4]} block rows"
     hist, hidx = res.theta_history, res.history_index
     if hist.shape[0] < 2 and idn.prior is not None:
         # The recipe ran without a parameter history: repeat the winner's last PLID pass
@@ -331,10 +407,31 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
             "R": np.asarray(idn.R).tolist(), "predictor": kinfo,
             **{k: v for k, v in prov.as_dict().items() if k not in ("passes", "predictor")},
             "passes": prov.passes}
-    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
+    info["chosen"] = chosen
+    if alt_info:
+        info["candidate_with_d"] = alt_info
     modes = mode_intervals(model, res.model, res.theta_cov)
     return Identified(model, K, K_source, time.perf_counter() - t0, method,
                       res.innovations, hist, hidx, info, modes)
+
+
+def _subspace_with_d(u, y, order: int, dt: float, block_rows):
+    """The best N4SID model with a direct term over ``block_rows`` by one-step prediction on
+    ``(u, y)``: ``(model, K, dB, skip, block rows)``, or None if none is stable."""
+    best = None
+    for br in block_rows:
+        try:
+            m = n4sid(u, y, order, int(br), dt).with_d
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        if np.max(np.abs(np.linalg.eigvals(np.asarray(m.A)))) >= 1:
+            continue
+        K, _, kinfo = choose_predictor(m, u, y)
+        skip = int(kinfo.get("skip", 0))
+        r = prediction_ratio_db(m, u, y, K=K, skip=skip)["overall"]
+        if best is None or r > best[2]:
+            best = (m, K, float(r), skip, int(br))
+    return best
 
 
 def _history_of_last_pass(idn, u, y, order, dt):
@@ -413,8 +510,6 @@ def _mode_checks(poles, modes, model, truth) -> list[ModeCheck]:
     """Per matched pole pair: the identified mode's 95 % intervals
     (:mod:`trussid.plid.uncertainty`) and the MAC of the true (FE) mode shape against the
     identified one at the sensors (:func:`trussid.plid.modal.mac`)."""
-    from trussid.plid.modal import mac, modal_table
-
     ident, true = modal_table(model), modal_table(truth)
     rows = []
     for r in poles:
@@ -582,7 +677,8 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
         say(f"      {name}: {order} states, {len(cols)} in x {d.n_outputs} out; candidates:")
         fits[name] = identify_model(d.u[:, cols], d.y, order, d.dt,
                                     block_rows=settings.block_rows,
-                                    log=lambda msg: say(f"        {msg}"))
+                                    log=lambda msg: say(f"        {msg}"),
+                                    direct=settings.direct)
         h1s[name] = h1_estimate(rid, settings.h1_nperseg)
         say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
             f"({fits[name].seconds:.1f} s)")
@@ -643,7 +739,8 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
 
 
 def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
-             force: bool = False, command: str | None = None, testbed=None) -> dict:
+             force: bool = False, command: str | None = None, testbed=None,
+             plant=None) -> dict:
     """Run the whole campaign and write the report directory ``out``.
 
     Parameters
@@ -664,6 +761,9 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     testbed : trussid.geometry.spec.Testbed, optional
         The testbed and its lab (``testbed.lab``: sample rate, converters, chain, sensor
         noise); default the default testbed in the thesis lab.
+    plant : trussid.campaign.structure.CampaignPlant, optional
+        Any other structure (a deck with its IO file and lab) instead of a testbed; its
+        experiment comes from :func:`derived_settings`.
 
     Returns
     -------
@@ -686,8 +786,12 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     timings = {}
 
     t0 = time.perf_counter()
-    say("[1/5] testbed -> modes -> plant ...")
-    tp = build_plant(testbed)
+    if plant is None:
+        say("[1/5] testbed -> modes -> plant ...")
+        tp = build_plant(testbed)
+    else:
+        say(f"[1/5] {plant.description}: modes -> plant ...")
+        tp = plant
     truth = tp.discrete
     fs = 1.0 / truth.dt
     timings["plant"] = time.perf_counter() - t0
@@ -723,8 +827,10 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
         loop = LoopSettings.for_lab(tp.lab, excitation_rms=settings.excitation_rms,
                                     excitation_band_hz=settings.excitation_band[1])
         control = demo_section(fits["mimo"].model, fits["mimo"].K, records["mimo"][0].data,
-                               truth, settings.quick, loop, tp.tbm.testbed,
-                               progress=lambda m: say("      " + m))
+                               truth, settings.quick, loop,
+                               tp.tbm.testbed if hasattr(tp, "tbm") else None,
+                               progress=lambda m: say("      " + m), lab=tp.lab,
+                               excitation_rms=settings.excitation_rms)
         timings["control"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -762,9 +868,20 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
 
 def plant_section(tp) -> PlantSummary:
     """The summary's plant: size, rate, modes, transducers, converters and noise."""
-    tb, lab = tp.tbm.testbed, tp.lab
+    lab = tp.lab
     f = tp.modes.frequencies_hz
     acc = lab.accelerometers
+    if not hasattr(tp, "tbm"):  # a deck's plant: outputs in its own units, no conditioner
+        nan = float("nan")
+        return PlantSummary(
+            states=int(tp.discrete.nstates), inputs=list(tp.discrete.input_labels),
+            outputs=list(tp.discrete.output_labels), sample_rate_hz=1.0 / tp.discrete.dt,
+            modes=int(f.size), mode_frequencies_hz=f.tolist(), modal_damping=tp.damping,
+            accelerometer_sensitivity_v_per_g=nan, conditioning_gain=1.0,
+            converter_bits=lab.daq.bits, converter_full_scale_v=lab.daq.full_scale,
+            sensor_noise_g_rms=nan, sensor_noise_v_rms=nan, lab=lab,
+            structure=tp.description, lab_source=tp.lab_source)
+    tb = tp.tbm.testbed
     return PlantSummary(
         states=int(tp.discrete.nstates), inputs=list(tp.discrete.input_labels),
         outputs=list(tp.discrete.output_labels), sample_rate_hz=1.0 / tp.discrete.dt,

@@ -55,6 +55,8 @@ class PlantSummary:
     sensor_noise_g_rms: float
     sensor_noise_v_rms: float
     lab: LabSpec                  # the lab the plant and its records were made in
+    structure: str = "the default testbed"  # or "deck X.bdf with io.toml"
+    lab_source: str = ""          # where a deck's lab came from
 
 
 @dataclass(frozen=True)

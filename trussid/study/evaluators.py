@@ -35,6 +35,7 @@ from trussid.plid.evaluate import compare
 from trussid.plid.frf import frequency_response
 from trussid.plid.multipass import identify, identify_reduced
 from trussid.plid.subspace import n4sid
+from trussid.study.deck import DeckModesEvaluator
 from trussid.study.errors import StudyError
 from trussid.study.plants import PLANTS, record
 from trussid.testbed.labels import label_testbed_modes
@@ -444,7 +445,7 @@ def _score(model, case, val, seconds, opts, K=None) -> dict:
 
 
 EVALUATORS = {e.name: e for e in (ModesEvaluator(), SensitivitiesEvaluator(), PlantEvaluator(),
-                                  IdentifyEvaluator())}
+                                  IdentifyEvaluator(), DeckModesEvaluator())}
 
 
 def get_evaluator(name: str, where: str = "spec") -> Evaluator:

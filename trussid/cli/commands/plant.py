@@ -20,7 +20,8 @@ from trussid._util.jsonio import dumps
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        "plant", help="build the testbed's state-space plant (PZT volts in, accelerometer volts out)",
+        "plant", help="build a state-space plant: the testbed's (PZT volts in, accelerometer volts "
+        "out) or a deck's with --io",
         description="Build the control-ready plant of a testbed: modes by finite elements, PZT "
         "strain actuators (3 channels, each driving the two struts that share a top vertex), "
         "accelerometers at the UDF corners, the lab's smoothing filter, amplifier and converters, "
