@@ -59,11 +59,12 @@ SUPPORTED_CARDS = frozenset({
     "MAT1", "CONM2", "CMASS1", "CMASS2", "PMASS", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH",
     "RBE2", "RBE3", "RBAR", "MPC", "MPCADD", "CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR",
     "SPC", "SPC1", "SPCADD", "OMIT", "OMIT1", "ASET", "ASET1", "SUPORT", "SUPORT1", "SPOINT",
+    "BSET", "BSET1", "QSET", "QSET1", "BAROR", "BEAMOR", "CONM1", "GENEL",
     "EIGRL", "EIGR", "PARAM", "ENDDATA",
 })
 
 #: NASTRAN-95 rigid elements that pyNastran does not parse: read from the raw card lines.
-RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR"})
+RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR", "CONM1", "GENEL"})
 
 #: Entries that cannot change the real eigenvalues of the structure: accepted, not
 #: translated, and listed with their counts in :attr:`BdfInfo.ignored`. Loads and enforced
@@ -91,6 +92,8 @@ IGNORED_CARDS = frozenset({
     "MONPNT2", "MONPNT3", "MONDSP1", "CSSCHD", "AEDW", "AEPRESS", "AEFORCE",
     # output, sets for DMAP, tables for post-processing, plotting
     "MDLPRM", "USET", "USET1", "DTI", "PLOTEL",
+    # MYSTRAN's output and debug switches
+    "DEBUG", "PARVEC", "PARVEC1",
     # heat-transfer materials (structural SOL 103 does not use them)
     "MAT4", "MAT5",
 })
@@ -291,6 +294,8 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     _nastran_mass_conventions(bdf, model, nodes, props, info)
     _add_masses(bdf, model, nodes, info.wtmass)
     _add_scalar_masses(bdf, model, nodes, info.wtmass)
+    _add_conm1(bdf, model, nodes, info.wtmass)
+    _add_genel(bdf, model, nodes)
     _add_springs(bdf, model, nodes)
     _add_rigid(bdf, model, nodes)
     _add_raw_rigid(bdf, model, nodes)
@@ -1101,8 +1106,11 @@ def _add_scalar_masses(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> N
             value = float(p.mass)
         else:
             value = float(m.mass)
-        if not (math.isfinite(value) and value >= 0):
-            raise ModelError(f"{card}: mass must be finite and >= 0, got {value:g}")
+        if not math.isfinite(value):
+            raise ModelError(f"{card}: mass must be finite, got {value:g}")
+        # A negative scalar mass is legal in NASTRAN (a coupling term of a lumped mass matrix
+        # given element by element, as NASTRAN-95's D11-03-1A wing); the assembled mass
+        # matrix is what must be positive, and the eigensolver says so if it is not.
         ends.append(_scalar_ends(m, card, nodes))
         values.append(value * wtmass)
         eids.append(m.eid)
@@ -1297,7 +1305,7 @@ def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
         name = body[0][:8].strip().rstrip("*").upper() if body else ""
         if "," in name:
             name = name.split(",")[0]
-        if name not in RAW_CARDS:
+        if name not in RAW_CARDS or name in ("CONM1", "GENEL"):
             continue
         f = _raw_fields(body, name)
         try:
@@ -1332,6 +1340,107 @@ def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
                 _add_rigid_rod(model, nodes, eid, gi, gm, cm, card)
         except (IndexError, ValueError):
             raise ModelError(f"{card}: malformed entry") from None
+
+
+def _raw_cards(bdf, name: str):
+    """(id, fields) of every raw (unparsed) ``name`` entry, in deck order."""
+    for lines in getattr(bdf, "reject_lines", []):
+        body = _card_lines(lines)
+        head = body[0][:8].strip().rstrip("*").upper().split(",")[0] if body else ""
+        if head != name:
+            continue
+        f = _raw_fields(body, name)
+        try:
+            yield int(f[1]), f
+        except (IndexError, ValueError):
+            raise ModelError(f"{name}: no element id in {body[0].strip()!r}") from None
+
+
+def _dof_matrix(nodes: _NodeTable, dofs: list, card: str, eid: int) -> tuple[list, np.ndarray]:
+    """(grids, A): A maps the grids' 6-DOF vectors (basic) to the listed (grid, component) DOFs."""
+    grids = list(dict.fromkeys(g for g, _ in dofs))
+    pos = {g: i for i, g in enumerate(grids)}
+    for g, c in dofs:
+        if not 1 <= c <= 6:
+            raise ModelError(f"{card}: component {c} of grid {g} must be 1-6 (scalar points are not supported)")
+    vec = nodes.dof_vectors([g for g, _ in dofs], [c for _, c in dofs], card.split()[0], [eid] * len(dofs))
+    A = np.zeros((len(dofs), 6 * len(grids)))
+    for k, (g, _c) in enumerate(dofs):
+        A[k, 6 * pos[g]:6 * pos[g] + 6] = vec[k]
+    return grids, A
+
+
+def _add_conm1(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
+    """CONM1: a 6x6 mass matrix at a grid (lower triangle by rows, in system CID), times WTMASS.
+
+    pyNastran parses CONM1, but it is read here from the raw fields like the other entries
+    this reader adds, so that a blank is NASTRAN's 0.0 and a malformed entry is named.
+    """
+    for eid, f in _raw_cards(bdf, "CONM1"):
+        card = f"CONM1 {eid}"
+        try:
+            g = int(f[2])
+            cid = int(f[3]) if f[3] else 0
+            vals = [float(_nastran_value(v)) if v else 0.0 for v in (f[4:25] + [""] * 21)[:21]]
+        except (IndexError, ValueError, TypeError):
+            raise ModelError(f"{card}: malformed entry (GRID, CID and 21 mass terms expected)") from None
+        M = np.zeros((6, 6))
+        M[np.tril_indices(6)] = vals  # row-wise lower triangle: M11, M21, M22, M31, ...
+        M = M + np.tril(M, -1).T
+        if cid:
+            R = _rect_frame(bdf, cid, card)
+            R6 = np.kron(np.eye(2), R)
+            M = R6.T @ M @ R6
+        nodes.index([g], "CONM1", [eid])
+        model.add_matrices([eid], [[g]], M=[M * wtmass], label="CONM1")
+
+
+def _add_genel(bdf, model: Model, nodes: _NodeTable) -> None:
+    """GENEL: a general element given by its stiffness K or flexibility Z with rigid-body matrix S.
+
+    UI (m DOFs) and UD (n DOFs) pairs, then K or Z (lower triangle by columns, m x m), then
+    optionally S (m x n, by rows). With Z, K = Z^-1; the element's stiffness on (UI, UD) is
+    ``[[K, -K S], [-S^T K, S^T K S]]`` (NASTRAN QRG, GENEL), so that the UD DOFs moving as
+    the rigid motion S leaves it unstrained.
+    """
+    for eid, f in _raw_cards(bdf, "GENEL"):
+        card = f"GENEL {eid}"
+        vals = [v for v in f[2:] if v]
+        try:
+            keys = {k: vals.index(k) for k in ("UD", "K", "Z", "S") if k in vals}
+            mat_key = "K" if "K" in keys else "Z" if "Z" in keys else None
+            if mat_key is None:
+                raise ModelError(f"{card}: no K or Z matrix given")
+            end_ui = keys.get("UD", keys[mat_key])
+            ui = [(int(g), int(c or 0)) for g, c in zip(vals[0:end_ui:2], vals[1:end_ui:2])]
+            ud = ([(int(g), int(c or 0)) for g, c in zip(vals[end_ui + 1:keys[mat_key]:2],
+                                                          vals[end_ui + 2:keys[mat_key]:2])]
+                  if "UD" in keys else [])
+            end_m = keys.get("S", len(vals))
+            tri = [float(_nastran_value(v)) for v in vals[keys[mat_key] + 1:end_m]]
+            svals = [float(_nastran_value(v)) for v in vals[end_m + 1:]] if "S" in keys else []
+        except (ValueError, TypeError):
+            raise ModelError(f"{card}: malformed entry") from None
+        m, n = len(ui), len(ud)
+        if len(tri) != m * (m + 1) // 2:
+            raise ModelError(f"{card}: {mat_key} needs {m * (m + 1) // 2} terms for {m} UI DOFs, got {len(tri)}")
+        if "S" in keys and len(svals) != m * n:
+            raise ModelError(f"{card}: S needs {m * n} terms ({m} UI x {n} UD), got {len(svals)}")
+        KZ = np.zeros((m, m))
+        KZ[np.triu_indices(m)] = tri  # columns of the lower triangle = rows of the upper one
+        KZ = KZ + np.triu(KZ, 1).T
+        if mat_key == "Z":
+            try:
+                K = np.linalg.inv(KZ)
+            except np.linalg.LinAlgError:
+                raise ModelError(f"{card}: the flexibility matrix Z is singular") from None
+        else:
+            K = KZ
+        S = np.asarray(svals, float).reshape(m, n) if n and svals else np.zeros((m, n))
+        full = np.block([[K, -K @ S], [-S.T @ K, S.T @ K @ S]]) if n else K
+        grids, A = _dof_matrix(nodes, ui + ud, card, eid)
+        Kg = A.T @ full @ A
+        model.add_matrices([eid], [grids], K=[0.5 * (Kg + Kg.T)], label="GENEL")
 
 
 def _add_rigid_rod(model: Model, nodes: _NodeTable, eid: int, gi: int, gm: int, cm: int, card: str) -> None:
@@ -1376,10 +1485,28 @@ def _add_mpcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
         sets.append(sid)
         for add in bdf.mpcadds.get(sid, []):
             stack.extend(add.sets)
+    qpoints = set()
+    for q in getattr(bdf, "qsets", []):
+        qpoints |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
+    qpoints &= set(getattr(bdf, "spoints", {}) or {})
     for sid in sets:
         for k, c in enumerate(bdf.mpcs.get(sid, [])):
             card = f"MPC {sid}"
             g = np.asarray(c.nodes, dtype=np.int64)
+            comps_raw = [str(x).strip() for x in c.components]
+            onq = np.array([int(n) in qpoints and cm in ("0", "") for n, cm in zip(g, comps_raw)])
+            if onq.any():
+                # A Q-set scalar point is a modal coordinate of the component reduction,
+                # held at zero with the boundary in the fixed-interface modes: its term drops.
+                if onq[0]:
+                    raise ModelError(f"{card}: dependent term on Q-set scalar point {g[0]} is not supported")
+                keep = ~onq
+                g = g[keep]
+                c = type("MPCTerms", (), {"components": [x for x, k in zip(c.components, keep) if k],
+                                          "coefficients": [x for x, k in zip(c.coefficients, keep) if k]})
+                if len(g) == 1:
+                    model.fix([int(g[0])], str(_comps(c.components[0], card)[0] + 1))
+                    continue
             comp = [_comps(x, card) for x in c.components]
             if any(len(x) != 1 for x in comp):
                 raise ModelError(f"{card}: each term needs exactly one component (scalar points are "
@@ -1418,8 +1545,45 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                 model.omit(nodes.ids[sel], str(c + 1))
         info.notes.append(f"OMIT/ASET: {int(omitted.sum())} DOFs condensed by Guyan reduction, as "
                           f"NASTRAN does (exact for DOFs without mass)")
+    spoints = set(getattr(bdf, "spoints", {}) or {})
+    bsets, qsets = getattr(bdf, "bsets", []), getattr(bdf, "qsets", [])
+    for c in qsets:
+        ids = [int(g) for g in (c.ids if hasattr(c, "ids") else c.node_ids)]
+        grids = [g for g in ids if g not in spoints]
+        if grids:
+            raise ModelError(f"{c.type} {grids[0]}: modal (Q-set) DOFs on grid points are not supported; "
+                             f"the Craig-Bampton Q-set is read on scalar points only")
+    if bsets:
+        extseout = _case_has(bdf, "EXTSEOUT")
+        if not (qsets or extseout):
+            raise ModelError(f"{bsets[0].type}: a boundary set without QSET or EXTSEOUT (residual-structure "
+                             f"B-set analysis) is not supported")
+        held = mask_of(bsets, bsets[0].type)
+        for c in range(6):
+            if held[:, c].any():
+                model.fix(nodes.ids[held[:, c]], str(c + 1))
+        info.notes.append(f"BSET: {int(held.sum())} boundary DOFs held: a component reduction (QSET/EXTSEOUT) "
+                          f"prints its fixed-interface (Craig-Bampton) modes, which these are"
+                          + (f"; QSET on {len(spoints)} scalar points: modal coordinates of the reduction, "
+                             f"no part of these modes" if qsets else ""))
     suport = getattr(bdf, "suport", []) + list(getattr(bdf, "suport1", {}).values())
-    if suport:
+    sol = (getattr(bdf, "trussid_solution", (None, None))[0] or "").split(",")[0]
+    if suport and sol == "31":
+        # MYSTRAN SOL 31 is a Craig-Bampton reduction whose boundary is the SUPORT set: its
+        # printed eigenvalues are those of the structure with that boundary held.
+        held = np.zeros((n, 6), bool)
+        for c in suport:
+            ids = np.asarray(c.nodes if hasattr(c, "nodes") else c.IDs, dtype=np.int64)
+            comps = c.Cs if hasattr(c, "Cs") else c.components
+            idx = nodes.index(ids, "SUPORT", np.zeros(len(ids), dtype=np.int64))
+            for i, cm in zip(np.atleast_1d(idx), comps):
+                held[i, _comps(cm, "SUPORT")] = True
+        for c in range(6):
+            if held[:, c].any():
+                model.fix(nodes.ids[held[:, c]], str(c + 1))
+        info.notes.append(f"SOL 31 (MYSTRAN Craig-Bampton): the {int(held.sum())} SUPORT DOFs are the reduction "
+                          f"boundary, held for the fixed-interface modes MYSTRAN prints")
+    elif suport:
         info.notes.append("SUPORT accepted: it selects reference DOFs for NASTRAN's rigid-body modes, "
                           "which trussid computes anyway (they come first, at about 0 Hz)")
 
@@ -1526,6 +1690,14 @@ def _case_values(bdf, key: str) -> list:
     return values
 
 
+def _case_has(bdf, key: str) -> bool:
+    """Whether the case control has a ``key`` request anywhere (with options, e.g. EXTSEOUT(...))."""
+    deck = getattr(bdf, "case_control_deck", None)
+    if deck is None:
+        return False
+    return any(key.upper() in str(p).upper() for sub in deck.subcases.values() for p in sub.params)
+
+
 def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     """SPC/SPC1 (through SPCADD) of the case control's SPC set, else of all sets; GRID PS."""
     all_sets = set(bdf.spcs) | set(bdf.spcadds)
@@ -1535,9 +1707,14 @@ def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
             info.notes.append(f"subcases select different SPC sets {chosen}; using the first, {chosen[0]}")
         top = int(chosen[0])
         if top not in all_sets:
-            raise ModelError(f"case control SPC = {top}, but no SPC, SPC1 or SPCADD has set {top}")
-        info.spc_reason = f"SPC = {top} in the case control"
-        roots = [top]
+            # NASTRAN only warns (and runs without the set); said loudly in the notes.
+            info.spc_reason = f"SPC = {top} in the case control, but no SPC, SPC1 or SPCADD has set {top}: no SPC applied, as NASTRAN"
+            info.notes.append(f"WARNING: case control SPC = {top} names no SPC/SPC1/SPCADD set: run without it, "
+                              f"as NASTRAN does (it warns too)")
+            roots = []
+        else:
+            info.spc_reason = f"SPC = {top} in the case control"
+            roots = [top]
     elif all_sets:
         roots = sorted(all_sets)
         info.spc_reason = "no SPC request in the case control: all SPC sets applied"
