@@ -533,7 +533,16 @@ def _read_params(bdf, info: BdfInfo) -> None:
         value = str(auto).strip().upper()
         if value not in ("YES", "NO"):
             raise ModelError(f"PARAM,AUTOSPC must be YES or NO, got {auto!r}")
-        info.autospc, info.autospc_reason = value == "YES", f"PARAM,AUTOSPC,{value}"
+        if value == "YES":
+            info.autospc, info.autospc_reason = True, "PARAM,AUTOSPC,YES"
+        else:
+            # A DOF with neither stiffness nor mass has no equation and takes no part in any
+            # mode; NASTRAN runs such decks with AUTOSPC off (Lanczos ignores the null rows),
+            # so they are removed here too. A DOF with mass and no stiffness is not removed:
+            # it is a mechanism either way.
+            info.autospc = True
+            info.autospc_reason = ("PARAM,AUTOSPC,NO: DOFs with neither stiffness nor mass are still removed "
+                                   "(they take no part in the modes, as in NASTRAN's run)")
 
 
 class _NodeTable:
@@ -880,6 +889,9 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         if bad.any():
             raise ModelError(f"{card} {eids[bad][0]}: no orientation (give X1-X3 or G0)")
         mat, nsm = prop.mat, prop.nsm
+        if prop.section["A"] == 0 or prop.mat["G"] == 0:
+            _add_spring_bars(model, group, xyz, orient, prop, eids)
+            continue
         if card == "CBAR" and model.mass_formulation == "consistent":
             # NASTRAN's coupled CBAR mass has no torsional (nor rotary) inertia: the structural
             # mass goes in as non-structural mass per length, which the element gives
@@ -890,6 +902,38 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         pinned = np.array([bool(e.pa or e.pb) for e in group])
         if pinned.any():
             _add_pin_flags(model, [e for e, p in zip(group, pinned) if p], xyz[pinned], orient[pinned], prop)
+
+
+def _add_spring_bars(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarray, prop: _Prop,
+                     eids: np.ndarray) -> None:
+    """Bars with A = 0 (bending springs: no axial stiffness, no structural mass) or a MAT1
+    with G = 0 (no torsional stiffness), legal in NASTRAN (MSC NAS120 problem F).
+
+    Their stiffness is the frame element's with placeholders (A = 1, G = E / 2), the axial
+    (and, for G = 0, torsion) rows and columns then set to zero in element axes: in a
+    straight frame element these are uncoupled from bending, so this is exact.
+    """
+    from trussid.fem.elements import frame_matrices, local_axes, to_global
+
+    sec, mat = prop.section, prop.mat
+    card = f"{elems[0].type} {eids[0]}"
+    if any(e.pa or e.pb for e in elems):
+        raise ModelError(f"{card}: pin flags on a bar with A = 0 or G = 0 are not supported")
+    G0 = mat["G"] == 0
+    if G0 and model.beam_theory == "timoshenko" and (math.isfinite(sec["Asy"]) or math.isfinite(sec["Asz"])):
+        raise ModelError(f"{card}: {prop.label} has shear flexibility with G = 0 (infinite shear flexibility)")
+    A0 = sec["A"] == 0
+    L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
+    K, M = frame_matrices(L, 1.0 if A0 else sec["A"], sec["Iy"], sec["Iz"], sec["J"], mat["E"],
+                          mat["E"] / 2.0 if G0 else mat["G"], 0.0 if A0 else mat["rho"],
+                          nsm=prop.nsm, Asy=sec["Asy"], Asz=sec["Asz"], theory=model.beam_theory,
+                          mass=model.mass_formulation)
+    zero = ([0, 6] if A0 else []) + ([3, 9] if G0 else [])
+    K[:, zero, :] = 0.0
+    K[:, :, zero] = 0.0
+    ends = np.array([[e.ga, e.gb] if e.type == "CBAR" else e.nodes for e in elems], dtype=np.int64)
+    model.add_matrices(eids, ends, K=to_global(K, R), M=to_global(M, R),
+                       label=f"{prop.label} ({'A = 0' if A0 else 'G = 0'})")
 
 
 def _add_pin_flags(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarray, prop: _Prop) -> None:
@@ -1165,8 +1209,13 @@ def _add_bushes(bdf, model: Model, nodes: _NodeTable) -> None:
                 v = nodes.coords([e.g0], "CBUSH", [e.eid])[0] - xa
             elif e.x is not None and e.x[0] is not None:
                 v = np.asarray(e.x, float)
+            elif k[1] == k[2] and k[4] == k[5]:
+                # No orientation: the axis is GA-GB, and a stiffness symmetric about it
+                # (K2 = K3, K5 = K6, e.g. an axial spring) is the same for any y-z pair.
+                v = np.eye(3)[np.argmin(np.abs(d))]
             else:
-                raise ModelError(f"{card}: no orientation (give X1-X3, G0 or CID)")
+                raise ModelError(f"{card}: no orientation (give X1-X3, G0 or CID; without one, the "
+                                 f"stiffness must be symmetric about GA-GB: K2 = K3 and K5 = K6)")
             x = d / L
             z = np.cross(x, v)
             if np.linalg.norm(z) <= 1e-9 * np.linalg.norm(v):
