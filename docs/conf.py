@@ -12,10 +12,13 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import os
 import pkgutil
+import shutil
 import sys
 from pathlib import Path
 
+from sphinx.errors import ExtensionError
 from sphinx.pycode import ModuleAnalyzer
 
 import trussid
@@ -85,6 +88,19 @@ numpydoc_xref_param_type = False
 
 myst_heading_anchors = 3
 
+# Formulas render offline: MathJax is served from the site itself, not from a CDN (a page
+# opened without network would show raw TeX). The copy is Debian's libjs-mathjax (MathJax
+# 2.7, installed by scripts/setup.sh); TRUSSID_MATHJAX points elsewhere (a MathJax 2.7 tree)
+# on a machine without apt. SVG output: the glyphs are JavaScript paths, no web fonts.
+MATHJAX_SOURCE = Path(os.environ.get("TRUSSID_MATHJAX", "/usr/share/javascript/mathjax"))
+#: The parts of the MathJax tree that the TeX-AMS_SVG configuration loads (5 MB of 54).
+MATHJAX_PARTS = ("MathJax.js", "config/TeX-AMS_SVG.js", "extensions", "jax/element", "jax/input/TeX",
+                 "jax/output/PreviewHTML", "jax/output/SVG/jax.js", "jax/output/SVG/config.js",
+                 "jax/output/SVG/autoload", "jax/output/SVG/fonts/TeX")
+mathjax_path = "mathjax/MathJax.js?config=TeX-AMS_SVG"  # relative to the site's _static
+mathjax2_config = {"tex2jax": {"inlineMath": [["\\(", "\\)"]], "displayMath": [["\\[", "\\]"]]},
+                   "menuSettings": {"zoom": "None"}}
+
 # The examples: run at build time unless they take minutes; figures kept.
 sphinx_gallery_conf = {
     "examples_dirs": [str(ROOT / "examples")],
@@ -128,5 +144,29 @@ def _skip_foreign(app, what, name, obj, skip, options):
     return None
 
 
+def _check_mathjax(app):
+    """Fail at the start of the build, not after it, when the local MathJax is missing."""
+    if app.builder.format == "html" and not (MATHJAX_SOURCE / "MathJax.js").is_file():
+        raise ExtensionError(f"MathJax 2.7 not found at {MATHJAX_SOURCE} (the formulas must render "
+                             "offline): install Debian's libjs-mathjax (bash scripts/setup.sh docs) "
+                             "or set TRUSSID_MATHJAX to a MathJax 2.7 folder")
+
+
+def _copy_mathjax(app, exception):
+    """Copy the parts of the local MathJax the pages load into the site's ``_static``."""
+    if exception is not None or app.builder.format != "html":
+        return
+    target = Path(app.outdir) / "_static" / "mathjax"
+    for part in MATHJAX_PARTS:
+        src, dst = MATHJAX_SOURCE / part, target / part
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        if src.is_dir():
+            shutil.copytree(src, dst, dirs_exist_ok=True)
+        else:
+            shutil.copyfile(src, dst)
+
+
 def setup(app):
     app.connect("autodoc-skip-member", _skip_foreign)
+    app.connect("builder-inited", _check_mathjax)
+    app.connect("build-finished", _copy_mathjax)

@@ -28,6 +28,8 @@ import numpy as np
 from trussid.fem.elements import local_axes
 from trussid.fem.errors import ModelError
 
+__all__ = ["EPSILON_0", "Wafer", "strain_actuator_loads"]
+
 #: Vacuum permittivity [F/m].
 EPSILON_0 = 8.8541878128e-12
 

@@ -18,6 +18,10 @@ from trussid.fem.constraints import build_transformation, dof_label, rigid_mass
 from trussid.fem.elements import check_beam_properties, frame_matrices, local_axes
 from trussid.fem.errors import ModelError
 from trussid.fem.model import DOF_NAMES
+from trussid.fem.reduction import guyan
+
+__all__ = ["System", "beam_matrices", "spring_matrices", "general_blocks", "mass_blocks",
+           "assemble"]
 
 
 @dataclass
@@ -295,8 +299,6 @@ def assemble(model, autospc: bool = False) -> System:
                     inert=inert)
     omitted = model.omitted_mask().reshape(-1) if hasattr(model, "omitted_mask") else None
     if omitted is not None and omitted.any():
-        from trussid.fem.reduction import guyan
-
         # Omitted DOFs that were supported, dependent or removed by AUTOSPC are not in the
         # system any more: only the remaining ones are condensed.
         system = guyan(system, omitted[dofs])

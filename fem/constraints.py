@@ -20,6 +20,9 @@ import scipy.sparse as sp
 from trussid.fem.errors import ModelError
 from trussid.fem.model import DOF_NAMES
 
+__all__ = ["skew", "rigid_transform", "rigid_mass", "dof_label", "frame_transform",
+           "build_transformation", "rigid_element", "rbe3_constraint", "rigid_body_modes"]
+
 
 def skew(r: np.ndarray) -> np.ndarray:
     """Cross-product matrices ``[r]x`` with ``[r]x @ a == r x a``; r (..., 3) -> (..., 3, 3)."""

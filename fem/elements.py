@@ -32,6 +32,8 @@ import numpy as np
 
 from trussid.fem.errors import ModelError
 
+__all__ = ["local_axes", "frame_matrices", "to_global", "check_beam_properties"]
+
 #: Local DOF indices of the x-y bending plane (v, rz at A; v, rz at B) ...
 _XY = np.array([1, 5, 7, 11])
 #: ... and of the x-z plane (w, ry at A; w, ry at B).

@@ -2,6 +2,8 @@
 
 from trussid._util.errors import UserError
 
+__all__ = ["ModelError"]
+
 
 class ModelError(UserError):
     """The model as given cannot be built or solved (bad value, unknown node, mechanism)."""

@@ -28,6 +28,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
+from trussid._util.threads import forget_blas_libraries
+
 #: Back ends of :class:`SPDFactor`: "auto" uses CHOLMOD when cvxopt and pymetis import, and
 #: SuperLU otherwise or when CHOLMOD finds the matrix not positive definite.
 BACKENDS = ("auto", "cholmod", "superlu")
@@ -46,7 +48,6 @@ def cholmod_available() -> bool:
         import pymetis  # noqa: F401
     except ImportError:
         return False
-    from trussid._util.threads import forget_blas_libraries
 
     forget_blas_libraries()
     return True

@@ -46,6 +46,11 @@ from pathlib import Path
 import numpy as np
 
 from trussid.fem.errors import ModelError
+from trussid.fem.actuators import strain_actuator_loads, Wafer
+from trussid.fem.assembly import assemble
+from trussid.fem.modal import solve_modes
+from trussid.fem.plant import modal_plant
+from trussid.fem.sensors import Sensor
 
 __all__ = ["IOSpec", "PointLoad", "StrainActuator", "read_io", "io_loads", "io_plant"]
 
@@ -139,8 +144,6 @@ def read_io(path) -> IOSpec:
     """
     # Long: one validation step per key of the file format, each naming entry and key; split
     # up, the entry/key context would have to be passed around for every check.
-    from trussid.fem.actuators import Wafer
-    from trussid.fem.sensors import Sensor
 
     path = Path(path)
     if not path.is_file():
@@ -223,8 +226,6 @@ def read_io(path) -> IOSpec:
 
 def io_loads(model, spec: IOSpec) -> np.ndarray:
     """Nodal loads per input unit, one column per actuator, (6 n_nodes, m), model order."""
-    from trussid.fem.actuators import strain_actuator_loads
-
     F = np.zeros((6 * model.n_nodes, len(spec.actuators)))
     for j, a in enumerate(spec.actuators):
         where = f"{spec.source}: actuator {j + 1} '{a.name}'"
@@ -268,10 +269,6 @@ def io_plant(model, spec: IOSpec, *, n_modes: int | None = None, damping: float 
     n_kept : int
     """
     import control
-
-    from trussid.fem.assembly import assemble
-    from trussid.fem.modal import solve_modes
-    from trussid.fem.plant import modal_plant
 
     damping = spec.damping if damping is None else damping
     damping = 0.02 if damping is None else float(damping)

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 from trussid.fem.errors import ModelError
 
+__all__ = ["Material", "ALUMINIUM", "STEEL"]
+
 
 @dataclass(frozen=True)
 class Material:

@@ -25,6 +25,10 @@ from trussid.fem.errors import ModelError
 from trussid.fem.factor import SPDFactor, cholmod_available
 from trussid._util.threads import blas_threads
 
+__all__ = ["BLAS_THREADS", "DENSE_MAX_DOF", "Modes", "SINGULAR_PIVOT", "factor_stiffness",
+           "default_shift", "eigenvalue_scale", "ZERO_EIGENVALUE", "solve_modes",
+           "rigid_null_dimension"]
+
 #: OpenBLAS threads used by the eigen and static solutions. The BLAS calls inside
 #: SuperLU and ARPACK are small (supernodes of tens of columns, level-2 updates), so
 #: threads only add synchronisation: measured on the shared 2-core machine under load,

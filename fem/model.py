@@ -21,6 +21,9 @@ from trussid.fem.errors import ModelError
 from trussid.fem.materials import Material
 from trussid.fem.sections import Section
 
+__all__ = ["DOF_NAMES", "parse_dofs", "Beams", "PointMasses", "Springs", "RigidBody",
+           "LinearConstraint", "GeneralElements", "Model"]
+
 DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
 
 
@@ -265,6 +268,9 @@ class Model:
         self.name = name
         self._node_ids: list[np.ndarray] = []
         self._xyz: list[np.ndarray] = []
+        # index_of's sorted node ids, (number of add_nodes calls it was built from, order,
+        # sorted ids): rebuilt when nodes were added since, not re-sorted on every call.
+        self._node_index: tuple[int, np.ndarray, np.ndarray] | None = None
         self._beams: list[dict[str, np.ndarray]] = []
         self._masses: list[dict[str, np.ndarray]] = []
         self._springs: list[dict[str, np.ndarray]] = []
@@ -342,18 +348,25 @@ class Model:
         """Number of DOFs before supports and rigid links are applied."""
         return 6 * self.n_nodes
 
+    def _sorted_node_ids(self) -> tuple[np.ndarray, np.ndarray]:
+        """(order, sorted ids) of the node ids, cached until the next :meth:`add_nodes`."""
+        if self._node_index is None or self._node_index[0] != len(self._node_ids):
+            node_ids = self.node_ids
+            order = np.argsort(node_ids, kind="stable")
+            sorted_ids = node_ids[order]
+            dup = sorted_ids[1:][sorted_ids[1:] == sorted_ids[:-1]]
+            if dup.size:
+                raise ModelError(f"node {dup[0]} is defined more than once")
+            self._node_index = (len(self._node_ids), order, sorted_ids)
+        return self._node_index[1], self._node_index[2]
+
     def index_of(self, ids, what: str = "element") -> np.ndarray:
         """Node indices for node ``ids`` (any shape); unknown ids raise naming ``what``.
 
         ``what`` may be a callable ``what(position) -> str`` describing the referrer of the
         flat position that failed (e.g. ``"beam 12"``).
         """
-        node_ids = self.node_ids
-        order = np.argsort(node_ids, kind="stable")
-        sorted_ids = node_ids[order]
-        dup = sorted_ids[1:][sorted_ids[1:] == sorted_ids[:-1]]
-        if dup.size:
-            raise ModelError(f"node {dup[0]} is defined more than once")
+        order, sorted_ids = self._sorted_node_ids()
         ids = np.asarray(ids, dtype=np.int64)
         pos = np.searchsorted(sorted_ids, ids.ravel())
         pos_c = np.minimum(pos, max(len(sorted_ids) - 1, 0))

@@ -51,6 +51,13 @@ import numpy as np
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
+from trussid._util.files import atomic_path
+from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transform
+from trussid.fem.elements import frame_matrices, local_axes, to_global
+
+__all__ = ["SUPPORTED_CARDS", "RAW_CARDS", "IGNORED_CARDS", "THERMAL_CARDS", "HANDLED_PARAMS",
+           "OUTPUT_PARAMS", "ROD_SHEAR_FACTOR", "SECTION_TYPES", "EigenRequest", "BdfInfo",
+           "read_bdf", "coord_axes", "offset_spring_matrix", "write_bdf"]
 
 #: Bulk-data cards :func:`read_bdf` translates.
 SUPPORTED_CARDS = frozenset({
@@ -944,8 +951,6 @@ def _add_pin_flags(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarra
     unpinned element is added as an element matrix, so the beam itself stays a plain beam.
     The mass is unchanged (NASTRAN's pin flags act on the stiffness).
     """
-    from trussid.fem.elements import frame_matrices, local_axes, to_global
-
     eids = np.array([e.eid for e in elems], dtype=np.int64)
     L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
     sec, mat = prop.section, prop.mat
@@ -1169,8 +1174,6 @@ def offset_spring_matrix(xa, xb, p, frame, k) -> np.ndarray:
     ``S_X`` the rigid map from grid X to ``p`` and ``F6 = diag(F, F)`` (rows of ``frame``
     are the spring axes), so ``K = B^T F6^T diag(k) F6 B`` with ``B = [-S_A, S_B]``.
     """
-    from trussid.fem.constraints import rigid_transform
-
     B = np.concatenate([-rigid_transform(np.asarray(p) - xa), rigid_transform(np.asarray(p) - xb)], axis=1)
     F6 = np.zeros((6, 6))
     F6[:3, :3] = F6[3:, 3:] = frame
@@ -1256,8 +1259,6 @@ def _comps(text, card: str) -> list[int]:
 def _add_rigid_element(model: Model, nodes: _NodeTable, eid: int, grids, independent, dependent,
                        label: str) -> None:
     """A rigid element given by (grid, component) lists: a linear constraint of the model."""
-    from trussid.fem.constraints import rigid_element
-
     grids = list(dict.fromkeys(grids))
     pos = {g: i for i, g in enumerate(grids)}
     xyz = nodes.coords(grids, label.split()[0], [eid] * len(grids))
@@ -1271,8 +1272,6 @@ def _add_rigid_element(model: Model, nodes: _NodeTable, eid: int, grids, indepen
 
 def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
     """RBE2 (rigid body), RBAR (rigid bar, any independent set) and RBE3 (interpolation)."""
-    from trussid.fem.constraints import rbe3_constraint
-
     for eid, e in sorted(bdf.rigid_elements.items()):
         card = f"{e.type} {eid}"
         if e.type == "RBE2":
@@ -1669,8 +1668,6 @@ def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict,
       shear-flexible stiffness (CBAR frames 1.7e-4 and 4.1e-4 off with the Timoshenko
       mass, 4e-7 and 7e-6 with this).
     """
-    from trussid.fem.elements import frame_matrices, local_axes
-
     b = model.beams
     if len(b) == 0:
         return
@@ -1864,8 +1861,6 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     from cpylog import SimpleLogger
     from pyNastran.bdf.bdf import BDF
     from pyNastran.bdf.case_control_deck import CaseControlDeck
-
-    from trussid._util.files import atomic_path
 
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     ids, xyz = model.node_ids, model.xyz

@@ -18,6 +18,9 @@ import warnings
 import numpy as np
 
 from trussid.fem.errors import ModelError
+from trussid._util.files import atomic_path
+
+__all__ = ["write_op2", "read_op2_modes"]
 
 
 def write_op2(path: str | os.PathLike, modes, frames: np.ndarray | None = None,
@@ -46,8 +49,6 @@ def write_op2(path: str | os.PathLike, modes, frames: np.ndarray | None = None,
     from cpylog import SimpleLogger
     from pyNastran.op2.op2 import OP2
     from pyNastran.op2.tables.oug.oug_eigenvectors import RealEigenvectorArray
-
-    from trussid._util.files import atomic_path
 
     n = len(modes.frequencies_hz)
     if n == 0:

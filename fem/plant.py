@@ -16,6 +16,9 @@ import numpy as np
 
 from trussid.fem.errors import ModelError
 from trussid.fem.sensors import Sensor, sensor_matrix
+from trussid.fem.static import solve_static
+
+__all__ = ["modal_damping", "modal_plant", "residual_flexibility"]
 
 
 def modal_damping(damping, n: int) -> np.ndarray:
@@ -129,8 +132,6 @@ def residual_flexibility(system, modes, loads: np.ndarray, n_modes: int) -> np.n
     ``K^-1 F - sum_{kept} phi phi^T F / omega^2``. Needs a supported model (non-singular K)
     whose kept modes are all elastic.
     """
-    from trussid.fem.static import solve_static
-
     F = np.asarray(loads, dtype=float).reshape(len(loads), -1)
     w = np.asarray(modes.omega[:n_modes])
     if not (w > 0).all():

@@ -21,6 +21,8 @@ import scipy.sparse.linalg as spla
 
 from trussid.fem.errors import ModelError
 
+__all__ = ["MAX_A_SET", "guyan"]
+
 #: Retained DOFs beyond which the dense reduced matrices are refused (memory ~ 8 n_a^2 bytes
 #: for each of K, M plus 8 n_o n_a for the transformation).
 MAX_A_SET = 20000

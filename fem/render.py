@@ -44,6 +44,12 @@ from trussid.fem.model import Model
 from trussid._util.errors import UserError
 from trussid._util.files import atomic_path
 
+__all__ = ["DEFAULT_AMPLITUDE", "DEFAULT_WINDOW", "GHOST_COLOR", "GHOST_OPACITY", "SUPPORT_COLOR",
+           "SCALAR_NAME", "RenderError", "Decoration", "FIXED_PART_COLOUR",
+           "decorations_from_solids", "hermite_beam_displacements", "equivalent_radius",
+           "check_mode_number", "ModeScene", "mode_scene", "offscreen_backend", "render_mode",
+           "render_mode_gif", "render_mode_grid", "default_cmap"]
+
 #: Default drawn amplitude: the largest displacement is this fraction of the diagonal of the
 #: model's bounding box.
 DEFAULT_AMPLITUDE = 0.08

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 from trussid.fem.errors import ModelError
 
+__all__ = ["Section"]
+
 
 @dataclass(frozen=True)
 class Section:

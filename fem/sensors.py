@@ -9,6 +9,8 @@ import numpy as np
 
 from trussid.fem.errors import ModelError
 
+__all__ = ["QUANTITIES", "Sensor", "sensor_matrix"]
+
 QUANTITIES = ("displacement", "velocity", "acceleration")
 
 

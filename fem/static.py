@@ -9,6 +9,8 @@ from trussid.fem.errors import ModelError
 from trussid.fem.factor import cholmod_available
 from trussid.fem.modal import BLAS_THREADS, blas_threads, factor_stiffness
 
+__all__ = ["solve_static"]
+
 
 def solve_static(model_or_system, f_full, *, autospc: bool = False) -> np.ndarray:
     """Displacements under nodal loads.

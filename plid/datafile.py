@@ -47,16 +47,17 @@ column (variable, record) or sample.
 from __future__ import annotations
 
 import csv
-import difflib
 import io
 import re
-from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from trussid._util.files import atomic_path
+from trussid.plid.data import (IOData, check_enough_samples, select_channels, unknown_name,
+                               validate, with_channels)
 from trussid.plid.errors import DataError
+from trussid.plid.uff import read_uff_data, write_uff_data
 
 #: Relative jitter of the time column tolerated before it is called non-uniform (times
 #: printed with few decimals, e.g. 1/3 ms, are not exactly uniform).
@@ -80,151 +81,7 @@ TIME_UNITS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0,
 _UNIT_NAMES = {1.0: "seconds", 1e-3: "milliseconds", 1e-6: "microseconds"}
 
 
-@dataclass
-class IOData:
-    """Sampled input/output data of one experiment.
-
-    Attributes
-    ----------
-    u : ndarray, shape (N, m)
-        Inputs, one column per channel.
-    y : ndarray, shape (N, p)
-        Outputs (measured, i.e. with noise).
-    fs : float
-        Sampling frequency [Hz].
-    input_names, output_names : list of str
-        Channel names (length m and p).
-    t : ndarray, shape (N,), optional
-        Sample times [s], when the file had them.
-    y_clean : ndarray, shape (N, p), optional
-        Noise-free outputs (known only for simulated data).
-    units : dict of str to str
-        Unit of each channel as the file gave it (e.g. ``{"y1": "V"}``); empty if unknown.
-    notes : list of str
-        What the reader decided that the user may want to know (e.g. the time unit).
-    """
-
-    u: np.ndarray
-    y: np.ndarray
-    fs: float
-    input_names: list[str] = field(default_factory=list)
-    output_names: list[str] = field(default_factory=list)
-    t: np.ndarray | None = None
-    y_clean: np.ndarray | None = None
-    units: dict = field(default_factory=dict)
-    notes: list = field(default_factory=list)
-
-    def __post_init__(self):
-        self.u = np.asarray(self.u, dtype=float)
-        self.y = np.asarray(self.y, dtype=float)
-        if self.u.ndim == 1:
-            self.u = self.u[:, None]
-        if self.y.ndim == 1:
-            self.y = self.y[:, None]
-        if not self.input_names:
-            self.input_names = [f"u{j + 1}" for j in range(self.u.shape[1])]
-        if not self.output_names:
-            self.output_names = [f"y{j + 1}" for j in range(self.y.shape[1])]
-        self.input_names = [str(s) for s in self.input_names]
-        self.output_names = [str(s) for s in self.output_names]
-
-    @property
-    def n_samples(self) -> int:
-        return self.u.shape[0]
-
-    @property
-    def n_inputs(self) -> int:
-        return self.u.shape[1]
-
-    @property
-    def n_outputs(self) -> int:
-        return self.y.shape[1]
-
-    @property
-    def dt(self) -> float:
-        """Sampling interval [s]."""
-        return 1.0 / self.fs
-
-
 # --------------------------------------------------------------------------- validation
-
-
-def validate(data: IOData, source: str = "data") -> IOData:
-    """Check data for the mistakes that would spoil an identification; return it unchanged.
-
-    Raises :class:`DataError` naming the column (and sample) for: wrong array rank, length
-    mismatch between inputs and outputs, no samples or no channels, names that do not match
-    the column count or repeat, NaN/inf (first bad sample), a constant (unexciting) input,
-    and a missing or non-positive sampling frequency.
-    """
-    u, y = data.u, data.y
-    for what, arr in (("u", u), ("y", y)):
-        if arr.ndim != 2:
-            raise DataError(f"{source}: array '{what}' must be 2-D (samples x channels), "
-                            f"got shape {arr.shape}")
-    if u.shape[0] != y.shape[0]:
-        raise DataError(f"{source}: length mismatch: inputs have {u.shape[0]} samples, "
-                        f"outputs have {y.shape[0]}")
-    if u.shape[0] == 0:
-        raise DataError(f"{source}: no samples")
-    if u.shape[1] == 0:
-        raise DataError(f"{source}: no input columns")
-    if y.shape[1] == 0:
-        raise DataError(f"{source}: no output columns")
-    for kind, names, arr in (("input", data.input_names, u), ("output", data.output_names, y)):
-        if len(names) != arr.shape[1]:
-            raise DataError(f"{source}: {len(names)} {kind} names for {arr.shape[1]} {kind} "
-                            "columns")
-    all_names = list(data.input_names) + list(data.output_names)
-    dup = sorted({s for s in all_names if all_names.count(s) > 1})
-    if dup:
-        raise DataError(f"{source}: column name '{dup[0]}' is used more than once")
-    for names, arr in ((data.input_names, u), (data.output_names, y)):
-        bad = ~np.isfinite(arr)
-        if bad.any():
-            k, j = np.argwhere(bad)[0]
-            raise DataError(f"{source}: column '{names[j]}' has a non-finite value "
-                            f"({arr[k, j]}) at sample {k}")
-    span = np.ptp(u, axis=0)
-    flat = np.flatnonzero(span <= 1e-12 * np.maximum(np.max(np.abs(u), axis=0), 1e-300))
-    if flat.size:
-        j = flat[0]
-        raise DataError(f"{source}: input column '{data.input_names[j]}' is constant "
-                        f"({u[0, j]:g}) and excites nothing")
-    if data.fs is None or not np.isfinite(data.fs) or data.fs <= 0:
-        raise DataError(f"{source}: sampling frequency missing or not positive (fs={data.fs}); "
-                        "give it (e.g. --fs HZ) or add a time column 't'")
-    if data.y_clean is not None and data.y_clean.shape != y.shape:
-        raise DataError(f"{source}: array 'y_clean' has shape {data.y_clean.shape}, "
-                        f"outputs have {y.shape}")
-    return data
-
-
-def check_enough_samples(data: IOData, n_params: int, what: str = "the model") -> None:
-    """Raise :class:`DataError` if ``data`` has fewer samples than ``n_params`` parameters."""
-    if data.n_samples < n_params:
-        raise DataError(f"only {data.n_samples} samples for {n_params} parameters of {what}; "
-                        f"need at least {n_params} samples")
-
-
-def _unknown(name: str, known: list[str], source: str, what: str = "column") -> DataError:
-    close = difflib.get_close_matches(name, known, n=1)
-    hint = f"; did you mean '{close[0]}'?" if close else f"; {what}s are {', '.join(known)}"
-    return DataError(f"{source}: unknown {what} '{name}'{hint}")
-
-
-def _select(names: list[str], arr: np.ndarray, wanted, kind: str, source: str):
-    """Pick channels ``wanted`` (names) out of ``arr``; ``None`` keeps all."""
-    if wanted is None:
-        return list(names), arr
-    idx = []
-    for w in wanted:
-        if w not in names:
-            raise _unknown(w, list(names), source)
-        idx.append(names.index(w))
-    if not idx:
-        raise DataError(f"{source}: empty list of {kind}s")
-    return [names[i] for i in idx], arr[:, idx]
 
 
 def fs_from_time(t: np.ndarray, source: str = "data", name: str = "t") -> float:
@@ -321,8 +178,6 @@ def read_data(path, inputs=None, outputs=None, fs=None) -> IOData:
     elif suffix in (".npz", ".mat"):
         data = _read_arrays(path, inputs, outputs, fs)
     elif suffix in (".uff", ".unv"):
-        from trussid.plid.uff import read_uff_data
-
         data = read_uff_data(path, inputs=inputs, outputs=outputs)
     else:
         raise DataError(f"{path}: unknown data file type '{path.suffix}' "
@@ -418,7 +273,7 @@ def _csv_roles(header, time_name, inputs, outputs, source):
     for lst in (inputs, outputs):
         for name in lst or []:
             if name not in header:
-                raise _unknown(name, header, source)
+                raise unknown_name(name, header, source)
     if inputs is None and outputs is None:
         in_names = [h for h in others if h[:1] in "uU"]
         out_names = [h for h in others if h[:1] in "yY"]
@@ -718,7 +573,7 @@ def _named_channels(arrays, u, y, in_key, out_key, transposed, inputs, outputs, 
     known = in_names + out_names
     for w in list(inputs or []) + list(outputs or []):
         if w not in known:
-            raise _unknown(w, known, source)
+            raise unknown_name(w, known, source)
     # A name may move between roles only in CSV; in NPZ/MAT the arrays fix the role.
     for w in inputs or []:
         if w not in in_names:
@@ -729,9 +584,9 @@ def _named_channels(arrays, u, y, in_key, out_key, transposed, inputs, outputs, 
             raise DataError(f"{source}: '{w}' is an input channel (array "
                             f"'{in_key}'), not an output")
     if y_clean is not None and outputs is not None:
-        _, y_clean = _select(out_names, y_clean, outputs, "output", source)
-    in_names, u = _select(in_names, u, inputs, "input", source)
-    out_names, y = _select(out_names, y, outputs, "output", source)
+        _, y_clean = select_channels(out_names, y_clean, outputs, "output", source)
+    in_names, u = select_channels(in_names, u, inputs, "input", source)
+    out_names, y = select_channels(out_names, y, outputs, "output", source)
     return u, y, in_names, out_names, y_clean
 
 
@@ -749,7 +604,7 @@ def _read_arrays(path: Path, inputs, outputs, fs_given=None) -> IOData:
             if items is not None and req is None:  # a typo among variable names
                 bad = next(w for w in _join_specs(list(items))
                            if w.split(":")[0] not in arrays)
-                raise _unknown(bad, sorted(arrays), source, "variable")
+                raise unknown_name(bad, sorted(arrays), source, "variable")
         if req_in is None:
             if inputs is not None or in_key is None:
                 raise DataError(f"{source}: name the input variable(s) with --inputs too "
@@ -837,8 +692,6 @@ def write_data(data: IOData, path) -> Path:
                         f"(use {', '.join(SUFFIXES)})")
     validate(data, "data to write")
     if suffix in (".uff", ".unv"):
-        from trussid.plid.uff import write_uff_data
-
         return write_uff_data(data, path)
     if suffix == ".csv":
         in_names = _csv_names(data.input_names, "u")
@@ -872,16 +725,6 @@ def write_data(data: IOData, path) -> Path:
     return path
 
 
-def with_channels(data: IOData, inputs=None, outputs=None) -> IOData:
-    """A copy of ``data`` restricted to the named input/output channels (in that order)."""
-    in_names, u = _select(data.input_names, data.u, inputs, "input", "data")
-    out_names, y = _select(data.output_names, data.y, outputs, "output", "data")
-    y_clean = None
-    if data.y_clean is not None:
-        _, y_clean = _select(data.output_names, data.y_clean, outputs, "output", "data")
-    return replace(data, u=u, y=y, input_names=in_names, output_names=out_names,
-                   y_clean=y_clean)
-
-
-__all__ = ["IOData", "read_data", "write_data", "validate", "check_enough_samples",
-           "fs_from_time", "with_channels", "FS_PLAUSIBLE_MIN"]
+# IOData, validate, check_enough_samples and with_channels live in plid.data (imported here
+# for the callers that know them from this module)
+__all__ = ["read_data", "write_data", "fs_from_time", "FS_PLAUSIBLE_MIN"]

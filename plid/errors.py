@@ -6,6 +6,8 @@ one-line message. Messages name the offending item (column, sample, parameter, o
 
 from trussid._util.errors import UserError
 
+__all__ = ["DataError", "IdentificationError"]
+
 
 class DataError(UserError):
     """Bad input/output data: NaN/inf, length mismatch, unexciting input, unknown column."""

@@ -26,8 +26,9 @@ import control
 import numpy as np
 import scipy.signal
 
-from trussid.plid.datafile import IOData
+from trussid.plid.data import IOData
 from trussid.plid.errors import DataError
+from trussid.plid.stability import require_stable
 
 EXCITATIONS = ("white", "prbs", "chirp", "multisine")
 
@@ -339,7 +340,6 @@ def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: s
         raise DataError("the plant must be discrete-time (dt > 0); discretise it first")
     if snr_db is not None and sensor_noise_rms is not None:
         raise DataError("give either snr_db or sensor_noise_rms, not both")
-    from trussid.plid.stability import require_stable
 
     require_stable(plant, "the plant", "a simulation of it diverges")
     fs = 1.0 / plant.dt

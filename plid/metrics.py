@@ -25,7 +25,7 @@ FRF error
 Poles
     Discrete poles z map to s = ln(z) / dt; frequency |s| / 2 pi [Hz], damping -Re(s)/|s|.
     Identified and true poles (one of each complex pair) are matched by minimum total
-    s-plane distance (Hungarian assignment, scipy.optimize.linear_sum_assignment).
+    s-plane distance (Hungarian assignment, :func:`trussid.plid.modal.assign_pairs`).
 """
 
 from __future__ import annotations
@@ -33,11 +33,12 @@ from __future__ import annotations
 import control
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 
+from trussid.plid._linalg import lstsq, modal_regressors
 from trussid.plid.errors import DataError
 from trussid.plid.experiment import simulate
 from trussid.plid.frf import FRF, frequency_response
+from trussid.plid.modal import assign_pairs, pole_parameters, s_plane
 
 
 def _check_sizes(sys, u, y=None):
@@ -175,9 +176,7 @@ def _long_ar_innovations(r: np.ndarray, lags: int) -> np.ndarray:
     N, p = r.shape
     lags = int(max(1, min(lags, (N // 4) // max(p, 1))))
     Phi = np.hstack([r[lags - i - 1:N - i - 1] for i in range(lags)])   # (N - lags, p lags)
-    from trussid.plid.subspace import _lstsq
-
-    coef = _lstsq(Phi, r[lags:])
+    coef = lstsq(Phi, r[lags:])
     e = np.zeros_like(r)
     e[lags:] = r[lags:] - Phi @ coef
     return e
@@ -200,7 +199,6 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: 
     list of ndarray (n, p)
         The gain after each iteration whose predictor ``A - K C`` is stable.
     """
-    from trussid.plid.subspace import _lstsq, _modal_regressors
 
     u, y = _check_sizes(model, u, y)
     A, C = np.asarray(model.A, float), np.asarray(model.C, float)
@@ -217,9 +215,9 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: 
     for it in range(iterations):
         if it:
             e = y - one_step_predict(model, u, y, K=K)
-        R = _modal_regressors(A, C, e, x0=True)          # (N, p, n p + n)
+        R = modal_regressors(A, C, e, x0=True)          # (N, p, n p + n)
         Rm = (R * w[None, :, None]).reshape(-1, R.shape[2])
-        theta = _lstsq(Rm, ((y - y_u - e) * w).ravel())
+        theta = lstsq(Rm, ((y - y_u - e) * w).ravel())
         K = theta[: n * p].reshape(p, n).T
         if not _stable_predictor(A, C, K):
             break
@@ -379,16 +377,6 @@ def simulation_fit(sys, u, y_clean, skip: int = 0) -> dict:
             "nrmse_percent": nrmse.tolist()}
 
 
-def s_plane(poles, dt: float | None) -> np.ndarray:
-    """Continuous-time (s-plane) images of poles: ``s = ln(z) / dt`` for a discrete model
-    (``dt`` > 0), the poles themselves for a continuous one (``dt`` None or 0)."""
-    poles = np.asarray(poles)
-    if not dt:
-        return poles.astype(complex)
-    z = np.where(np.abs(poles) < 1e-300, 1e-300, poles)
-    return np.log(z.astype(complex)) / dt
-
-
 def modal_parameters(sys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frequencies [Hz], damping ratios and s-plane poles of ``sys``, one per complex pair.
 
@@ -404,11 +392,9 @@ def modal_parameters(sys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     keep = s.imag >= -1e-12 * np.maximum(np.abs(s), 1)
     s = s[keep]
     s = np.where(np.abs(s.imag) < 1e-12 * np.maximum(np.abs(s), 1), s.real + 0j, s)
-    wn = np.abs(s)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        zeta = np.where(wn > 0, -s.real / wn, 1.0)
-    order = np.argsort(wn, kind="stable")
-    return wn[order] / (2 * np.pi), zeta[order], s[order]
+    f, zeta, _ = pole_parameters(s)
+    order = np.argsort(np.abs(s), kind="stable")
+    return f[order], zeta[order], s[order]
 
 
 def prediction_burn_in(model, K, n_samples: int) -> int:
@@ -462,9 +448,9 @@ def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) 
     match = {}
     if si.size and st.size:
         cost = np.abs(si[:, None] - st[None, :])
-        r, c = scipy.optimize.linear_sum_assignment(cost)
-        for i, j in zip(r.tolist(), c.tolist()):
-            if max_relative_distance is None or cost[i, j] <= max_relative_distance * abs(st[j]):
+        for i, j in enumerate(assign_pairs(cost).tolist()):
+            if j >= 0 and (max_relative_distance is None
+                           or cost[i, j] <= max_relative_distance * abs(st[j])):
                 match[j] = i
     for j in range(st.size):
         i = match.get(j)

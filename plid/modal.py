@@ -4,10 +4,15 @@
   (complex pair) or real pole: natural frequency [Hz] and damping ratio (from
   ``control.damp``), the mode shape at the sensors (the outputs) and the modal
   participation factors of the inputs.
+- :func:`pole_parameters`: natural frequency [Hz], damping ratio and s-plane image of poles
+  (the one conversion of the project; ``modal_parameters``, ``modal_table``, the LQG
+  evaluation and model updating call it).
 - :func:`mac`: the modal assurance criterion between two sets of mode shapes.
-- :func:`stabilisation`: models over a range of orders, each pole marked stable in
-  frequency, damping and mode shape against the model one order step below, as modal
-  analysts choose order and poles (the figure: :func:`trussid.plots.stabilisation_figure`).
+- :func:`pair_modes`, :func:`assign_pairs`, :func:`mode_groups`: pairing of one set of modes
+  with another (linear assignment by frequency distance and MAC), and the groups of modes an
+  experiment cannot tell apart.
+- :func:`pole_std`: first-order standard deviations of frequency and damping of poles from
+  the covariance of a PLID parameter vector.
 
 Conventions
 -----------
@@ -23,62 +28,19 @@ holds exactly. Frequencies and damping of a discrete pole are those of the conti
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
+import math
 
+import control
 import numpy as np
+import scipy.optimize
 
-from trussid.plid.errors import DataError, IdentificationError
+from trussid.plid.data import ModeShapes
+from trussid.plid.errors import DataError
 
-__all__ = ["ModeShapes", "modal_table", "format_modal_table", "mac", "Stabilisation",
-           "stabilisation"]
-
-
-@dataclass
-class ModeShapes:
-    """A set of modes: frequencies, damping and shapes at some degrees of freedom.
-
-    Attributes
-    ----------
-    frequencies_hz : ndarray, shape (n_modes,)
-        Undamped natural frequencies [Hz].
-    damping : ndarray, shape (n_modes,)
-        Damping ratios [-] (1 for a real pole).
-    shapes : ndarray, shape (n_dof, n_modes)
-        Mode shapes, one column per mode (complex for identified modes).
-    labels : list of str, optional
-        Name of each DOF (e.g. the model's output names).
-    dofs : list of (int, int), optional
-        (node id, direction 1-6) of each DOF, for UFF 55 export and FE comparison.
-    participation : ndarray, shape (n_modes, n_inputs), optional
-        Modal participation factors of the inputs (see the module docstring).
-    input_names : list of str, optional
-    poles : ndarray, shape (n_modes,), optional
-        Continuous-time poles [rad/s], one per mode (positive imaginary part).
-    """
-
-    frequencies_hz: np.ndarray
-    damping: np.ndarray
-    shapes: np.ndarray
-    labels: list | None = None
-    dofs: list | None = None
-    participation: np.ndarray | None = None
-    input_names: list | None = None
-    poles: np.ndarray | None = None
-
-    @property
-    def n_modes(self) -> int:
-        return int(np.asarray(self.frequencies_hz).size)
-
-    def select(self, index) -> "ModeShapes":
-        """The modes ``index`` (indices or a boolean mask), in that order."""
-        idx = np.arange(self.n_modes)[index]
-        pick = (lambda a: None if a is None else np.asarray(a)[idx])
-        return ModeShapes(
-            frequencies_hz=np.asarray(self.frequencies_hz)[idx],
-            damping=np.asarray(self.damping)[idx], shapes=np.asarray(self.shapes)[:, idx],
-            labels=self.labels, dofs=self.dofs, participation=pick(self.participation),
-            input_names=self.input_names, poles=pick(self.poles))
+# ModeShapes lives in plid.data (imported here for the callers that know it from this
+# module); the stabilisation diagram in plid.stabilisation
+__all__ = ["modal_table", "format_modal_table", "mac", "s_plane", "pole_parameters", "assign_pairs", "pair_modes",
+           "mode_groups", "pole_std"]
 
 
 def _names(sys, kind: str, n: int, letter: str) -> list[str]:
@@ -105,14 +67,11 @@ def modal_table(sys, physical_only: bool = False) -> ModeShapes:
 
     Notes
     -----
-    Frequencies and damping come from :func:`control.damp` (its conversion of discrete
-    poles through ``ln(z)/dt``); the shapes and participation factors need the eigenvectors,
-    which it does not return, so each of its poles is matched to the nearest eigenvalue.
+    Frequencies and damping are those of the eigenvalues through :func:`pole_parameters`
+    (``s = ln(z)/dt`` for a discrete model), the same conversion as :func:`control.damp`.
     A defective A (repeated poles without a full set of eigenvectors) gives shapes of poor
     accuracy; identified models practically never have one.
     """
-    import control
-
     A = np.asarray(sys.A, dtype=float)
     B = np.asarray(sys.B, dtype=float)
     C = np.asarray(sys.C, dtype=float)
@@ -124,14 +83,9 @@ def modal_table(sys, physical_only: bool = False) -> ModeShapes:
                           poles=np.zeros(0, complex))
     lam, V = np.linalg.eig(A)
     W = np.linalg.solve(V, np.eye(n))  # rows: left eigenvectors with W V = I
-    wn_c, zeta_c, poles_c = control.damp(sys, doprint=False)
-    wn, zeta = np.empty(n), np.empty(n)
-    used = np.zeros(n, bool)
-    for k, lk in enumerate(lam):  # pair control.damp's poles with the eigenvalues
-        d = np.abs(np.asarray(poles_c) - lk) + np.where(used, np.inf, 0.0)
-        j = int(np.argmin(d))
-        used[j] = True
-        wn[k], zeta[k] = wn_c[j], zeta_c[j]
+    dt = sys.dt if control.isdtime(sys, strict=True) else None
+    f_all, zeta, s_all = pole_parameters(lam, dt)
+    wn = 2 * np.pi * f_all
     keep = lam.imag >= -1e-12 * np.maximum(np.abs(lam), 1e-300)
     cand = np.flatnonzero(keep)
     if physical_only:
@@ -145,10 +99,8 @@ def modal_table(sys, physical_only: bool = False) -> ModeShapes:
         if abs(scale) > 0:
             shapes[:, c] /= scale
             part[c, :] *= scale
-    dt = sys.dt if control.isdtime(sys, strict=True) else None
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.log(lam[idx].astype(complex)) / dt if dt else lam[idx].astype(complex)
-    return ModeShapes(frequencies_hz=wn[idx] / (2 * np.pi), damping=zeta[idx], shapes=shapes,
+    s = s_all[idx]
+    return ModeShapes(frequencies_hz=f_all[idx], damping=zeta[idx], shapes=shapes,
                       labels=out_names, participation=part, input_names=in_names, poles=s)
 
 
@@ -170,7 +122,7 @@ def format_modal_table(modes: ModeShapes, max_rows: int | None = None) -> str:
     return "\n".join("  ".join(x.rjust(w) for x, w in zip(r, width)) for r in [head] + rows)
 
 
-def mac(phi_a, phi_b=None) -> np.ndarray:
+def mac(phi_a, phi_b=None, zero_shape: str = "raise") -> np.ndarray:
     """Modal assurance criterion between two sets of mode shapes.
 
     ``MAC_ij = |a_i^H b_j|^2 / ((a_i^H a_i)(b_j^H b_j))``: 1 for shapes that are multiples
@@ -181,6 +133,9 @@ def mac(phi_a, phi_b=None) -> np.ndarray:
     phi_a : array_like, shape (n_dof, n_a) or ModeShapes
     phi_b : array_like, shape (n_dof, n_b) or ModeShapes, optional
         Default: ``phi_a`` (the auto-MAC).
+    zero_shape : {"raise", "zero"}
+        A shape that is zero (or not finite): a :class:`DataError` naming it, or MAC 0 with
+        every shape (what pairing wants: a mode no sensor sees matches nothing by shape).
 
     Returns
     -------
@@ -195,6 +150,12 @@ def mac(phi_a, phi_b=None) -> np.ndarray:
                         f"{b.shape[0]} rows")
     na = np.sum(np.abs(a) ** 2, axis=0)
     nb = np.sum(np.abs(b) ** 2, axis=0)
+    if zero_shape == "zero":
+        num = np.abs(a.conj().T @ b) ** 2
+        den = np.outer(na, nb)
+        return np.divide(num, den, out=np.zeros_like(num), where=den > 0)
+    if zero_shape != "raise":
+        raise DataError(f"zero_shape must be 'raise' or 'zero', got {zero_shape!r}")
     for what, nrm in (("first", na), ("second", nb)):
         if np.any(nrm == 0) or not np.all(np.isfinite(nrm)):
             k = int(np.argmax((nrm == 0) | ~np.isfinite(nrm)))
@@ -202,149 +163,212 @@ def mac(phi_a, phi_b=None) -> np.ndarray:
     return np.abs(a.conj().T @ b) ** 2 / np.outer(na, nb)
 
 
-# --------------------------------------------------------------------- stabilisation
+# --------------------------------------------------------------------- poles
 
 
-@dataclass
-class Stabilisation:
-    """Poles of models over a range of orders, each marked against the order below.
-
-    Attributes
-    ----------
-    orders : list of int
-        Orders that gave a model.
-    modes : list of ModeShapes
-        Per order, its physical modes (0 < damping < 1, one per pair).
-    status : list of ndarray of str
-        Per order and mode: ``"new"`` (no pole near it at the order below), ``"f"``
-        (frequency stable), ``"fd"`` (frequency and damping), ``"fv"`` (frequency and
-        shape) or ``"s"`` (all three: stable).
-    runs : list of ndarray of int
-        Per order and mode: over how many consecutive order steps (ending here) the pole
-        has been stable in all three (0 for any other status). Modal analysts trust a
-        column of stable poles, not one stable step: a noise pole can match once.
-    failed : list of (int, str)
-        Orders that gave no model, with the reason.
-    tolerances : dict
-        ``f`` and ``damping`` (relative), ``mac`` (lowest MAC).
-    models : list
-        The identified models, by order.
-    seconds : list of float
-    """
-
-    orders: list
-    modes: list
-    status: list
-    runs: list = field(default_factory=list)
-    failed: list = field(default_factory=list)
-    tolerances: dict = field(default_factory=dict)
-    models: list = field(default_factory=list)
-    seconds: list = field(default_factory=list)
-
-    def stable_poles(self, order: int | None = None, min_run: int = 1) -> ModeShapes:
-        """The modes stable in all three at ``order`` (default: the highest order) over at
-        least ``min_run`` consecutive order steps."""
-        k = len(self.orders) - 1 if order is None else self.orders.index(order)
-        return self.modes[k].select(self.runs[k] >= max(min_run, 1))
+def s_plane(poles, dt: float | None) -> np.ndarray:
+    """Continuous-time (s-plane) images of poles: ``s = ln(z) / dt`` for a discrete model
+    (``dt`` > 0), the poles themselves for a continuous one (``dt`` None or 0)."""
+    poles = np.asarray(poles)
+    if not dt:
+        return poles.astype(complex)
+    z = np.where(np.abs(poles) < 1e-300, 1e-300, poles)
+    return np.log(z.astype(complex)) / dt
 
 
-def mark_stability(prev: ModeShapes | None, cur: ModeShapes, tol_f: float, tol_zeta: float,
-                   tol_mac: float, return_match: bool = False):
-    """Status of each mode of ``cur`` against the nearest-frequency mode of ``prev``
-    (and, with ``return_match``, the index of that mode, -1 where none is near)."""
-    status = np.array(["new"] * cur.n_modes, dtype=object)
-    match = np.full(cur.n_modes, -1)
-    if prev is None or prev.n_modes == 0 or cur.n_modes == 0:
-        return (status, match) if return_match else status
-    macs = mac(cur.shapes, prev.shapes)
-    for k in range(cur.n_modes):
-        j = int(np.argmin(np.abs(prev.frequencies_hz - cur.frequencies_hz[k])))
-        df = abs(cur.frequencies_hz[k] - prev.frequencies_hz[j]) / max(prev.frequencies_hz[j],
-                                                                        1e-300)
-        if df > tol_f:
-            continue
-        match[k] = j
-        dz = abs(cur.damping[k] - prev.damping[j]) / max(prev.damping[j], 1e-300)
-        d_ok, v_ok = dz <= tol_zeta, macs[k, j] >= tol_mac
-        status[k] = "s" if d_ok and v_ok else "fd" if d_ok else "fv" if v_ok else "f"
-    return (status, match) if return_match else status
-
-
-def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
-                  tol_zeta: float = 0.05, tol_mac: float = 0.98, progress=None,
-                  input_names=None, output_names=None) -> Stabilisation:
-    """Identify at each order and mark every pole stable in frequency, damping and shape.
+def pole_parameters(poles, dt: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Natural frequency, damping ratio and s-plane image of each pole (in the given order).
 
     Parameters
     ----------
-    u : ndarray, shape (N, m)
-    y : ndarray, shape (N, p)
-    dt : float
-        Sampling interval [s].
-    orders : sequence of int
-        Model orders, ascending.
-    identify : callable, optional
-        ``identify(u, y, order, dt) -> control.StateSpace``; default PLID
-        (:func:`trussid.plid.multipass.identify`, its ``.model``).
-    tol_f, tol_zeta : float
-        Largest relative change of frequency and of damping from the nearest pole one
-        order step below for the pole to count as stable in them (defaults 1 % and 5 %, the
-        usual values of modal-analysis software).
-    tol_mac : float
-        Lowest MAC of the shape with that pole's (default 0.98).
-    progress : bool or None
-        tqdm bar over the orders (None: only on a terminal).
-    input_names, output_names : list of str, optional
-        Labels of the shapes and participation factors.
+    poles : array_like, complex
+        Discrete poles ``z`` (with ``dt``) or continuous poles ``s`` [rad/s] (``dt`` None).
+    dt : float or None
+        Sampling interval [s] of a discrete model.
 
     Returns
     -------
-    Stabilisation
-        An order whose identification fails (:class:`IdentificationError` or
-        :class:`DataError`) is listed in ``failed`` with the reason, and the next order is
-        compared with the last one that worked.
+    frequency_hz : ndarray
+        ``|s| / 2 pi`` [Hz].
+    damping : ndarray
+        ``-Re(s) / |s|`` [-] (1 for a pole at s = 0).
+    s : ndarray, complex
+        ``ln(z) / dt`` [rad/s] (a discrete pole at 0 is taken at 1e-300).
     """
-    import control
-    from tqdm.auto import tqdm
+    s = s_plane(poles, dt)
+    wn = np.abs(s)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        zeta = np.where(wn > 0, -s.real / wn, 1.0)
+    return wn / (2 * np.pi), zeta, s
 
-    if identify is None:
-        from trussid.plid.multipass import identify as plid_identify
 
-        def identify(u_, y_, n_, dt_):
-            return plid_identify(u_, y_, n_, dt_, progress=False).model
+def pole_std(poles, s, V, W, Cv, theta_cov, dt: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """First-order standard deviations of frequency [Hz] and damping of poles of a PLID model.
 
-    orders = [int(n) for n in orders]
-    if not orders or sorted(orders) != orders or orders[0] < 1:
-        raise IdentificationError(f"stabilisation orders must be ascending positive "
-                                  f"integers, got {orders}")
-    res = Stabilisation(orders=[], modes=[], status=[],
-                        tolerances={"f": tol_f, "damping": tol_zeta, "mac": tol_mac})
-    prev = None
-    bar = tqdm(orders, desc="stabilisation", unit="order", disable=progress is False
-               if progress is not None else None, leave=False)
-    for n in bar:
-        t0 = time.perf_counter()
-        try:
-            model = identify(u, y, n, dt)
-        except (IdentificationError, DataError) as exc:
-            res.failed.append((n, str(exc)))
-            continue
-        if output_names is not None or input_names is not None:
-            model = control.ss(model.A, model.B, model.C, model.D, model.dt,
-                               inputs=input_names, outputs=output_names)
-        modes = modal_table(model, physical_only=True)
-        res.orders.append(n)
-        res.modes.append(modes)
-        status, match = mark_stability(prev, modes, tol_f, tol_zeta, tol_mac, True)
-        run_prev = res.runs[-1] if res.runs else np.zeros(0, int)
-        res.status.append(status)
-        res.runs.append(np.array([run_prev[j] + 1 if st == "s" else 0
-                                  for st, j in zip(status, match)], dtype=int))
-        res.models.append(model)
-        res.seconds.append(time.perf_counter() - t0)
-        prev = modes
-    bar.close()
-    if not res.orders:
-        raise IdentificationError("no order gave a model: " + "; ".join(
-            f"order {n}: {why}" for n, why in res.failed))
-    return res
+    PLID's parameters ``theta = [vec(Abar); vec(B)]`` give ``A = F + Abar C`` (``F``, ``C``
+    fixed); with right/left eigenvectors ``v``, ``w`` of ``A`` a pole moves by
+    ``d z = w^H dAbar C v / (w^H v)``, then ``s = ln z / dt``, ``f = |s| / 2 pi``,
+    ``zeta = -Re s / |s|``.
+
+    Parameters
+    ----------
+    poles : (k,) complex
+        Eigenvalues of ``A`` (discrete poles ``z`` or continuous ``s``).
+    s : (k,) complex
+        Their s-plane images [rad/s] (:func:`s_plane`).
+    V, W : (n, k) complex
+        Right and left eigenvectors of ``A`` (``scipy.linalg.eig(A, left=True)``).
+    Cv : (p, k) complex
+        ``C V``.
+    theta_cov : (N, N) array, N >= n p
+        Posterior covariance of theta (:class:`trussid.plid.estimator.PLIDResult`).
+    dt : float or None
+        Sampling interval [s] of a discrete model.
+
+    Returns
+    -------
+    frequency_std_hz, damping_std : (k,) float
+        NaN for a pole whose propagated variance is not positive (a covariance that lost
+        definiteness, which PLID's direct form can give).
+    """
+    n, p = np.shape(V)[0], np.shape(Cv)[0]
+    cov = np.asarray(theta_cov, float)
+    if cov.ndim != 2 or cov.shape[0] != cov.shape[1] or cov.shape[0] < n * p:
+        raise DataError(f"theta_cov must be square with at least n p = {n * p} rows, got {cov.shape}")
+    caa = cov[: n * p, : n * p]
+    fstd, zstd = np.empty(len(s)), np.empty(len(s))
+    for k in range(len(s)):  # a handful of modes
+        wv = W[:, k].conj() @ V[:, k]
+        g = np.outer(W[:, k].conj(), Cv[:, k]).ravel(order="F") / wv  # d z / d vec(Abar)
+        gs = g / (poles[k] * dt) if dt else g  # d s
+        mag = abs(s[k])
+        a_f = np.real(np.conj(s[k]) * gs) / (2 * np.pi * mag)
+        a_z = -np.real(gs) / mag + s[k].real * np.real(np.conj(s[k]) * gs) / mag**3
+        vf, vz = a_f @ caa @ a_f, a_z @ caa @ a_z
+        fstd[k] = math.sqrt(vf) if vf > 0 else np.nan
+        zstd[k] = math.sqrt(vz) if vz > 0 else np.nan
+    return fstd, zstd
+
+
+# --------------------------------------------------------------------- pairing
+
+
+def assign_pairs(cost, allowed=None, groups=None) -> np.ndarray:
+    """Pair each row with a distinct column at least total cost (linear assignment).
+
+    The one pairing of the project: :func:`pair_modes` (frequency and MAC) and
+    :func:`trussid.plid.metrics.compare_poles` (s-plane distance) build a cost and call it.
+
+    Parameters
+    ----------
+    cost : (k, n) float
+    allowed : (k, n) bool, optional
+        Pairs outside it are never chosen.
+    groups : (n,) int, optional
+        Columns with the same number form a group (:func:`mode_groups`): each group takes at
+        most one row, with its lowest-cost member.
+
+    Returns
+    -------
+    (k,) int
+        Column paired with each row, -1 when no allowed column is left.
+    """
+    cost = np.asarray(cost, float)
+    k = cost.shape[0]
+    big = 1e6 + 10 * float(np.max(cost[np.isfinite(cost)], initial=0.0))
+    if allowed is not None:
+        cost = np.where(allowed, cost, big)
+    member = None
+    if groups is not None:
+        groups = np.asarray(groups, int)
+        labels = np.unique(groups)
+        gc = np.full((k, labels.size), big)
+        member = np.zeros((k, labels.size), dtype=int)
+        for q, lab in enumerate(labels):  # a few dozen groups
+            idx = np.flatnonzero(groups == lab)
+            best = np.argmin(cost[:, idx], axis=1)
+            member[:, q] = idx[best]
+            gc[:, q] = cost[np.arange(k), idx[best]]
+        cost = gc
+    out = np.full(k, -1)
+    if cost.shape[1] == 0:
+        return out
+    rows, cols = scipy.optimize.linear_sum_assignment(cost)
+    ok = cost[rows, cols] < big
+    out[rows[ok]] = cols[ok] if member is None else member[rows[ok], cols[ok]]
+    return out
+
+
+def pair_modes(measured_hz, model_hz, *, scale_hz=None, mac=None, mac_weight: float = 1.0,
+               allowed=None, groups=None) -> np.ndarray:
+    """Pair each measured mode with a distinct model mode (linear assignment).
+
+    Cost of a pair: ``|f_i - F_j| / scale_i`` (default ``scale_i = f_i``: relative distance)
+    plus ``mac_weight * (1 - MAC_ij)`` when ``mac`` is given. Pairs outside ``allowed`` are
+    never chosen.
+
+    Parameters
+    ----------
+    measured_hz : (k,) float
+    model_hz : (n,) float
+    scale_hz : (k,) or (k, n) float, optional
+    mac : (k, n) float, optional
+    mac_weight : float
+    allowed : (k, n) bool, optional
+    groups : (n,) int, optional
+        Model modes with the same number form a group (:func:`mode_groups`): each group
+        takes at most one measured mode, with its lowest-cost member.
+
+    Returns
+    -------
+    (k,) int
+        Model index paired with each measured mode, -1 when no allowed model mode is left.
+    """
+    f = np.asarray(measured_hz, float)
+    F = np.asarray(model_hz, float)
+    scale = f[:, None] if scale_hz is None else np.asarray(scale_hz, float)
+    if scale.ndim == 1:
+        scale = scale[:, None]
+    cost = np.abs(f[:, None] - F[None, :]) / scale
+    if mac is not None:
+        cost = cost + mac_weight * (1.0 - np.asarray(mac, float))
+    return assign_pairs(cost, allowed=allowed, groups=groups)
+
+
+def mode_groups(model_hz, shapes, bandwidth_hz, mac_min: float = 0.9) -> np.ndarray:
+    """Group model modes that an experiment cannot tell apart.
+
+    Two modes (adjacent in frequency) are one group when they are closer than
+    ``bandwidth_hz`` and their shapes at the sensors agree (MAC above ``mac_min``): the
+    two bending planes of one strut, seen by one lateral sensor. An identified pole is then
+    one blend of the group, so at most one measured mode may pair with it.
+
+    Parameters
+    ----------
+    model_hz : (n,) float
+        Frequencies [Hz].
+    shapes : (p, n) array or None
+        Shapes at the sensors (None: frequency alone, no two modes are grouped).
+    bandwidth_hz : float or (n,) float
+    mac_min : float
+
+    Returns
+    -------
+    (n,) int
+        Group number of each mode (modes in frequency order get consecutive numbers).
+    """
+    F = np.asarray(model_hz, float)
+    order = np.argsort(F)
+    macs = None if shapes is None else mac(np.asarray(shapes, complex),
+                                           np.asarray(shapes, float).real, zero_shape="zero")
+    bw = np.broadcast_to(np.asarray(bandwidth_hz, float), F.shape)
+    g = np.empty(F.size, dtype=int)
+    cur = 0
+    for a, b in zip(order[:-1], order[1:]):  # a chain along the sorted frequencies
+        g[a] = cur
+        close = F[b] - F[a] < bw[b]
+        if not (close and macs is not None and macs[a, b] > mac_min):
+            cur += 1
+    if F.size:
+        g[order[-1]] = cur
+    return g

@@ -20,6 +20,7 @@ import numpy as np
 
 from trussid.plid.errors import DataError
 from trussid._util.files import atomic_path
+from trussid.plid.stability import check_stability, UnstableModelWarning
 
 FORMAT_VERSION = 1
 
@@ -126,7 +127,6 @@ def save_model(path, sys: control.StateSpace, K=None, input_names=None, output_n
         with open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
     # Writing an unstable model is allowed (a user may want to inspect it), but never silently.
-    from trussid.plid.stability import UnstableModelWarning, check_stability
 
     st = check_stability(sys)
     if st.unstable.size:
@@ -227,7 +227,6 @@ def load_model(path, which: str = "auto"):
         sys = control.ss(cA, cB, cC, cD, inputs=in_names, outputs=out_names)
     else:
         sys = control.ss(A, B, C, D, dt, inputs=in_names, outputs=out_names)
-    from trussid.plid.stability import check_stability
 
     meta["stability"] = check_stability(sys)
     return sys, meta

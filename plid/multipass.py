@@ -32,8 +32,15 @@ import numpy as np
 from trussid.plid.bases import basis_for, data_frequencies, model_frequencies
 from trussid.plid.canonical import ObserverBasis
 from trussid.plid._validate import as_2d
-from trussid.plid.errors import IdentificationError
+from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.estimator import PLID, PLIDResult, PLIDWarning
+from trussid.plid.experiment import simulate
+from trussid.plid.metrics import (best_predictor, choose_predictor, default_noise_covariances,
+                                  predictor_gain)
+from trussid.plid.reduce import balanced_truncation
+from trussid.plid.stability import stabilise
+from trussid.plid.subspace import (direct_term_test, output_error_fit, refit_input_matrix,
+                                   subspace_prior)
 
 __all__ = ["Pass", "multipass", "identify", "identify_reduced", "fit_model", "default_via",
            "Identification", "Candidate", "RECIPES",
@@ -125,7 +132,6 @@ def check_data(u, y, dt) -> tuple[np.ndarray, np.ndarray]:
     and column) before any library sees the data: numpy's concatenation error, nfoursid's
     "nulls" and a ZeroDivisionError leaked through before (newcomer audit A13, A14, A18).
     """
-    from trussid.plid.errors import DataError
 
     try:
         dt_ok = float(dt) > 0 and np.isfinite(float(dt))
@@ -144,7 +150,6 @@ def check_data(u, y, dt) -> tuple[np.ndarray, np.ndarray]:
 def _noise_estimate(model, u, y, floor=1e-10):
     """Output-noise variance per channel in scaled units: the simulation error of a prior
     model on the data (an over-estimate by the prior's own model error)."""
-    from trussid.plid.experiment import simulate
 
     e = y - simulate(model, u)
     return np.maximum(np.mean(e ** 2, axis=0) / np.mean(y ** 2, axis=0), floor)
@@ -217,15 +222,12 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
               stabilise=stabilise, progress=progress)
     if order % p:
         return _identify_by_reduction(u, y, int(order), dt, kw)
-    from trussid.plid.subspace import direct_term_test, output_error_fit
 
     info = {}
     t0 = time.perf_counter()
     use_d, test, D0 = direct is True, None, None
     y_fit = y
     if start == "subspace":
-        from trussid.plid.subspace import subspace_prior
-
         prior, pinfo = subspace_prior(u, y, order, dt, block_rows=block_rows)
         info["subspace"] = pinfo
         info["subspace_seconds"] = time.perf_counter() - t0
@@ -279,7 +281,6 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
 def _with_direct_term(model, u, y, use_d: bool, stable: bool, D0):
     """``(model, use_d, D standard errors)``: B and D refitted by output error when a direct
     term is wanted; an unstable model cannot be refitted, so it keeps the prior's ``D0``."""
-    from trussid.plid.subspace import output_error_fit
 
     if not use_d:
         return model, False, None
@@ -310,8 +311,6 @@ def _best_gain(model, u, y, R, own):
     """:func:`trussid.plid.metrics.best_predictor` with the recursion's gain and the former
     default (1 % input noise and the estimated ``R``) among the candidates; the former
     default alone when no predictor of the model is stable."""
-    from trussid.plid.errors import DataError
-    from trussid.plid.metrics import best_predictor
 
     cands = dict(own)
     cands["kalman, 1 % input noise and estimated R"] = _default_gain(model, u, y, R)
@@ -330,8 +329,6 @@ def _best_gain(model, u, y, R, own):
 def _identify_by_reduction(u, y, order, dt, kw):
     """An order that is not a multiple of the outputs: identify at the next multiple (at
     least ``p``), reduce by input-weighted balanced truncation, refit ``B`` (and ``D``)."""
-    from trussid.plid.reduce import balanced_truncation
-    from trussid.plid.subspace import output_error_fit
 
     p = y.shape[1]
     t0 = time.perf_counter()
@@ -366,7 +363,6 @@ def _identify_by_reduction(u, y, order, dt, kw):
 def _default_gain(model, u, y, R):
     """The former default predictor gain: a steady-state Kalman gain with 1 % input noise
     through ``B`` and the estimated output noise ``R`` (None without a solution)."""
-    from trussid.plid.metrics import default_noise_covariances, predictor_gain
 
     Qd, _ = default_noise_covariances(model, u, y)
     sy2 = np.mean(y ** 2, axis=0)
@@ -379,7 +375,6 @@ def _default_gain(model, u, y, R):
 
 def _stable(model):
     """``model`` with any pole outside the unit circle reflected in (plid.stabilise)."""
-    from trussid.plid.stability import stabilise
 
     return stabilise(model).model
 
@@ -550,8 +545,6 @@ def _direct_candidate(u, y, order, dt, kw) -> Candidate:
 
 def _via_candidates(u, y, order, h, dt, kw, form, prior_theta_var, progress) -> list:
     """The fit at order ``h`` reduced to ``order``, and that reduction refined by PLID."""
-    from trussid.plid.reduce import balanced_truncation
-    from trussid.plid.subspace import refit_input_matrix
 
     t0 = time.perf_counter()
     try:
@@ -583,9 +576,6 @@ def _via_candidates(u, y, order, h, dt, kw, form, prior_theta_var, progress) -> 
 
 def _score(c: Candidate, u, y, order: int) -> None:
     """Stabilise ``c`` if needed and score its best one-step predictor on ``u, y``."""
-    from trussid.plid.errors import DataError
-    from trussid.plid.metrics import choose_predictor
-    from trussid.plid.stability import stabilise
 
     if c.model is None:
         return
@@ -665,7 +655,6 @@ def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
         fit's noise model); ``info["K_source"]`` says where it came from,
         ``info["warnings"]`` lists the estimator's warnings.
     """
-    from trussid.plid.metrics import predictor_gain
 
     if start not in RECIPES:
         raise IdentificationError(f"start must be one of {', '.join(RECIPES)}; got {start!r}")

@@ -30,6 +30,8 @@ from trussid.plid.frf import frequency_response
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.metrics import (default_noise_covariances, one_step_predict, prediction_burn_in,
                                   prediction_ratio_db, predictor_gain)
+from trussid.plid.multipass import identify
+from trussid.plid.subspace import subspace_prior
 
 __all__ = ["OrderRow", "order_table", "format_table"]
 
@@ -80,8 +82,6 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
         A tqdm bar over the orders (None: shown for more than one order; each is a full
         identification, seconds to minutes).
     """
-    from trussid.plid.multipass import identify
-    from trussid.plid.subspace import subspace_prior
 
     u = as_2d(u, "u")
     y = as_2d(y, "y")

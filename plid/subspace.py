@@ -23,11 +23,12 @@ from dataclasses import dataclass
 
 import control
 import numpy as np
-import scipy.linalg
-import scipy.signal
 
+from trussid.plid._linalg import lstsq, modal_regressors
 from trussid.plid._validate import as_2d
 from trussid.plid.errors import DataError, IdentificationError
+from trussid.plid.experiment import simulate
+from trussid.plid.stability import stabilise
 
 __all__ = ["SubspaceFit", "n4sid", "po_moesp", "block_hankel", "refit_input_matrix",
            "output_error_fit", "direct_term_test", "subspace_prior"]
@@ -107,53 +108,6 @@ def n4sid(u, y, n: int, block_rows: int, dt: float) -> SubspaceFit:
     return SubspaceFit(with_d, zero_d, block_rows, sv)
 
 
-def _mode_filter(lam: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """``f[s, k] = sum_{i<k} lam_s^(k-1-i) v[i]``: ``v`` (N,) through ``1/(z - lam_s)``."""
-    f = np.empty((lam.size, v.size), dtype=complex)
-    vc = v.astype(complex)
-    for s, ls in enumerate(lam):
-        f[s] = scipy.signal.lfilter([0.0, 1.0], [1.0, -ls], vc)
-    return f
-
-
-def _modal_regressors(A, C, u, x0=True, direct=False):
-    """Regressor matrix (N, p, k) for ``y = sum_j G_j(B[:, j]) [+ D u] [+ C A^k x0]`` with
-    ``A, C`` fixed: columns ``vec(B)`` (column-major), then ``x0`` (n), then ``vec(D)``
-    (row-major: ``D[l, j]`` at ``l * m + j``)."""
-    lam, V = np.linalg.eig(A)
-    Vi = np.linalg.inv(V)
-    CV = C @ V                                      # (p, n)
-    N, m = u.shape
-    p, n = C.shape
-    cols = []
-
-    def through(f):                                 # f (n, N) modal signals -> (N, p, n)
-        # y[k] = CV diag(f[:, k]) Vi b: the regressor of b[t] is (CV * f[:, k]) @ Vi[:, t]
-        out = np.empty((N, p, n))
-        for r in range(p):
-            out[:, r, :] = ((f.T * CV[r]) @ Vi).real
-        return out
-
-    for j in range(m):
-        cols.append(through(_mode_filter(lam, u[:, j])))
-    if x0:
-        with np.errstate(divide="ignore"):
-            loglam = np.log(lam.astype(complex))
-        cols.append(through(np.exp(loglam[:, None] * np.arange(N)[None, :])))
-    if direct:
-        Dr = np.zeros((N, p, p, m))
-        for l in range(p):
-            Dr[:, l, l, :] = u
-        cols.append(Dr.reshape(N, p, p * m))
-    return np.concatenate(cols, axis=2)
-
-
-def _lstsq(M, b):
-    """Least squares by pivoted QR (LAPACK gelsy): several times faster than numpy's
-    SVD-based solver on these tall regressor matrices, and rank-revealing as well."""
-    return scipy.linalg.lstsq(M, b, lapack_driver="gelsy", check_finite=False)[0]
-
-
 def _stable(A) -> bool:
     return bool(np.max(np.abs(np.linalg.eigvals(np.asarray(A, float))), initial=0) < 1)
 
@@ -192,10 +146,10 @@ def output_error_fit(sys, u, y, direct: bool = False):
     if not _stable(A):
         # Output error over a long record is meaningless for an unstable A.
         raise IdentificationError("an output-error refit needs a stable model")
-    R = _modal_regressors(A, C, u, x0=True, direct=direct)
+    R = modal_regressors(A, C, u, x0=True, direct=direct)
     w = 1.0 / np.sqrt(np.mean(y ** 2, axis=0))
     Rm = (R * w[None, :, None]).reshape(-1, R.shape[2])
-    theta = _lstsq(Rm, (y * w).ravel())
+    theta = lstsq(Rm, (y * w).ravel())
     B = theta[: n * m].reshape(m, n).T
     keep = np.ones(theta.size, bool)
     keep[n * m:n * m + n] = False                  # x0 columns
@@ -260,7 +214,7 @@ def direct_term_test(sys, u, y, folds: int = 2, margin: float = 0.05) -> dict:
     n, m, p = A.shape[0], u.shape[1], y.shape[1]
     edges = np.linspace(0, u.shape[0], folds + 1).astype(int)
     w = 1.0 / np.sqrt(np.mean(y ** 2, axis=0))
-    regs = [_modal_regressors(A, C, u[a:b], x0=True, direct=True) for a, b in zip(edges[:-1], edges[1:])]
+    regs = [modal_regressors(A, C, u[a:b], x0=True, direct=True) for a, b in zip(edges[:-1], edges[1:])]
     nb, nd = n * m, p * m
     score = {"without": 0.0, "with": 0.0}
     for k in range(folds):
@@ -275,7 +229,7 @@ def direct_term_test(sys, u, y, folds: int = 2, margin: float = 0.05) -> dict:
                 parts = [Rj[:, :, :nb], x0] + ([Rj[:, :, nb + n:]] if use_d else [])
                 rows.append((np.concatenate(parts, axis=2) * w[None, :, None]).reshape(-1, nb + n * len(train) + (nd if use_d else 0)))
                 rhs.append((y[edges[j]:edges[j + 1]] * w).ravel())
-            th = _lstsq(np.vstack(rows), np.concatenate(rhs))
+            th = lstsq(np.vstack(rows), np.concatenate(rhs))
             b = th[:nb]
             d = th[nb + n * len(train):] if use_d else np.zeros(nd)
             Rk = regs[k]
@@ -283,7 +237,7 @@ def direct_term_test(sys, u, y, folds: int = 2, margin: float = 0.05) -> dict:
             pred = Rk[:, :, :nb] @ b + Rk[:, :, nb + n:] @ d
             # the held-out segment's own initial state
             X0 = (Rk[:, :, nb:nb + n] * w[None, :, None]).reshape(-1, n)
-            x0k = _lstsq(X0, ((yk - pred) * w).ravel())
+            x0k = lstsq(X0, ((yk - pred) * w).ravel())
             score[label] += _nmse(yk, pred + Rk[:, :, nb:nb + n] @ x0k) / folds
     direct = score["with"] < (1.0 - margin) * score["without"]
     return {"direct": bool(direct), "held_out_nmse": score, "margin": margin, "folds": folds}
@@ -308,8 +262,6 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
     info : dict
         ``{"block_rows": chosen, "candidates": {block_rows: output-error dB}}``.
     """
-    from trussid.plid.experiment import simulate
-    from trussid.plid.stability import stabilise
 
     u = as_2d(u, "u")
     y = as_2d(y, "y")

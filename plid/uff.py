@@ -5,7 +5,7 @@ Data sets handled
 -----------------
 58, function type 1 (time response)
     One record per channel: the sampled time history of an input or an output. Read into
-    :class:`trussid.plid.datafile.IOData` (so ``trussid identify DATA.uff`` works) and
+    :class:`trussid.plid.data.IOData` (so ``trussid identify DATA.uff`` works) and
     written from it. A channel is an input if the record says so (ordinate data type 13,
     "excitation force", as modal-test software marks its force/drive channels), if its name
     starts with ``u`` (and an output if it starts with ``y``), or if ``inputs=`` /
@@ -15,7 +15,7 @@ Data sets handled
     from :class:`trussid.plid.frf.FRF`.
 55 (data at nodes: mode shapes)
     One record per mode, real (normal modes, analysis type 2) or complex (analysis type 3),
-    read into and written from :class:`trussid.plid.modal.ModeShapes`.
+    read into and written from :class:`trussid.plid.data.ModeShapes`.
 15 (nodes) and 82 (trace lines)
     Test geometry: :class:`Geometry`.
 
@@ -39,7 +39,9 @@ from pathlib import Path
 import numpy as np
 
 from trussid._util.files import atomic_path
+from trussid.plid.data import IOData, ModeShapes, unknown_name
 from trussid.plid.errors import DataError
+from trussid.plid.frf import FRF
 
 __all__ = ["Geometry", "UFFContents", "read_uff", "write_uff", "read_uff_data",
            "write_uff_data"]
@@ -175,8 +177,6 @@ def _check_values(ds: dict, name: str, source: str) -> np.ndarray:
 
 
 def _time_data(recs: list[dict], source: str, inputs, outputs):
-    from trussid.plid.datafile import IOData
-
     names = _channel_names(recs)
     values, dxs = [], []
     for ds, name in zip(recs, names):
@@ -210,9 +210,7 @@ def _time_data(recs: list[dict], source: str, inputs, outputs):
     for lst in (inputs, outputs):
         for w in lst or []:
             if w not in names:
-                from trussid.plid.datafile import _unknown
-
-                raise _unknown(w, names, source, "channel")
+                raise unknown_name(w, names, source, "channel")
     is_exc = [int(ds.get("ordinate_spec_data_type", 0)) == EXCITATION for ds in recs]
     if inputs is None and outputs is None:
         in_idx = [k for k, n in enumerate(names) if is_exc[k] or n[:1] in "uU"]
@@ -251,8 +249,6 @@ def _time_data(recs: list[dict], source: str, inputs, outputs):
 
 
 def _frf_data(recs: list[dict], source: str):
-    from trussid.plid.frf import FRF
-
     ins, outs, cells = [], [], {}
     f0 = None
     for ds in recs:
@@ -282,8 +278,6 @@ def _frf_data(recs: list[dict], source: str):
 
 
 def _mode_data(recs: list[dict], source: str):
-    from trussid.plid.modal import ModeShapes
-
     nodes = None
     freqs, damps, cols = [], [], []
     ncomp = 3

@@ -14,6 +14,9 @@ if command -v apt-get >/dev/null 2>&1; then
     # dependencies libglapi-mesa and libllvm15 come with it). No libGL/libEGL/X11 library is
     # loaded on that path. libgomp1 is not for VTK; kept from the original list.
     pkgs="libosmesa6 libgomp1"
+    # The documentation site serves MathJax itself (docs/conf.py), so that its formulas
+    # render offline: Debian's MathJax 2.7 (docs and test build the site).
+    case "$extras" in docs|test) pkgs="$pkgs libjs-mathjax" ;; esac
     missing=""
     for p in $pkgs; do dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"; done
     if [ -n "$missing" ]; then

@@ -97,3 +97,20 @@ def test_gallery_has_every_example_with_its_figure(site):
         assert png.stat().st_size > 10_000, f"{name}'s figure is nearly empty"
         html = (site / "auto_examples" / f"{name}.html").read_text()
         assert f"sphx_glr_{name}_001.png" in html  # the page shows it
+
+
+@pytest.mark.slow
+def test_formulas_render_offline_from_the_site_itself(site):
+    """A page with formulas loads MathJax from the site's own ``_static``, never from a CDN:
+    opened without network it still shows rendered math (the screenshot
+    docs/images/site_math_offline.png was taken so, in Chromium in a network namespace with no
+    interface)."""
+    html = (site / "auto_examples" / "cantilever_frame.html").read_text()
+    assert r"\frac{(\beta_n L)^2}" in html  # the formula is on the page, for MathJax
+    scripts = re.findall(r"<script[^>]*src=\"([^\"]+)\"", html)
+    assert "../_static/mathjax/MathJax.js?config=TeX-AMS_SVG" in scripts
+    assert not [s for s in scripts if re.match(r"[a-z]+://|//", s)]  # nothing from the network
+    mathjax = site / "_static" / "mathjax"
+    for part in ("MathJax.js", "config/TeX-AMS_SVG.js", "jax/input/TeX/jax.js", "jax/output/SVG/jax.js",
+                 "jax/output/SVG/fonts/TeX/fontdata.js", "extensions/TeX/AMSmath.js"):
+        assert (mathjax / part).is_file(), part

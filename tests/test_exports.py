@@ -52,3 +52,18 @@ def test_every_module_of_the_library_imports():
     assert len(names) > 60
     for name in names:
         importlib.import_module(name)
+
+
+@pytest.mark.parametrize("package", ["trussid.fem", "trussid.plid"])
+def test_every_module_names_its_public_api(package):
+    """Each public module of the generic packages says what it exports (``__all__``), and each
+    name there exists: a reader (and ``from ... import *``) sees the API, not the helpers."""
+    import pkgutil
+
+    path = importlib.import_module(package).__path__
+    for info in pkgutil.iter_modules(path, package + "."):
+        if info.name.rsplit(".", 1)[1].startswith("_"):
+            continue  # a private module (plid._validate) has no public API to name
+        module = importlib.import_module(info.name)
+        assert hasattr(module, "__all__"), info.name
+        assert [n for n in module.__all__ if not hasattr(module, n)] == [], info.name

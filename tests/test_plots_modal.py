@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
-from trussid.plid.modal import ModeShapes, Stabilisation, mac
+from trussid.plid.data import ModeShapes
+from trussid.plid.modal import mac
+from trussid.plid.stabilisation import Stabilisation
 from trussid.plots import mac_figure, save_figure, stabilisation_figure
 
 

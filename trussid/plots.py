@@ -248,7 +248,7 @@ def convergence_figure(fits: dict, fs: float, y_rms: dict):
 def trace_figure(model, K, data, cols, title: str, seconds=(2.0, 2.25)):
     """Measured versus one-step predicted sensor signals on (validation) data.
 
-    ``data`` is a :class:`trussid.plid.datafile.IOData`; ``cols`` the inputs the model has.
+    ``data`` is a :class:`trussid.plid.data.IOData`; ``cols`` the inputs the model has.
     """
     d = data
     yhat = one_step_predict(model, d.u[:, cols], d.y, K=K)
@@ -393,7 +393,7 @@ def stabilisation_figure(stab, frf=None, title: str = "stabilisation diagram",
 
     Parameters
     ----------
-    stab : trussid.plid.modal.Stabilisation
+    stab : trussid.plid.stabilisation.Stabilisation
     frf : (f [Hz], H (n_freq, p, m)), optional
         Drawn behind the poles as the sum over channels of ``|H|`` [dB] (right axis), so that
         stable columns can be checked against the resonance peaks.

@@ -78,20 +78,22 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+import control
 import numpy as np
 import scipy.linalg as la
 import scipy.optimize
 import scipy.stats
 
 from trussid._util.errors import UserError
+from trussid.plid.errors import DataError
+from trussid.plid.modal import mac as modal_assurance
+from trussid.plid.modal import mode_groups, pair_modes, pole_parameters, pole_std
 
 __all__ = [
     "UpdateError",
     "IdentifiedModes",
     "UpdateReport",
     "reduced_wall_basis",
-    "pair_modes",
-    "mode_groups",
     "modes_of_model",
     "modes_from_data",
     "update_walls",
@@ -360,99 +362,6 @@ class _ModelModes:
         return self._val
 
 
-def _mac(measured: np.ndarray, model: np.ndarray) -> np.ndarray:
-    """MAC between complex measured shapes (p, k) and real model shapes (p, n)."""
-    num = np.abs(measured.conj().T @ model) ** 2
-    den = np.outer(np.sum(np.abs(measured) ** 2, axis=0), np.sum(model**2, axis=0))
-    return np.divide(num, den, out=np.zeros_like(num), where=den > 0)
-
-
-def mode_groups(model_hz, shapes, bandwidth_hz, mac_min: float = 0.9) -> np.ndarray:
-    """Group model modes that an experiment cannot tell apart.
-
-    Two modes (adjacent in frequency) are one group when they are closer than
-    ``bandwidth_hz`` and their shapes at the sensors agree (MAC above ``mac_min``): the
-    two bending planes of one strut, seen by one lateral sensor. An identified pole is then
-    one blend of the group, so at most one measured mode may pair with it.
-
-    Returns
-    -------
-    (n,) int
-        Group number of each mode (modes in frequency order get consecutive numbers).
-    """
-    F = np.asarray(model_hz, float)
-    order = np.argsort(F)
-    mac = _mac(np.asarray(shapes, complex), np.asarray(shapes, float).real) if shapes is not None else None
-    bw = np.broadcast_to(np.asarray(bandwidth_hz, float), F.shape)
-    g = np.empty(F.size, dtype=int)
-    cur = 0
-    for a, b in zip(order[:-1], order[1:]):  # a chain along the sorted frequencies
-        g[a] = cur
-        close = F[b] - F[a] < bw[b]
-        if not (close and mac is not None and mac[a, b] > mac_min):
-            cur += 1
-    if F.size:
-        g[order[-1]] = cur
-    return g
-
-
-def pair_modes(measured_hz, model_hz, *, scale_hz=None, mac=None, mac_weight: float = 1.0,
-               allowed=None, groups=None) -> np.ndarray:
-    """Pair each measured mode with a distinct model mode (linear assignment).
-
-    Cost of a pair: ``|f_i - F_j| / scale_i`` (default ``scale_i = f_i``: relative distance)
-    plus ``mac_weight * (1 - MAC_ij)`` when ``mac`` is given. Pairs outside ``allowed`` are
-    never chosen.
-
-    Parameters
-    ----------
-    measured_hz : (k,) float
-    model_hz : (n,) float
-    scale_hz : (k,) or (k, n) float, optional
-    mac : (k, n) float, optional
-    mac_weight : float
-    allowed : (k, n) bool, optional
-    groups : (n,) int, optional
-        Model modes with the same number form a group (:func:`mode_groups`): each group
-        takes at most one measured mode, with its lowest-cost member.
-
-    Returns
-    -------
-    (k,) int
-        Model index paired with each measured mode, -1 when no allowed model mode is left.
-    """
-    f = np.asarray(measured_hz, float)
-    F = np.asarray(model_hz, float)
-    scale = f[:, None] if scale_hz is None else np.asarray(scale_hz, float)
-    if scale.ndim == 1:
-        scale = scale[:, None]
-    cost = np.abs(f[:, None] - F[None, :]) / scale
-    if mac is not None:
-        cost = cost + mac_weight * (1.0 - np.asarray(mac, float))
-    big = 1e6 + 10 * float(np.max(cost[np.isfinite(cost)], initial=0.0))
-    if allowed is not None:
-        cost = np.where(allowed, cost, big)
-    member = None
-    if groups is not None:
-        groups = np.asarray(groups, int)
-        labels = np.unique(groups)
-        gc = np.full((f.size, labels.size), big)
-        member = np.zeros((f.size, labels.size), dtype=int)
-        for q, lab in enumerate(labels):  # a few dozen groups
-            idx = np.flatnonzero(groups == lab)
-            best = np.argmin(cost[:, idx], axis=1)
-            member[:, q] = idx[best]
-            gc[:, q] = cost[np.arange(f.size), idx[best]]
-        cost = gc
-    out = np.full(f.size, -1)
-    if cost.shape[1] == 0:
-        return out
-    rows, cols = scipy.optimize.linear_sum_assignment(cost)
-    ok = cost[rows, cols] < big
-    out[rows[ok]] = cols[ok] if member is None else member[rows[ok], cols[ok]]
-    return out
-
-
 # --------------------------------------------------------------------------- identified side
 
 
@@ -480,10 +389,6 @@ def modes_of_model(sys, band=None, *, max_damping: float = 0.2, min_damping: flo
         right/left eigenvectors ``v``, ``w`` of ``A``, ``d z = w^H dAbar C v / (w^H v)``,
         then ``s = ln z / dt``, ``f = |s| / 2 pi``, ``zeta = -Re s / |s|``.
     """
-    import control
-
-    from trussid.plid.metrics import s_plane
-
     A = np.asarray(sys.A, float)
     B = np.asarray(sys.B, float)
     C = np.asarray(sys.C, float)
@@ -492,10 +397,8 @@ def modes_of_model(sys, band=None, *, max_damping: float = 0.2, min_damping: flo
     lam, W, V = la.eig(A, left=True, right=True)
     keep = lam.imag > 1e-12 * np.maximum(np.abs(lam), 1e-300)
     lam, W, V = lam[keep], W[:, keep], V[:, keep]
-    s = s_plane(lam, sys.dt if control.isdtime(sys, strict=True) else None)
-    wn = np.abs(s)
-    f = wn / (2 * np.pi)
-    z = -s.real / np.maximum(wn, 1e-300)
+    dt = sys.dt if control.isdtime(sys, strict=True) else None
+    f, z, s = pole_parameters(lam, dt)
     sel = (z < max_damping) & (z > min_damping)
     if band is not None:
         sel &= (f >= band[0]) & (f <= band[1])
@@ -510,33 +413,11 @@ def modes_of_model(sys, band=None, *, max_damping: float = 0.2, min_damping: flo
     names = tuple(getattr(sys, "output_labels", ()) or ())
     fstd = zstd = None
     if theta_cov is not None:
-        fstd, zstd = _pole_std(lam[idx], s[idx], V[:, idx], W[:, idx], cv[:, idx], theta_cov,
-                               A.shape[0], C.shape[0], sys)
+        try:
+            fstd, zstd = pole_std(lam[idx], s[idx], V[:, idx], W[:, idx], cv[:, idx], theta_cov, dt)
+        except DataError as exc:
+            raise UpdateError(str(exc)) from None
     return IdentifiedModes(f[idx], z[idx], shapes, strength[idx], fstd, zstd, names)
-
-
-def _pole_std(lam, s, V, W, cv, theta_cov, n, p, sys):
-    """First-order standard deviations of frequency [Hz] and damping from ``theta_cov``."""
-    import control
-
-    cov = np.asarray(theta_cov, float)
-    if cov.ndim != 2 or cov.shape[0] != cov.shape[1] or cov.shape[0] < n * p:
-        raise UpdateError(f"theta_cov must be square with at least n p = {n * p} rows, got {cov.shape}")
-    caa = cov[: n * p, : n * p]
-    dt = sys.dt if control.isdtime(sys, strict=True) else None
-    fstd, zstd = np.empty(len(s)), np.empty(len(s))
-    for k in range(len(s)):  # a handful of modes
-        wv = W[:, k].conj() @ V[:, k]
-        g = np.outer(W[:, k].conj(), cv[:, k]).ravel(order="F") / wv  # d z / d vec(Abar)
-        gs = g / (lam[k] * dt) if dt else g  # d s
-        mag = abs(s[k])
-        a_f = np.real(np.conj(s[k]) * gs) / (2 * np.pi * mag)
-        a_z = -np.real(gs) / mag + s[k].real * np.real(np.conj(s[k]) * gs) / mag**3
-        vf, vz = a_f @ caa @ a_f, a_z @ caa @ a_z
-        # a covariance that lost definiteness (PLID's direct form can) gives no variance
-        fstd[k] = math.sqrt(vf) if vf > 0 else np.nan
-        zstd[k] = math.sqrt(vz) if vz > 0 else np.nan
-    return fstd, zstd
 
 
 def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = None,
@@ -957,7 +838,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         reach = np.abs(d0) @ (prior_range * nominal)
         tol = gate * (reach[None, :] + (sig_all[:, None] if known_sigma else 0.0)) + 5e-3 * f_all[:, None]
         allowed = np.abs(f_all[:, None] - f0[None, :]) <= tol
-        mac0 = None if sh_all is None else _mac(sh_all, sh0)
+        mac0 = None if sh_all is None else modal_assurance(sh_all, sh0, zero_shape="zero")
         pair0 = pair_modes(f_all, f0, scale_hz=np.maximum(tol, 1e-300), mac=mac0, mac_weight=mac_weight,
                            allowed=allowed)
         used = pair0 >= 0
@@ -983,7 +864,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
                 F, dF, shp = mm(w)
                 mac = groups = None
                 if sh is not None:
-                    mac = _mac(sh, shp)
+                    mac = modal_assurance(sh, shp, zero_shape="zero")
                     groups = mode_groups(F, shp, 2 * zeta_bw * F)
                 j = pair_modes(f, F, mac=mac, mac_weight=mac_weight, allowed=allowed_u, groups=groups)
                 # every gated mode stays pairable (the residual length must not change)
@@ -1018,8 +899,8 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         if unresolved_sigma:
             w1 = np.array([start[n] for n in WALL_NAMES])
             F1, _, sh1 = full_modes(w1)
-            j1 = pair_modes(f, F1, mac=None if sh is None else _mac(sh, sh1), mac_weight=mac_weight,
-                            allowed=allowed_u,
+            mac1 = None if sh is None else modal_assurance(sh, sh1, zero_shape="zero")
+            j1 = pair_modes(f, F1, mac=mac1, mac_weight=mac_weight, allowed=allowed_u,
                             groups=None if sh is None else mode_groups(F1, sh1, 2 * zeta_bw * F1))
             j1 = np.where(j1 >= 0, j1, pair_modes(f, F1))
             zi = z_all[used] if z_all is not None else np.full(k, tb.damping.modal_ratio)

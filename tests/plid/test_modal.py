@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from trussid.plid.data import ModeShapes
 from trussid.plid.errors import DataError, IdentificationError
-from trussid.plid.modal import mac, mark_stability, modal_table, stabilisation
+from trussid.plid.modal import mac, modal_table, mode_groups, pair_modes, pole_parameters
+from trussid.plid.stabilisation import mark_stability, stabilisation
 
 
 def test_mac_of_identical_shapes_is_one_to_1e_12(rng):
@@ -130,8 +132,6 @@ def test_stabilisation_marks_the_true_modes_stable_and_refuses_nothing_silently(
 
 
 def test_a_pole_that_moves_is_not_stable():
-    from trussid.plid.modal import ModeShapes
-
     prev = ModeShapes(np.array([10.0, 50.0]), np.array([0.01, 0.02]), np.eye(2))
     cur = ModeShapes(np.array([10.05, 52.0]), np.array([0.0102, 0.02]),
                      np.array([[1.0, 0.0], [0.1, 1.0]]))
@@ -148,3 +148,62 @@ def test_stabilisation_with_no_model_at_all_says_why(rng):
     with pytest.raises(IdentificationError, match="no order gave a model: order 2: always"):
         stabilisation(np.ones((10, 1)), np.ones((10, 1)), 1.0, [2], identify=never,
                       progress=False)
+
+
+# --------------------------------------------------------------------- pairing
+
+
+def test_pairing_by_frequency_is_the_order_preserving_assignment():
+    measured = np.array([50.3, 50.1, 80.0])
+    model = np.array([49.0, 50.05, 50.35, 79.0, 120.0])
+    assert pair_modes(measured, model).tolist() == [2, 1, 3]
+
+
+def test_mac_overrides_a_closer_frequency():
+    """Two modes 0.2 % apart: the shape decides, not the frequency."""
+    measured = np.array([50.0])
+    model = np.array([50.0, 50.1])
+    shapes_meas = np.array([[0.0], [1.0j]])  # complex scale is irrelevant to MAC
+    shapes_model = np.array([[1.0, 0.0], [0.0, 2.0]])
+    m = mac(shapes_meas, shapes_model)
+    np.testing.assert_allclose(m, [[0.0, 1.0]])
+    assert pair_modes(measured, model, mac=m).tolist() == [1]
+
+
+def test_modes_the_sensors_cannot_separate_take_one_measured_mode():
+    """Two bending planes of one strut (0.06 Hz apart, same shape at the sensors) form a
+    group: two measured modes near them pair with that group and the next strut, not
+    both with the one strut."""
+    model = np.array([50.0, 50.06, 50.2, 50.26])
+    shapes = np.array([[1.0, 0.95, 0.0, 0.05], [0.05, 0.1, 1.0, 0.9]])  # strut A, strut B
+    groups = mode_groups(model, shapes, bandwidth_hz=0.25)
+    assert groups.tolist() == [0, 0, 1, 1]
+    measured = np.array([50.03, 50.05])
+    assert pair_modes(measured, model).tolist() == [0, 1]  # frequency alone: one strut twice
+    got = pair_modes(measured, model, groups=groups)
+    assert sorted(groups[got].tolist()) == [0, 1]
+
+
+def test_disallowed_pairs_are_left_unpaired():
+    allowed = np.array([[True, False], [False, False]])
+    assert pair_modes([10.0, 20.0], [10.0, 20.0], allowed=allowed).tolist() == [0, -1]
+
+
+def test_a_shape_no_sensor_sees_has_mac_zero_when_asked():
+    """Pairing asks for MAC 0 where a shape is zero; the default names the mode."""
+    got = mac(np.array([[1.0, 0.0], [0.0, 0.0]]), np.eye(2), zero_shape="zero")
+    np.testing.assert_array_equal(got, [[1.0, 0.0], [0.0, 0.0]])
+    with pytest.raises(DataError, match="mode 2 of the first set"):
+        mac(np.array([[1.0, 0.0], [0.0, 0.0]]), np.eye(2))
+
+
+def test_pole_parameters_are_those_of_the_continuous_pole():
+    """z = exp(s dt) with s = -zeta wn + j wn sqrt(1 - zeta^2): frequency wn / 2 pi and
+    damping zeta come back, and a continuous pole is taken as it is."""
+    wn, zeta, dt = 2 * np.pi * 37.0, 0.02, 1 / 1600
+    s = -zeta * wn + 1j * wn * np.sqrt(1 - zeta**2)
+    f, z, s_back = pole_parameters([np.exp(s * dt)], dt)
+    np.testing.assert_allclose([f[0], z[0]], [37.0, 0.02], rtol=1e-12)
+    np.testing.assert_allclose(s_back, [s], rtol=1e-12)
+    f_c, z_c, _ = pole_parameters([s])
+    np.testing.assert_allclose([f_c[0], z_c[0]], [37.0, 0.02], rtol=1e-12)

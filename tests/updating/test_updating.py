@@ -23,7 +23,6 @@ from trussid.geometry.spec import Testbed
 from trussid.updating import (
     UpdateError,
     modes_of_model,
-    pair_modes,
     reduced_wall_basis,
     update_walls,
 )
@@ -75,46 +74,6 @@ def test_reduced_model_frequencies_and_sensitivities_match_the_full_model(nomina
 
 
 # --------------------------------------------------------------------------- pairing
-
-
-def test_pairing_by_frequency_is_the_order_preserving_assignment():
-    measured = np.array([50.3, 50.1, 80.0])
-    model = np.array([49.0, 50.05, 50.35, 79.0, 120.0])
-    assert pair_modes(measured, model).tolist() == [2, 1, 3]
-
-
-def test_mac_overrides_a_closer_frequency():
-    """Two modes 0.2 % apart: the shape decides, not the frequency."""
-    measured = np.array([50.0])
-    model = np.array([50.0, 50.1])
-    shapes_meas = np.array([[0.0], [1.0j]])  # complex scale is irrelevant to MAC
-    shapes_model = np.array([[1.0, 0.0], [0.0, 2.0]])
-    from trussid.updating import _mac
-
-    mac = _mac(shapes_meas, shapes_model)
-    np.testing.assert_allclose(mac, [[0.0, 1.0]])
-    assert pair_modes(measured, model, mac=mac).tolist() == [1]
-
-
-def test_modes_the_sensors_cannot_separate_take_one_measured_mode():
-    """Two bending planes of one strut (0.06 Hz apart, same shape at the sensors) form a
-    group: two measured modes near them pair with that group and the next strut, not
-    both with the one strut."""
-    from trussid.updating import mode_groups
-
-    model = np.array([50.0, 50.06, 50.2, 50.26])
-    shapes = np.array([[1.0, 0.95, 0.0, 0.05], [0.05, 0.1, 1.0, 0.9]])  # strut A, strut B
-    groups = mode_groups(model, shapes, bandwidth_hz=0.25)
-    assert groups.tolist() == [0, 0, 1, 1]
-    measured = np.array([50.03, 50.05])
-    assert pair_modes(measured, model).tolist() == [0, 1]  # frequency alone: one strut twice
-    got = pair_modes(measured, model, groups=groups)
-    assert sorted(groups[got].tolist()) == [0, 1]
-
-
-def test_disallowed_pairs_are_left_unpaired():
-    allowed = np.array([[True, False], [False, False]])
-    assert pair_modes([10.0, 20.0], [10.0, 20.0], allowed=allowed).tolist() == [0, -1]
 
 
 # --------------------------------------------------------------------------- identified side

@@ -16,6 +16,8 @@ import control
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from trussid.plid.frf import frequency_response
+
 from .errors import ControlError
 from .modal import freq_damping, modal_data
 
@@ -205,25 +207,6 @@ def h2_norm(sys) -> float:
     X = (Bt @ Bt.conj().T) / (1 - lam[:, None] * lam.conj()[None, :])
     val = np.real(np.trace(Ct @ X @ Ct.conj().T)) + np.sum(D**2)
     return float(math.sqrt(max(val, 0.0)))
-
-
-def frequency_response(sys, f) -> np.ndarray:
-    """Response (n_freq, p, m) of a discrete system through its eigendecomposition.
-
-    O(n) per frequency after one eigendecomposition (python-control solves an n x n system
-    per frequency); falls back to python-control when the eigenvectors are ill-conditioned.
-    """
-    A, B, C, D = (np.asarray(M, dtype=float) for M in (sys.A, sys.B, sys.C, sys.D))
-    f = np.atleast_1d(np.asarray(f, dtype=float))
-    z = np.exp(2j * np.pi * f * sys.dt)
-    if A.shape[0] == 0:
-        return np.broadcast_to(D, (f.size,) + D.shape).astype(complex)
-    lam, V = np.linalg.eig(A)
-    if np.linalg.cond(V) > 1e8:
-        H = np.asarray(sys(z, squeeze=False))
-        return np.moveaxis(H.reshape(sys.noutputs, sys.ninputs, f.size), -1, 0)
-    CV, ViB = C @ V, np.linalg.solve(V, B)
-    return np.einsum("ps,fs,sm->fpm", CV, 1.0 / (z[:, None] - lam[None, :]), ViB) + D[None]
 
 
 def margin_grid(systems, dt: float, n_base: int = 1500) -> np.ndarray:

@@ -13,21 +13,14 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-
-def z_to_s(z, dt: float) -> np.ndarray:
-    """Continuous-time equivalents ``log(z) / dt`` of discrete poles [rad/s]."""
-    z = np.asarray(z, dtype=complex)
-    z = np.where(np.abs(z) < 1e-300, 1e-300, z)
-    return np.log(z) / dt
+from trussid.plid.modal import pole_parameters
 
 
 def freq_damping(z, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Frequency [Hz] and damping ratio [-] of discrete poles ``z`` (ZOH equivalents)."""
-    s = z_to_s(z, dt)
-    wn = np.abs(s)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        zeta = np.where(wn > 0, -s.real / wn, 1.0)
-    return wn / (2 * np.pi), zeta
+    """Frequency [Hz] and damping ratio [-] of discrete poles ``z`` (ZOH equivalents): the
+    conversion of :func:`trussid.plid.modal.pole_parameters`, without the s-plane images."""
+    f, zeta, _ = pole_parameters(z, dt)
+    return f, zeta
 
 
 @dataclass
