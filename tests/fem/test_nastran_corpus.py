@@ -116,7 +116,8 @@ def test_shell_and_solid_decks_of_the_survey_get_one_line_naming_their_elements(
     small beam model: one line naming the unsupported element entries, as the CLI prints it
     with exit status 2 (tests/cli), and no other failure."""
     from trussid.fem import ModelError
-    from trussid.fem.nastran import IGNORED_CARDS, SUPPORTED_CARDS, _is_element_entry
+    from trussid.fem.nastran import IGNORED_CARDS, SUPPORTED_CARDS
+    from trussid.fem.nastran.deck import _is_element_entry
 
     lines = ["BEGIN BULK", "MAT1,1,70.+9,,0.3,2700.", "PBAR,1,1,1.-4,2.-9,2.-9,4.-9",
              "GRID,1,,0.,0.,0.", "GRID,2,,1.,0.,0.", "CBAR,1,1,1,2,0.,0.,1.", "SPC1,1,123456,1"]

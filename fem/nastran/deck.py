@@ -1,0 +1,421 @@
+"""A deck's text to pyNastran's BDF, and what trussid reads from its raw fields: executive
+control, PARAMs, case-control requests and the entries pyNastran does not parse faithfully."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+
+from trussid.fem.errors import ModelError
+from trussid.fem.nastran.entries import (HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS, RAW_CARDS,
+                                         SUPPORTED_CARDS, THERMAL_CARDS)
+
+__all__ = ['EigenRequest', 'BdfInfo']
+
+
+@dataclass
+class EigenRequest:
+    """The deck's real-eigenvalue request (EIGRL or EIGR).
+
+    Attributes
+    ----------
+    card : str
+        "EIGRL" or "EIGR".
+    sid : int
+    n_modes : int or None
+        ND: number of modes wanted.
+    f_low, f_high : float or None
+        Frequency range [Hz in the deck's time unit] (EIGRL V1, V2; EIGR F1, F2).
+    """
+
+    card: str
+    sid: int
+    n_modes: int | None
+    f_low: float | None
+    f_high: float | None
+
+
+@dataclass
+class BdfInfo:
+    """What :func:`read_bdf` found and decided, for reports.
+
+    Attributes
+    ----------
+    path : str
+    wtmass : float
+        PARAM,WTMASS (1.0 when absent): the factor applied to every mass.
+    mass : {"consistent", "lumped"}
+        Mass formulation used.
+    mass_reason : str
+        Why (the PARAM,COUPMASS value, or NASTRAN's lumped default).
+    beam_theory : {"euler-bernoulli", "timoshenko"}
+    beam_theory_reason : str
+    eigen : EigenRequest or None
+        The eigenvalue request selected by the case control (METHOD), or the only one.
+    spc_sets : list of int or None
+        SPC set ids applied (after SPCADD expansion); ``None`` when the deck has none.
+    spc_reason : str
+    autospc : bool
+        Whether DOFs with neither stiffness nor mass should be removed (NASTRAN's AUTOSPC,
+        on by default in SOL 103; ``PARAM,AUTOSPC,NO`` turns it off).
+    autospc_reason : str
+    conventions : {"nx", "msc"}
+        The NASTRAN build conventions followed (see :func:`read_bdf`).
+    cards : dict of str to int
+        Bulk-data cards read, with counts.
+    ignored : list of str
+        Accepted entries without effect on the modes, with counts (e.g. ``"FORCE (3)"``,
+        ``"PARAM,POST"``).
+    notes : list of str
+        Other things a user should know (multiple subcases, enforced displacements...).
+    """
+
+    path: str
+    wtmass: float = 1.0
+    mass: str = "lumped"
+    mass_reason: str = ""
+    beam_theory: str = "euler-bernoulli"
+    beam_theory_reason: str = ""
+    eigen: EigenRequest | None = None
+    spc_sets: list | None = None
+    spc_reason: str = ""
+    autospc: bool = True
+    autospc_reason: str = ""
+    conventions: str = "nx"
+    cards: dict = field(default_factory=dict)
+    ignored: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+
+@dataclass
+class _RawParam:
+    """A PARAM entry from its raw fields (pyNastran validates PARAM values against its own
+    lists and refuses legal ones, e.g. ``PARAM,EXTOUT,MATRIXPCH`` or MYSTRAN's EQCHECK)."""
+
+    name: str
+    values: list
+
+
+def _nastran_value(text: str):
+    """A field as NASTRAN reads it: int, real (also ``1.5-3`` = 1.5e-3), or the string."""
+    t = text.strip()
+    for conv in (int, float):
+        try:
+            return conv(t)
+        except ValueError:
+            pass
+    m = re.fullmatch(r"([+-]?(?:\d+\.?\d*|\.\d+))([+-]\d+)", t)
+    if m:
+        return float(f"{m.group(1)}e{m.group(2)}")
+    return t.upper()
+
+
+def _executive(text: str, path: Path) -> tuple[str, str, list[str]]:
+    """(executive control, rest, notes): the executive control is dropped before pyNastran.
+
+    trussid needs nothing from it but the solution (read here), and pyNastran refuses
+    statements it does not know (NASTRAN-95's ``APP AERO``, ``APP DISP``, DMAP ALTERs).
+    """
+    m = re.search(r"^\s*CEND\b.*$", text, re.IGNORECASE | re.MULTILINE)
+    if m is None:
+        return "", text, []
+    return text[:m.start()], text[m.end() + 1:], []
+
+
+def _solution(executive: str) -> tuple[str | None, str | None]:
+    """(SOL value, APP value) of an executive control, upper case, or None."""
+    sol = re.search(r"^\s*SOL\s+([^\s$]+)", executive, re.IGNORECASE | re.MULTILINE)
+    app = re.search(r"^\s*APP\s+([^\s$]+)", executive, re.IGNORECASE | re.MULTILINE)
+    return (sol.group(1).upper() if sol else None), (app.group(1).upper() if app else None)
+
+
+def _check_solution(path: Path, sol: str | None, app: str | None) -> None:
+    """Refuse solutions whose printed modes are not the structure's real modes, naming them."""
+    if sol is None:
+        return
+    number = sol.split(",")[0]
+    if app in (None, "DISP", "DISPLACEMENT", "AERO") and number == "13":
+        raise ModelError(f"{path}: SOL 13 (NASTRAN-95 rigid format 13, normal modes with differential "
+                         f"stiffness): its modes are those of the structure preloaded by the static subcase, "
+                         f"which trussid does not compute (differential stiffness is not supported)")
+
+
+def _parse(path: Path):
+    """pyNastran's BDF of ``path``, quietly; any failure becomes a one-line ModelError."""
+    from cpylog import SimpleLogger
+    from pyNastran.bdf.bdf import BDF
+
+    if not path.exists():
+        raise ModelError(f"{path}: no such file")
+    if path.is_dir():
+        raise ModelError(f"{path}: is a directory, not a bulk-data file")
+    try:
+        text = path.read_text(errors="replace")
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read ({exc.strerror})") from None
+    flags = re.IGNORECASE | re.MULTILINE
+    # INCLUDE files are relative to the deck. Checked here so that a missing one is named
+    # (pyNastran would also leave a crash file in the working directory).
+    includes = re.findall(r"^\s*INCLUDE\s+'([^']+)'", text, flags)
+    for inc in includes:
+        if not (path.parent / inc).is_file():
+            raise ModelError(f"{path}: INCLUDE '{inc}': no such file (looked in {path.parent})")
+    notes = []
+    executive, rest, _ = _executive(text, path)
+    sol, app = _solution(executive)
+    _check_solution(path, sol, app)
+    punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, flags) is None
+    if not punch:
+        # The deck goes to pyNastran from memory, with an empty executive control (see
+        # _executive) and INCLUDEs made absolute (pyNastran resolves them from the working
+        # directory when reading from memory).
+        text = re.sub(r"^(\s*INCLUDE\s+')([^']+)(')",
+                      lambda m: m.group(1) + str((path.parent / m.group(2)).resolve()) + m.group(3),
+                      rest, flags=flags)
+        # A repeated BEGIN BULK (MSC's HA144D) is accepted by NASTRAN; pyNastran reads the
+        # second as a superelement header.
+        heads = list(re.finditer(r"^\s*BEGIN\s+BULK\b.*$\n?", text, flags))
+        if len(heads) > 1:
+            for h in reversed(heads[1:]):
+                text = text[:h.start()] + text[h.end():]
+            notes.append(f"BEGIN BULK repeated {len(heads)} times: read once, as NASTRAN")
+        source: str | io.StringIO = io.StringIO("CEND\n" + text)
+    else:
+        source = str(path)
+    bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
+    # Cards this reader does not translate are only counted, never parsed, so that a
+    # malformed one is reported as unsupported rather than failing the parse; those read
+    # from their raw fields (RAW_CARDS, PARAM) too.
+    bdf.disable_cards(sorted((set(bdf.cards_to_read) - SUPPORTED_CARDS) | RAW_CARDS | {"PARAM"}))
+    try:
+        # pyNastran also print()s some complaints; keep them off the user's terminal (the
+        # exception carries the message).
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            bdf.read_bdf(source, xref=False, validate=False, punch=punch)
+    except Exception as exc:  # pyNastran raises many types for malformed decks
+        raise ModelError(f"{path}: not a readable bulk-data deck ({_parser_message(exc)})") from None
+    if not bdf.card_count:
+        raise ModelError(f"{path}: no bulk-data cards found")
+    bdf.params = _raw_params(bdf)
+    bdf.trussid_notes = notes
+    bdf.trussid_solution = (sol, app)
+    return bdf
+
+
+def _parser_message(exc: Exception) -> str:
+    """pyNastran's message in user terms: the entry and its id, without its internals.
+
+    pyNastran words its complaints as ``field 'x' (field #3) on card must be ...
+    card=['CBAR', '1', ...]``: the list is the raw card; the entry name and id (its first
+    two fields) are what a user can find in the deck.
+    """
+    msg = " ".join(str(exc).split())
+    card = re.search(r"card=\[\s*'([A-Z0-9*]+)'\s*,\s*'?([^',\]]*)'?", msg)
+    msg = re.sub(r"\s*card=\[.*$", "", msg)
+    msg = re.sub(r"\s*\b(uline|allowed_methods|allowed|len\(\w+ card\))\s*=.*$", "", msg)
+    msg = msg.strip(" ;,.") or type(exc).__name__
+    if card:
+        name, ident = card.group(1), card.group(2).strip()
+        msg = f"{name} {ident}: {msg}" if ident else f"{name}: {msg}"
+    return msg[:300]
+
+
+def _card_lines(lines: list[str]) -> list[str]:
+    """A rejected card's lines without the comment lines pyNastran keeps in front."""
+    return [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("$")]
+
+
+def _raw_params(bdf) -> dict:
+    """PARAM name -> :class:`_RawParam` from the raw lines (the last entry of a name wins)."""
+    params = {}
+    for lines in getattr(bdf, "reject_lines", []):
+        body = _card_lines(lines)
+        if not body or not re.match(r"\s*PARAM\b", body[0], re.IGNORECASE):
+            continue
+        f = _raw_fields(body, "PARAM")
+        if len(f) < 2 or not f[1]:
+            raise ModelError(f"PARAM: no name ({body[0].strip()!r})")
+        params[f[1]] = _RawParam(f[1], [_nastran_value(v) for v in f[2:] if v.strip()])
+    return params
+
+
+def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
+    """Every card must be translated or known to be harmless: list all the others.
+
+    Unsupported element entries (shells, solids...) come first in the message: they are
+    the reason a beam code cannot read the deck, the rest would follow from them.
+    """
+    counts = bdf.card_count
+    thermal_on = any(counts.get(c) for c in ("TEMPD", "TEMP")) or _case_values(bdf, "TEMPERATURE") \
+        or _case_values(bdf, "TEMP")
+    bad, ignored = {}, {}
+    for name, n in counts.items():
+        if name in SUPPORTED_CARDS:
+            continue
+        if name in IGNORED_CARDS or (name in THERMAL_CARDS and not thermal_on):
+            ignored[name] = n
+        else:
+            bad[name] = n
+    for name in sorted(bdf.params):
+        if name in HANDLED_PARAMS:
+            continue
+        if name in MODE_PARAMS and bdf.params[name].values not in ([], [1], [1.0]):
+            bad[f"PARAM,{name}"] = 1
+        else:
+            ignored[f"PARAM,{name}"] = 1
+    info.ignored = [f"{k} ({v})" if not k.startswith("PARAM,") else k for k, v in sorted(ignored.items())]
+    if not bad:
+        return
+    elements = {k: v for k, v in bad.items() if _is_element_entry(k)}
+    if elements:
+        listing = ", ".join(f"{k} ({v})" for k, v in sorted(elements.items()))
+        rest = {k: v for k, v in bad.items() if k not in elements}
+        also = f"; also unsupported: {', '.join(f'{k} ({v})' for k, v in sorted(rest.items()))}" if rest else ""
+        raise ModelError(f"{path}: unsupported element entries: {listing} (trussid reads beam, rod, "
+                         f"spring, mass and rigid elements: CBAR, CBEAM, CROD, CONROD, CELAS1/2, "
+                         f"CBUSH, CONM2, CMASS1/2, RBE2, RBE3, RBAR, CRIGD1/2/3/R){also}")
+    listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items()))
+    raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
+                     f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")
+
+
+def _is_element_entry(name: str) -> bool:
+    """Element connection entries (CQUAD4, CHEXA, CTUBE, GENEL...), not coordinate systems."""
+    return (name.startswith("C") and not name.startswith("CORD") and name not in ("CONM1", "CMASS3", "CMASS4")
+            ) or name in ("GENEL", "PLOTEL")
+
+
+def _param(bdf, name):
+    p = bdf.params.get(name)
+    if p is None:
+        return None
+    return p.values[0]
+
+
+def _read_params(bdf, info: BdfInfo) -> None:
+    wt = _param(bdf, "WTMASS")
+    if wt is not None:
+        if not (isinstance(wt, (int, float)) and math.isfinite(wt) and wt > 0):
+            raise ModelError(f"PARAM,WTMASS must be a positive number, got {wt!r}")
+        info.wtmass = float(wt)
+    cm = _param(bdf, "COUPMASS")
+    if cm is None:
+        info.mass = "lumped"
+        info.mass_reason = "PARAM,COUPMASS absent: NASTRAN's default lumped mass"
+    else:
+        if not isinstance(cm, (int, float)):
+            raise ModelError(f"PARAM,COUPMASS must be a number, got {cm!r}")
+        info.mass = "consistent" if cm > 0 else "lumped"
+        info.mass_reason = f"PARAM,COUPMASS,{cm}: {'> 0, coupled' if cm > 0 else '<= 0, lumped'} mass"
+    auto = _param(bdf, "AUTOSPC")
+    if auto is None:
+        info.autospc, info.autospc_reason = True, "NASTRAN's default (AUTOSPC=YES in SOL 103)"
+    else:
+        value = str(auto).strip().upper()
+        if value not in ("YES", "NO"):
+            raise ModelError(f"PARAM,AUTOSPC must be YES or NO, got {auto!r}")
+        if value == "YES":
+            info.autospc, info.autospc_reason = True, "PARAM,AUTOSPC,YES"
+        else:
+            # A DOF with neither stiffness nor mass has no equation and takes no part in any
+            # mode; NASTRAN runs such decks with AUTOSPC off (Lanczos ignores the null rows),
+            # so they are removed here too. A DOF with mass and no stiffness is not removed:
+            # it is a mechanism either way.
+            info.autospc = True
+            info.autospc_reason = ("PARAM,AUTOSPC,NO: DOFs with neither stiffness nor mass are still removed "
+                                   "(they take no part in the modes, as in NASTRAN's run)")
+
+
+def _comps(text, card: str) -> list[int]:
+    """0-based components of a NASTRAN component string such as "123456"."""
+    text = "" if text is None else str(text).strip()
+    if any(ch not in "123456" for ch in text):
+        raise ModelError(f"{card}: components {text!r} must be digits 1-6")
+    return sorted({int(ch) - 1 for ch in text})
+
+
+def _raw_fields(lines: list[str], name: str) -> list[str]:
+    from pyNastran.bdf.bdf_interface.utils import to_fields
+
+    return [f.strip().upper() for f in to_fields(lines, name)]
+
+
+def _ints(fields: list[str], card: str) -> list[int]:
+    """Grid ids of a field list, with ``A THRU B`` expanded and blanks dropped."""
+    out, i = [], 0
+    fields = [f for f in fields if f]
+    while i < len(fields):
+        if i + 2 < len(fields) and fields[i + 1] == "THRU":
+            out.extend(range(int(fields[i]), int(fields[i + 2]) + 1))
+            i += 3
+            continue
+        try:
+            out.append(int(fields[i]))
+        except ValueError:
+            raise ModelError(f"{card}: field {fields[i]!r} is not a grid id") from None
+        i += 1
+    return out
+
+
+def _raw_cards(bdf, name: str):
+    """(id, fields) of every raw (unparsed) ``name`` entry, in deck order."""
+    for lines in getattr(bdf, "reject_lines", []):
+        body = _card_lines(lines)
+        head = body[0][:8].strip().rstrip("*").upper().split(",")[0] if body else ""
+        if head != name:
+            continue
+        f = _raw_fields(body, name)
+        try:
+            yield int(f[1]), f
+        except (IndexError, ValueError):
+            raise ModelError(f"{name}: no element id in {body[0].strip()!r}") from None
+
+
+def _case_values(bdf, key: str) -> list:
+    """Values of case-control ``key`` (e.g. "SPC", "METHOD") over the subcases, in order."""
+    deck = getattr(bdf, "case_control_deck", None)
+    if deck is None:
+        return []
+    values = []
+    for sid in sorted(deck.subcases):
+        sub = deck.subcases[sid]
+        if sub.has_parameter(key)[0]:
+            value = sub.get_parameter(key)[0]
+            if value not in values:
+                values.append(value)
+    return values
+
+
+def _case_has(bdf, key: str) -> bool:
+    """Whether the case control has a ``key`` request anywhere (with options, e.g. EXTSEOUT(...))."""
+    deck = getattr(bdf, "case_control_deck", None)
+    if deck is None:
+        return False
+    return any(key.upper() in str(p).upper() for sub in deck.subcases.values() for p in sub.params)
+
+
+def _select_eigen(bdf, info: BdfInfo) -> None:
+    methods = {sid: m for sid, m in bdf.methods.items() if m.type in ("EIGRL", "EIGR")}
+    chosen = _case_values(bdf, "METHOD")
+    if chosen:
+        sid = int(chosen[0])
+        if sid not in methods:
+            raise ModelError(f"case control METHOD = {sid}, but no EIGRL or EIGR has SID {sid}")
+        if len(chosen) > 1:
+            info.notes.append(f"subcases select different METHODs {chosen}; using the first, {sid}")
+    elif methods:
+        sid = min(methods)
+        if len(methods) > 1:
+            info.notes.append(f"several eigenvalue requests and no METHOD in the case control; using {sid}")
+    else:
+        return
+    m = methods[sid]
+    if m.type == "EIGRL":
+        info.eigen = EigenRequest("EIGRL", sid, m.nd, m.v1, m.v2)
+    else:
+        info.eigen = EigenRequest("EIGR", sid, m.nd or m.ne, m.f1, m.f2)
