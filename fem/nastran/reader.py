@@ -69,6 +69,7 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
         raise ModelError(f"conventions must be one of {', '.join(CONVENTIONS)}, got {conventions!r}")
     bdf = _parse(path)
     info = BdfInfo(path=str(path), cards=dict(sorted(bdf.card_count.items())), conventions=conventions)
+    info.notes.extend(bdf.trussid_notes)
     _check_cards(bdf, path, info)
     _read_params(bdf, info)
 

@@ -1,0 +1,279 @@
+"""Entries and analyses that decks from the field use (issue 25), each against an answer that
+does not use the entry: a closed form, a small model solved by hand in numpy, or the same
+model written without the entry.
+
+The decks are written here; none is copied from the corpus of published decks.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+from trussid.fem import ModelError
+from trussid.fem.modal import solve_modes
+from trussid.fem.nastran import read_bdf
+
+TWO_PI = 2.0 * math.pi
+
+
+def deck(tmp_path: Path, bulk: str, name: str = "deck.bdf", case: str = "", executive: str = "SOL 103\n") -> Path:
+    text = (executive + "CEND\n" + case + "BEGIN BULK\n" if case or executive != "SOL 103\n"
+            else "BEGIN BULK\n") + bulk.strip() + "\nENDDATA\n"
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def freqs(path: Path, n: int = 6, **kw) -> np.ndarray:
+    model, info = read_bdf(path, **kw)
+    return solve_modes(model, n_modes=n, autospc=info.autospc).frequencies_hz
+
+
+def hand(K, M) -> np.ndarray:
+    return np.sqrt(np.abs(sl.eigh(K, M, eigvals_only=True))) / TWO_PI
+
+
+# Three grids on x that move along x only.
+LINE = """GRID,1,,0.,0.,0.,,23456
+GRID,2,,1.,0.,0.,,23456
+GRID,3,,2.,0.,0.,,23456
+"""
+
+
+# ------------------------------------------------------------------ GENEL
+def test_genel_flexibility_with_rigid_body_matrix_is_a_spring_chain(tmp_path):
+    """UI = x of grids 1, 2; UD = x of grid 3 (the reference). Z = flexibility of the chain
+    3 -k1- 1 -k2- 2 with 3 held: [[1/k1, 1/k1], [1/k1, 1/k1 + 1/k2]], S = [1, 1]^T (a rigid
+    translation). Free-free with three masses: the stiffness of the two springs (hand)."""
+    k1, k2, m = 2000.0, 5000.0, (1.0, 2.0, 3.0)
+    z = [1 / k1, 1 / k1, 1 / k1 + 1 / k2]  # Z11, Z21, Z22 (columns of the lower triangle)
+    bulk = LINE + "".join(f"CONM2,{10 + i},{i + 1},,{mi}\n" for i, mi in enumerate(m)) + (
+        f"GENEL,7,,1,1,2,1,,,\n,UD,,3,1,,,,,\n,Z,{z[0]!r},{z[1]!r},{z[2]!r},,,,\n,S,1.,1.\n")
+    K = np.array([[k1 + k2, -k2, -k1], [-k2, k2, 0.0], [-k1, 0.0, k1]])
+    want = hand(K, np.diag(m))
+    np.testing.assert_allclose(freqs(deck(tmp_path, bulk), 3)[1:], want[1:], rtol=1e-9)
+    assert abs(freqs(deck(tmp_path, bulk), 3)[0]) < 1e-6 * want[-1]
+
+
+def test_genel_stiffness_form_equals_celas2_springs(tmp_path):
+    """K given directly (no UD): the same as two CELAS2 springs, grid 1 grounded by k1."""
+    k1, k2 = 3000.0, 1000.0
+    masses = "CONM2,10,1,,1.\nCONM2,11,2,,2.\nSPC1,1,1,3\n"
+    genel = f"GENEL,7,,1,1,2,1\n,K,{k1 + k2!r},{-k2!r},{k2!r}\n"
+    springs = f"CELAS2,7,{k1},1,1\nCELAS2,8,{k2},1,1,2,1\n"
+    np.testing.assert_allclose(freqs(deck(tmp_path, LINE + masses + genel, "g.bdf"), 2),
+                               freqs(deck(tmp_path, LINE + masses + springs, "s.bdf"), 2), rtol=1e-12)
+
+
+def test_genel_with_a_wrong_number_of_terms_is_named(tmp_path):
+    with pytest.raises(ModelError, match=r"GENEL 7: Z needs 3 terms for 2 UI DOFs, got 2"):
+        read_bdf(deck(tmp_path, LINE + "GENEL,7,,1,1,2,1\n,Z,1.,2.\n"))
+
+
+# ------------------------------------------------------------------ CONM1, CMASS2 < 0
+def test_conm1_full_mass_matrix_in_a_rotated_system(tmp_path):
+    """A grid on six CELAS2 springs carrying a CONM1 6x6 mass given in a system turned 30
+    degrees about z: M_basic = T^T M T (hand) with T the rotation of both triples."""
+    a = math.radians(30.0)
+    c, s = math.cos(a), math.sin(a)
+    k = np.array([1e4, 2e4, 3e4, 40.0, 50.0, 60.0])
+    M = np.diag([2.0, 2.0, 2.0, 0.01, 0.02, 0.03])
+    M[4, 0] = M[0, 4] = 0.05  # a mass offset couples translation and rotation
+    lower = [M[i, j] for i in range(6) for j in range(i + 1)]
+    fields = ",".join(repr(v) for v in lower)
+    f = fields.split(",")
+    # five terms on the first line, eight on each continuation (QRG CONM1)
+    conm1 = (f"CONM1,1,1,5,{','.join(f[0:5])}\n,{','.join(f[5:13])}\n,{','.join(f[13:21])}\n")
+    bulk = (f"CORD2R,5,,0.,0.,0.,0.,0.,1.,\n,{c!r},{s!r},0.\nGRID,1,,0.,0.,0.\n"
+            + "".join(f"CELAS2,{i + 1},{k[i]!r},1,{i + 1}\n" for i in range(6)) + conm1)
+    R = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1.0]])  # rows: the system's axes in basic
+    T = np.kron(np.eye(2), R)
+    np.testing.assert_allclose(freqs(deck(tmp_path, bulk), 6), hand(np.diag(k), T.T @ M @ T), rtol=1e-10)
+
+
+def test_negative_coupling_cmass2_is_read_as_nastran_does(tmp_path):
+    """CMASS2 between two grids with a negative value: a coupling term of a lumped mass
+    matrix (positive definite overall), m12 (u1 - u2)^2 added to the diagonal masses."""
+    m1, m2, m12, k1, k2 = 5.0, 3.0, -0.7, 4000.0, 2500.0
+    bulk = LINE + (f"CMASS2,1,{m1},1,1\nCMASS2,2,{m2},2,1\nCMASS2,3,{m12},1,1,2,1\n"
+                   f"CELAS2,4,{k1},1,1\nCELAS2,5,{k2},1,1,2,1\nSPC1,1,1,3\n")
+    M = np.array([[m1 + m12, -m12], [-m12, m2 + m12]])
+    K = np.array([[k1 + k2, -k2], [-k2, k2]])
+    np.testing.assert_allclose(freqs(deck(tmp_path, bulk), 2), hand(K, M), rtol=1e-12)
+
+
+# ------------------------------------------------------------------ bars without A or G
+def test_pbar_without_area_and_mat1_without_g_are_bending_springs(tmp_path):
+    """PBAR A = 0 with I1 = I2 = I and a MAT1 with E alone: a massless bending cantilever,
+    3 E I / L^3 under a tip mass in both planes; axial and torsion carry nothing (held)."""
+    E, I, L, m = 1e6, 50.0, 100.0, 2.0
+    bulk = (f"MAT1,1,{E}\nPBAR,1,1,0.,{I},{I}\nGRID,1,,0.,0.,0.\nGRID,2,,{L / 2},0.,0.\n"
+            f"GRID,3,,{L},0.,0.\nCBAR,1,1,1,2,0.,0.,1.\nCBAR,2,1,2,3,0.,0.,1.\nSPC1,1,123456,1\n"
+            f"SPC1,1,14,2,3\nCONM2,9,3,,{m}\n")
+    want = math.sqrt(3 * E * I / L**3 / m) / TWO_PI
+    np.testing.assert_allclose(freqs(deck(tmp_path, bulk), 2), [want, want], rtol=1e-10)
+
+
+# ------------------------------------------------------------------ CBUSH without orientation
+def test_axial_cbush_without_orientation_is_an_axial_spring(tmp_path):
+    k, m = 1e5, 10.0
+    bulk = (f"GRID,1,,0.,0.,0.,,123456\nGRID,2,,1.,0.,0.,,23456\nCBUSH,1,4,1,2\n"
+            f"PBUSH,4,K,{k},0.,0.,0.,0.,0.\nCONM2,5,2,,{m}\n")
+    np.testing.assert_allclose(freqs(deck(tmp_path, bulk), 1), [math.sqrt(k / m) / TWO_PI], rtol=1e-12)
+
+
+def test_cbush_without_orientation_and_unequal_lateral_stiffness_is_refused(tmp_path):
+    bulk = "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nCBUSH,1,4,1,2\nPBUSH,4,K,1.,2.,3.,0.,0.,0.\n"
+    with pytest.raises(ModelError, match=r"CBUSH 1: no orientation"):
+        read_bdf(deck(tmp_path, bulk))
+
+
+# ------------------------------------------------------------------ AUTOSPC, PARAMs, SPC set
+CHAIN = ("GRID,1,,0.,0.,0.,,23\nGRID,2,,1.,0.,0.,,23\nCELAS2,1,1000.,1,1\nCELAS2,2,2000.,1,1,2,1\n"
+         "CONM2,3,1,,1.\nCONM2,4,2,,2.\n")
+
+
+def test_autospc_no_still_drops_dofs_without_stiffness_or_mass(tmp_path):
+    """A CELAS2/CONM2 chain leaves the rotations with neither stiffness nor mass: NASTRAN
+    runs it with AUTOSPC off; the modes are those of the two-mass chain (hand)."""
+    p = deck(tmp_path, CHAIN + "PARAM,AUTOSPC,NO\n")
+    model, info = read_bdf(p)
+    assert "AUTOSPC,NO" in info.autospc_reason
+    want = hand(np.array([[3000.0, -2000.0], [-2000.0, 2000.0]]), np.diag([1.0, 2.0]))
+    np.testing.assert_allclose(freqs(p, 2), want, rtol=1e-12)
+
+
+def test_params_without_effect_are_listed_and_matrix_scale_factors_refused(tmp_path):
+    p = deck(tmp_path, CHAIN + "PARAM,SESDAMP,YES\nPARAM,EXTOUT,MATRIXPCH\nPARAM,EQCHECK,0,3,3,,,,-1.E10\n"
+             "PARAM,MPTUNIT,4\nPARAM,AUTOSPC,YES\n")
+    _model, info = read_bdf(p)
+    for name in ("PARAM,SESDAMP", "PARAM,EXTOUT", "PARAM,EQCHECK", "PARAM,MPTUNIT"):
+        assert name in info.ignored
+    np.testing.assert_allclose(freqs(p, 2), freqs(deck(tmp_path, CHAIN, "plain.bdf"), 2), rtol=1e-14)
+    with pytest.raises(ModelError, match=r"PARAM,CK2"):
+        read_bdf(deck(tmp_path, CHAIN + "PARAM,CK2,2.0\n", "ck2.bdf"))
+
+
+def test_undefined_spc_set_is_run_without_it_and_said_loudly(tmp_path):
+    """NASTRAN warns and runs without the set: the same as the deck without the request."""
+    p = deck(tmp_path, CHAIN + "SPC1,1,1,1\n", case="SPC = 7\n")
+    model, info = read_bdf(p)
+    assert any("WARNING" in n and "SPC = 7" in n for n in info.notes)
+    np.testing.assert_allclose(freqs(p, 2), freqs(deck(tmp_path, CHAIN, "plain.bdf"), 2), rtol=1e-14)
+
+
+# ------------------------------------------------------------------ executive control
+def test_unknown_executive_statements_and_a_repeated_begin_bulk_are_read(tmp_path):
+    plain = freqs(deck(tmp_path, CHAIN, "plain.bdf"), 2)
+    text = "ID X,NASTRAN\nAPP AERO\nSOL 11,0\nTIME 5\nCEND\nTITLE = T\nBEGIN BULK\nBEGIN BULK\n" + CHAIN + "ENDDATA\n"
+    (tmp_path / "aero.dat").write_text(text)
+    model, info = read_bdf(tmp_path / "aero.dat")
+    assert any("BEGIN BULK repeated" in n for n in info.notes)
+    np.testing.assert_allclose(freqs(tmp_path / "aero.dat", 2), plain, rtol=1e-14)
+
+
+def test_rigid_format_13_is_refused_naming_the_analysis(tmp_path):
+    p = deck(tmp_path, CHAIN, executive="APP DISP\nSOL 13,0\n", case="TITLE = T\n")
+    with pytest.raises(ModelError, match=r"SOL 13 .*differential stiffness"):
+        read_bdf(p)
+
+
+# ------------------------------------------------------------------ fixed-interface modes
+FRAME = """MAT1,1,70.+9,,0.3,2700.
+PBAR,1,1,1.-4,2.-9,2.-9,4.-9
+GRID,1,,0.,0.,0.
+GRID,2,,0.3,0.,0.
+GRID,3,,0.6,0.,0.
+GRID,4,,0.9,0.,0.
+CBAR,1,1,1,2,0.,0.,1.
+CBAR,2,1,2,3,0.,0.,1.
+CBAR,3,1,3,4,0.,0.,1.
+CONM2,9,4,,0.2
+"""
+
+
+def test_bset_of_a_component_reduction_holds_the_boundary(tmp_path):
+    """BSET1 with QSET1 on scalar points and EXTSEOUT: NASTRAN prints the fixed-interface
+    modes: the same frame with the boundary grid held by SPC1. An MPC term on a Q-set
+    scalar point (held with the boundary) leaves its grid component held."""
+    red = deck(tmp_path, FRAME + "SPOINT,101,THRU,104\nQSET1,0,101,THRU,104\nBSET1,123456,1\n"
+               "MPC,5,4,4,1.0,101,0,1.0\n", "red.bdf", case="EXTSEOUT(ASMBULK,EXTID=100)\nMPC = 5\n")
+    held = deck(tmp_path, FRAME + "SPC1,1,123456,1\nSPC1,1,4,4\n", "held.bdf")
+    np.testing.assert_allclose(freqs(red, 6), freqs(held, 6), rtol=1e-12)
+
+
+def test_bset_without_a_reduction_is_refused_naming_it(tmp_path):
+    with pytest.raises(ModelError, match=r"BSET1: a boundary set without QSET or EXTSEOUT"):
+        read_bdf(deck(tmp_path, FRAME + "BSET1,123456,1\n"))
+
+
+def test_mystran_sol_31_holds_its_suport_boundary(tmp_path):
+    """MYSTRAN SOL 31 (Craig-Bampton): SUPORT names the boundary, held in the printed modes."""
+    cb = deck(tmp_path, FRAME + "SUPORT,1,123456\n", "cb.dat", executive="SOL 31\n", case="TITLE = CB\n")
+    held = deck(tmp_path, FRAME + "SPC1,1,123456,1\n", "held.bdf")
+    _model, info = read_bdf(cb)
+    assert any("SOL 31" in n for n in info.notes)
+    np.testing.assert_allclose(freqs(cb, 6), freqs(held, 6), rtol=1e-12)
+
+
+# ------------------------------------------------------------------ build conventions
+ROD = "".join(f"GRID,{i + 1},,{0.02 * i},0.,0.\n" for i in range(4)) + "".join(
+    f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,0.,1.\n" for i in range(3)) + "SPC1,1,123456,1\nMAT1,1,70.+9,,0.33,2700.\n"
+
+
+@pytest.mark.parametrize("conventions,factor", [("nx", 0.9), ("msc", 6.0 / 7.0)])
+def test_pbarl_rod_shear_factor_follows_the_conventions(tmp_path, conventions, factor):
+    r = 0.01
+    A, I, J = math.pi * r**2, math.pi * r**4 / 4, math.pi * r**4 / 2
+    rod_deck = deck(tmp_path, ROD + f"PBARL,1,1,,ROD\n,{r}", "l.bdf")
+    rod = freqs(rod_deck, 6, conventions=conventions)
+    pbar = freqs(deck(tmp_path, ROD + f"PBAR,1,1,{A!r},{I!r},{I!r},{J!r}\n,,,,,,,,\n,{factor!r},{factor!r}",
+                      "p.bdf"), 6)
+    np.testing.assert_allclose(rod, pbar, rtol=1e-12)
+    assert read_bdf(rod_deck, conventions=conventions)[1].conventions == conventions
+
+
+def test_unknown_conventions_are_refused(tmp_path):
+    with pytest.raises(ModelError, match="conventions must be one of nx, msc"):
+        read_bdf(deck(tmp_path, ROD + "PBARL,1,1,,ROD\n,0.01"), conventions="abaqus")
+
+
+def test_pbarl_bar_uses_shear_factor_five_sixths(tmp_path):
+    """PBARL BAR DIM1 (along z) x DIM2 (along y) = PBAR with its A, I1, I2, the torsion
+    constant of the rectangle and K1 = K2 = 5/6 (MSC 2012.2's conversion)."""
+    from trussid.fem.sections import Section
+
+    h, b = 0.01, 0.02
+    s = Section.rectangle(b=b, h=h, nu=0.33)
+    bar = freqs(deck(tmp_path, ROD + f"PBARL,1,1,,BAR\n,{h},{b}", "l.bdf"), 6)
+    pbar = freqs(deck(tmp_path, ROD + f"PBAR,1,1,{s.A!r},{s.Iz!r},{s.Iy!r},{s.J!r}\n,,,,,,,,\n,{5 / 6!r},{5 / 6!r}",
+                      "p.bdf"), 6)
+    np.testing.assert_allclose(bar, pbar, rtol=1e-12)
+
+
+def test_coupled_shear_flexible_cbar_mass_is_euler_bernoulli_cubic(tmp_path):
+    """MSC: a shear-flexible CBAR's coupled mass is the Euler-Bernoulli cubic one without
+    rotary inertia, on the Timoshenko stiffness: planar cantilever of 4 elements by hand."""
+    E, G, A, I, rho, L, n, K1 = 2.9e7, 1.1e7, 0.1, 0.01, 7.357e-4, 1.0, 4, 0.8
+    phi = 12 * E * I / (G * K1 * A * L * L)
+    k = E * I / ((1 + phi) * L**3) * np.array([
+        [12, 6 * L, -12, 6 * L], [6 * L, (4 + phi) * L * L, -6 * L, (2 - phi) * L * L],
+        [-12, -6 * L, 12, -6 * L], [6 * L, (2 - phi) * L * L, -6 * L, (4 + phi) * L * L]])
+    m = rho * A * L / 420 * np.array([
+        [156, 22 * L, 54, -13 * L], [22 * L, 4 * L * L, 13 * L, -3 * L * L],
+        [54, 13 * L, 156, -22 * L], [-13 * L, -3 * L * L, -22 * L, 4 * L * L]])
+    Kg, Mg = np.zeros((2 * n + 2,) * 2), np.zeros((2 * n + 2,) * 2)
+    for e in range(n):
+        Kg[2 * e:2 * e + 4, 2 * e:2 * e + 4] += k
+        Mg[2 * e:2 * e + 4, 2 * e:2 * e + 4] += m
+    want = hand(Kg[2:, 2:], Mg[2:, 2:])
+    p = deck(tmp_path, f"PARAM,COUPMASS,1\nMAT1,1,{E},{G},,{rho}\nPBAR,1,1,{A},{I},{I},{2 * I}\n,,,,,,,,\n,{K1},{K1}\n"
+             + "".join(f"GRID,{i + 1},,{L * i},0.,0.\n" for i in range(n + 1)) + "".join(
+                 f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,0.,1.\n" for i in range(n))
+             + "SPC1,1,123456,1\nSPC1,1,1345,2,THRU,5\n")
+    np.testing.assert_allclose(freqs(p, 2 * n), want, rtol=1e-10)
