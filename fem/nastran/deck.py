@@ -191,7 +191,12 @@ def _parse(path: Path):
     # Cards this reader does not translate are only counted, never parsed, so that a
     # malformed one is reported as unsupported rather than failing the parse; those read
     # from their raw fields (RAW_CARDS, PARAM) too.
-    bdf.disable_cards(sorted((set(bdf.cards_to_read) - SUPPORTED_CARDS) | RAW_CARDS | {"PARAM"}))
+    bdf.disable_cards(sorted((set(bdf.cards_to_read) - SUPPORTED_CARDS) | RAW_CARDS | {"PARAM", "EIGR"}))
+    # Entries pyNastran builds through a "prepare" function raise without saying which
+    # entry failed: name it (this BDF instance's table only).
+    prepare = getattr(bdf, "_card_parser_prepare", {})
+    for name in list(prepare):
+        prepare[name] = _named_entry(name, prepare[name])
     try:
         # pyNastran also print()s some complaints; keep them off the user's terminal (the
         # exception carries the message).
@@ -207,6 +212,20 @@ def _parse(path: Path):
     return bdf
 
 
+def _named_entry(name: str, prepare):
+    """``prepare`` whose failure says the entry and its id."""
+    def call(card, card_obj, comment=""):
+        try:
+            return prepare(card, card_obj, comment=comment)
+        except Exception as exc:  # pyNastran raises many types; re-raised naming the entry
+            ident = card_obj.field(1)
+            msg = " ".join(str(exc).split())
+            if "defining plane 1 is not defined" in msg:
+                msg = "no orientation (give X1-X3 or G0 on the entry, or a BAROR/BEAMOR default)"
+            raise ValueError(f"{name} {'' if ident is None else ident}".strip() + f": {msg}") from None
+    return call
+
+
 def _parser_message(exc: Exception) -> str:
     """pyNastran's message in user terms: the entry and its id, without its internals.
 
@@ -219,9 +238,10 @@ def _parser_message(exc: Exception) -> str:
     msg = re.sub(r"\s*card=\[.*$", "", msg)
     msg = re.sub(r"\s*\b(uline|allowed_methods|allowed|len\(\w+ card\))\s*=.*$", "", msg)
     msg = msg.strip(" ;,.") or type(exc).__name__
-    if card:
+    msg = re.sub(r"^([A-Z0-9]+) None:", r"\1:", msg)
+    if card and not msg.startswith(card.group(1)):
         name, ident = card.group(1), card.group(2).strip()
-        msg = f"{name} {ident}: {msg}" if ident else f"{name}: {msg}"
+        msg = f"{name} {ident}: {msg}" if ident and ident != "None" else f"{name}: {msg}"
     return msg[:300]
 
 
@@ -271,17 +291,38 @@ def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
     info.ignored = [f"{k} ({v})" if not k.startswith("PARAM,") else k for k, v in sorted(ignored.items())]
     if not bad:
         return
+    first = _first_ids(bdf, bad)
     elements = {k: v for k, v in bad.items() if _is_element_entry(k)}
     if elements:
-        listing = ", ".join(f"{k} ({v})" for k, v in sorted(elements.items()))
+        listing = ", ".join(f"{k} ({v})" for k, v in sorted(elements.items())) + first
         rest = {k: v for k, v in bad.items() if k not in elements}
         also = f"; also unsupported: {', '.join(f'{k} ({v})' for k, v in sorted(rest.items()))}" if rest else ""
         raise ModelError(f"{path}: unsupported element entries: {listing} (trussid reads beam, rod, "
                          f"spring, mass and rigid elements: CBAR, CBEAM, CROD, CONROD, CELAS1/2, "
                          f"CBUSH, CONM2, CMASS1/2, RBE2, RBE3, RBAR, CRIGD1/2/3/R){also}")
-    listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items()))
+    listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items())) + first
     raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
                      f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")
+
+
+def _first_ids(bdf, bad: dict) -> str:
+    """`` [first: CQUAD4 100, PARAM,CK1 2.0]``: the first id (PARAM: value) of each refused entry."""
+    found = {}
+    for lines in getattr(bdf, "reject_lines", []):
+        body = _card_lines(lines)
+        if not body:
+            continue
+        name = body[0][:8].strip().rstrip("*").upper().split(",")[0]
+        key = name
+        if name == "PARAM":
+            f = _raw_fields(body, name)
+            key = f"PARAM,{f[1]}" if len(f) > 1 else name
+        if key in bad and key not in found:
+            f = _raw_fields(body, name)
+            found[key] = f[2 if name == "PARAM" else 1] if len(f) > (2 if name == "PARAM" else 1) else ""
+    if not found:
+        return ""
+    return " [first: " + ", ".join(f"{k} {v}".strip() for k, v in sorted(found.items())) + "]"
 
 
 def _is_element_entry(name: str) -> bool:
@@ -400,7 +441,8 @@ def _case_has(bdf, key: str) -> bool:
 
 
 def _select_eigen(bdf, info: BdfInfo) -> None:
-    methods = {sid: m for sid, m in bdf.methods.items() if m.type in ("EIGRL", "EIGR")}
+    methods = {sid: m for sid, m in bdf.methods.items() if m.type == "EIGRL"}
+    methods.update(_raw_eigrs(bdf))
     chosen = _case_values(bdf, "METHOD")
     if chosen:
         sid = int(chosen[0])
@@ -419,3 +461,34 @@ def _select_eigen(bdf, info: BdfInfo) -> None:
         info.eigen = EigenRequest("EIGRL", sid, m.nd, m.v1, m.v2)
     else:
         info.eigen = EigenRequest("EIGR", sid, m.nd or m.ne, m.f1, m.f2)
+        info.notes.append(f"EIGR {sid} method {m.method}: the lowest modes are listed, whatever the method")
+
+
+@dataclass
+class _RawEigr:
+    """An EIGR from its raw fields: pyNastran refuses methods outside its list (FEER, MGIV...),
+    and trussid lists the lowest modes whatever the method."""
+
+    sid: int
+    method: str
+    f1: float | None
+    f2: float | None
+    ne: int | None
+    nd: int | None
+    type: str = "EIGR"
+
+
+def _raw_eigrs(bdf) -> dict:
+    """EIGR SID -> :class:`_RawEigr` (fields SID METHOD F1 F2 NE ND)."""
+    out = {}
+    for sid, f in _raw_cards(bdf, "EIGR"):
+        f = f + [""] * 8
+        try:
+            num = [None if not v else _nastran_value(v) for v in f[3:7]]
+            f1, f2 = (None if v is None else float(v) for v in num[:2])
+            ne, nd = (None if v is None else int(v) for v in num[2:])
+        except (TypeError, ValueError):
+            raise ModelError(f"EIGR {sid}: F1, F2 must be numbers and NE, ND integers, got "
+                             f"{', '.join(repr(v) for v in f[3:7])}") from None
+        out[sid] = _RawEigr(sid, f[2] or "(blank)", f1, f2, ne, nd)
+    return out

@@ -1122,7 +1122,8 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     if bsets:
         extseout = _case_has(bdf, "EXTSEOUT")
         if not (qsets or extseout):
-            raise ModelError(f"{bsets[0].type}: a boundary set without QSET or EXTSEOUT (residual-structure "
+            g0 = (bsets[0].ids if hasattr(bsets[0], "ids") else bsets[0].node_ids)[0]
+            raise ModelError(f"{bsets[0].type} (grid {g0}): a boundary set without QSET or EXTSEOUT (residual-structure "
                              f"B-set analysis) is not supported")
         held = mask_of(bsets, bsets[0].type)
         for c in range(6):
