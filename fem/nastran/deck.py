@@ -161,7 +161,8 @@ def _parse(path: Path):
     flags = re.IGNORECASE | re.MULTILINE
     # INCLUDE files are relative to the deck. Checked here so that a missing one is named
     # (pyNastran would also leave a crash file in the working directory).
-    includes = re.findall(r"^\s*INCLUDE\s+'([^']+)'", text, flags)
+    include = r"^(\s*INCLUDE\s+)(?:'([^']+)'|([^'\s$]+))"  # quoted, or a bare file name
+    includes = [q or bare for _, q, bare in re.findall(include, text, flags)]
     for inc in includes:
         if not (path.parent / inc).is_file():
             raise ModelError(f"{path}: INCLUDE '{inc}': no such file (looked in {path.parent})")
@@ -174,9 +175,8 @@ def _parse(path: Path):
         # The deck goes to pyNastran from memory, with an empty executive control (see
         # _executive) and INCLUDEs made absolute (pyNastran resolves them from the working
         # directory when reading from memory).
-        text = re.sub(r"^(\s*INCLUDE\s+')([^']+)(')",
-                      lambda m: m.group(1) + str((path.parent / m.group(2)).resolve()) + m.group(3),
-                      rest, flags=flags)
+        text = re.sub(include, lambda m: m.group(1) + "'" + str((path.parent / (m.group(2) or m.group(3))).resolve())
+                      + "'", rest, flags=flags)
         # A repeated BEGIN BULK (MSC's HA144D) is accepted by NASTRAN; pyNastran reads the
         # second as a superelement header.
         heads = list(re.finditer(r"^\s*BEGIN\s+BULK\b.*$\n?", text, flags))
