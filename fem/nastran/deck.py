@@ -134,15 +134,24 @@ def _solution(executive: str) -> tuple[str | None, str | None]:
     return (sol.group(1).upper() if sol else None), (app.group(1).upper() if app else None)
 
 
-def _check_solution(path: Path, sol: str | None, app: str | None) -> None:
-    """Refuse solutions whose printed modes are not the structure's real modes, naming them."""
-    if sol is None:
+#: Loads read for a preload (rigid format 13); otherwise they are ignored, never parsed.
+PRELOAD_CARDS = frozenset({"FORCE", "FORCE1", "MOMENT", "MOMENT1"})
+
+
+def _is_preload_run(sol: str | None, app: str | None) -> bool:
+    """NASTRAN-95 rigid format 13: normal modes with differential stiffness."""
+    return sol is not None and sol.split(",")[0] == "13" and app in (None, "DISP", "DISPLACEMENT")
+
+
+def _check_solution(path: Path, sol: str | None, app: str | None, text: str) -> None:
+    """Refuse analyses whose printed modes trussid cannot reproduce, naming them."""
+    if not _is_preload_run(sol, app):
         return
-    number = sol.split(",")[0]
-    if app in (None, "DISP", "DISPLACEMENT", "AERO") and number == "13":
-        raise ModelError(f"{path}: SOL 13 (NASTRAN-95 rigid format 13, normal modes with differential "
-                         f"stiffness): its modes are those of the structure preloaded by the static subcase, "
-                         f"which trussid does not compute (differential stiffness is not supported)")
+    m = re.search(r"^\s*(CPSE[234])[\s,]+(\d+)", text, re.IGNORECASE | re.MULTILINE)
+    if m:
+        raise ModelError(f"{path}: SOL 13 (normal modes with differential stiffness): {m.group(1).upper()} "
+                         f"{m.group(2)} adds pressure stiffness to the preload, which trussid does not compute "
+                         f"(it computes the differential stiffness of frame and rod elements)")
 
 
 def _parse(path: Path):
@@ -169,7 +178,7 @@ def _parse(path: Path):
     notes = []
     executive, rest, _ = _executive(text, path)
     sol, app = _solution(executive)
-    _check_solution(path, sol, app)
+    _check_solution(path, sol, app, text)
     punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, flags) is None
     if not punch:
         # The deck goes to pyNastran from memory, with an empty executive control (see
@@ -191,7 +200,8 @@ def _parse(path: Path):
     # Cards this reader does not translate are only counted, never parsed, so that a
     # malformed one is reported as unsupported rather than failing the parse; those read
     # from their raw fields (RAW_CARDS, PARAM) too.
-    bdf.disable_cards(sorted((set(bdf.cards_to_read) - SUPPORTED_CARDS) | RAW_CARDS | {"PARAM", "EIGR"}))
+    readable = SUPPORTED_CARDS | (PRELOAD_CARDS if _is_preload_run(sol, app) else frozenset())
+    bdf.disable_cards(sorted((set(bdf.cards_to_read) - readable) | RAW_CARDS | {"PARAM", "EIGR"}))
     # Entries pyNastran builds through a "prepare" function raise without saying which
     # entry failed: name it (this BDF instance's table only).
     prepare = getattr(bdf, "_card_parser_prepare", {})

@@ -15,10 +15,11 @@ from trussid.fem.elements import frame_matrices, local_axes, to_global
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
+from trussid.fem.nastran.preload import add_preload_stiffness
 from trussid.fem.nastran.entries import RAW_CARDS, SECTION_TYPES
 from trussid.fem.nastran.conventions import (BAR_SHEAR_FACTOR, CONVENTIONS, ROD_SHEAR_FACTOR,
                                              _nastran_mass_conventions)
-from trussid.fem.nastran.deck import (BdfInfo, _card_lines, _case_has, _case_values, _check_cards,
+from trussid.fem.nastran.deck import (_is_preload_run, BdfInfo, _card_lines, _case_has, _case_values, _check_cards,
                                       _comps, _ints, _nastran_value, _parse, _raw_cards,
                                       _raw_fields, _read_params, _select_eigen)
 
@@ -113,6 +114,8 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     _add_spcs(bdf, model, nodes, info)
     _add_dof_sets(bdf, model, nodes, info)
     _select_eigen(bdf, info)
+    if _is_preload_run(*bdf.trussid_solution):
+        add_preload_stiffness(bdf, model, nodes, info, _rect_frame)
     return model, info
 
 

@@ -177,9 +177,43 @@ def test_unknown_executive_statements_and_a_repeated_begin_bulk_are_read(tmp_pat
     np.testing.assert_allclose(freqs(tmp_path / "aero.dat", 2), plain, rtol=1e-14)
 
 
-def test_rigid_format_13_is_refused_naming_the_analysis(tmp_path):
-    p = deck(tmp_path, CHAIN, executive="APP DISP\nSOL 13,0\n", case="TITLE = T\n")
-    with pytest.raises(ModelError, match=r"SOL 13 .*differential stiffness"):
+def test_rigid_format_13_string_of_pretensioned_rods_is_the_taut_string(tmp_path):
+    """Rigid format 13: massless CRODs pulled by an end FORCE1 T, masses m at the grids: the
+    transverse modes are those of a taut string, (T / h) tridiag(-1, 2, -1) with m (hand), on
+    soft grounded springs ks (without them the static preload solution is a mechanism, in
+    NASTRAN too)."""
+    n, h, T, m, ks = 6, 0.5, 800.0, 0.3, 50.0
+    grids = "".join(f"GRID,{i + 1},,{h * i},0.,0.,,3456\n" for i in range(n + 1))
+    bulk = (grids + "MAT1,1,70.+9,,0.3\nPROD,1,1,1.-4\n"
+            + "".join(f"CROD,{i + 1},1,{i + 1},{i + 2}\n" for i in range(n))
+            + "".join(f"CONM2,{100 + i},{i + 1},,{m}\nCELAS2,{200 + i},{ks},{i + 1},2\n" for i in range(1, n))
+            + f"SPC1,1,12,1\nSPC1,1,2,{n + 1}\nFORCE1,5,{n + 1},{T},1,{n + 1}\nEIGR,9,INV,0.,1.+4,,{n - 1}\n")
+    p = deck(tmp_path, bulk, executive="APP DISP\nSOL 13,0\n", case="SPC = 1\nSUBCASE 1\nLOAD = 5\nSUBCASE 2\nMETHOD = 9\n")
+    model, info = read_bdf(p)
+    assert any("SOL 13" in note for note in info.notes)
+    K = T / h * (2 * np.eye(n - 1) - np.eye(n - 1, k=1) - np.eye(n - 1, k=-1)) + ks * np.eye(n - 1)
+    want = hand(K, m * np.eye(n - 1))
+    f = freqs(p, n - 1)
+    np.testing.assert_allclose(f, want, rtol=1e-9)  # the axial modes (EA/h) are far above
+
+
+def test_rigid_format_13_beam_at_half_its_euler_load(tmp_path):
+    """A pinned beam under half its Euler load pi^2 E I / L^2: the first bending mode drops by
+    sqrt(1/2) (the same sine shape with and without the preload), to 1e-6 with 20 elements."""
+    E, I, A, rho, L, n = 70e9, 2e-9, 1e-4, 2700.0, 1.0, 20
+    P = 0.5 * math.pi**2 * E * I / L**2
+    grids = "".join(f"GRID,{i + 1},,{L * i / n},0.,0.,,345\n" for i in range(n + 1))
+    bulk = (grids + f"MAT1,1,{E},,0.3,{rho}\nPBAR,1,1,{A},{I},{I},{2 * I}\nPARAM,COUPMASS,1\n"
+            + "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0.\n" for i in range(n))
+            + f"SPC1,1,12,1\nSPC1,1,2,{n + 1}\nFORCE1,5,{n + 1},{P!r},{n + 1},1\nEIGRL,9,,,1\n")
+    free = deck(tmp_path, bulk, "free.bdf")
+    pre = deck(tmp_path, bulk, "pre.dat", executive="APP DISP\nSOL 13,0\n", case="SPC = 1\nLOAD = 5\nMETHOD = 9\n")
+    np.testing.assert_allclose(freqs(pre, 1) / freqs(free, 1), [math.sqrt(0.5)], rtol=1e-6)
+
+
+def test_rigid_format_13_with_pressure_stiffness_is_refused_naming_it(tmp_path):
+    p = deck(tmp_path, CHAIN + "CPSE2,17,2,1,2\n", executive="APP DISP\nSOL 13,0\n", case="LOAD = 1\n")
+    with pytest.raises(ModelError, match=r"SOL 13 .*CPSE2 17 adds pressure stiffness"):
         read_bdf(p)
 
 
@@ -208,7 +242,7 @@ def test_bset_of_a_component_reduction_holds_the_boundary(tmp_path):
 
 
 def test_bset_without_a_reduction_is_refused_naming_it(tmp_path):
-    with pytest.raises(ModelError, match=r"BSET1: a boundary set without QSET or EXTSEOUT"):
+    with pytest.raises(ModelError, match=r"BSET1 \(grid 1\): a boundary set without QSET or EXTSEOUT"):
         read_bdf(deck(tmp_path, FRAME + "BSET1,123456,1\n"))
 
 
