@@ -207,6 +207,12 @@ def _parse(path: Path):
     prepare = getattr(bdf, "_card_parser_prepare", {})
     for name in list(prepare):
         prepare[name] = _named_entry(name, prepare[name])
+    bdf.trussid_blank_cp_cd = ({}, {})
+    if re.search(r"^\s*GRDSET", text, flags) and "GRID" in getattr(bdf, "_card_parser", {}):
+        # A GRID's blank CP/CD takes the GRDSET default, an explicit 0 does not; pyNastran's
+        # GRID reads both as 0, so the blank fields are recorded from the raw card here.
+        cls, add = bdf._card_parser["GRID"]
+        bdf._card_parser["GRID"] = (_GridBlanks(cls, bdf.trussid_blank_cp_cd), add)
     try:
         # pyNastran also print()s some complaints; keep them off the user's terminal (the
         # exception carries the message).
@@ -220,6 +226,20 @@ def _parse(path: Path):
     bdf.trussid_notes = notes
     bdf.trussid_solution = (sol, app)
     return bdf
+
+
+class _GridBlanks:
+    """pyNastran's GRID class, recording the ids of GRIDs whose CP / CD field is blank."""
+
+    def __init__(self, cls, blanks: tuple):
+        self.cls, self.blanks = cls, blanks
+
+    def add_card(self, card_obj, comment=""):
+        grid = self.cls.add_card(card_obj, comment=comment)
+        for k, field_no in ((0, 2), (1, 6)):
+            if card_obj.field(field_no) in (None, ""):
+                self.blanks[k][grid.nid] = True
+        return grid
 
 
 def _named_entry(name: str, prepare):

@@ -180,9 +180,11 @@ def _nodes(bdf):
         raise ModelError("the deck has no GRID cards")
     grdset = getattr(bdf, "grdset", None)
     if grdset is not None:
-        if grdset.cp or grdset.cd:
-            raise ModelError(f"GRDSET: default CP={grdset.cp} / CD={grdset.cd} is not supported "
-                             f"(pyNastran cannot tell a GRID's blank CP/CD from 0); give them on the GRIDs")
+        blank_cp, blank_cd = getattr(bdf, "trussid_blank_cp_cd", ({}, {}))
+        for default, blanks, attr in ((grdset.cp, blank_cp, "cp"), (grdset.cd, blank_cd, "cd")):
+            if default:
+                for nid in blanks:
+                    setattr(bdf.nodes[nid], attr, default)
         if grdset.seid:
             raise ModelError("GRDSET: superelements (SEID) are not supported")
         if grdset.ps:

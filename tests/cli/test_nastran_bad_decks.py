@@ -42,8 +42,8 @@ BAD_DECKS = [
     ("Q-set on a grid", BEAM + CBAR + "QSET1,123456,2\n", "QSET1 2"),
     ("text WTMASS", BEAM + CBAR + "PARAM,WTMASS,abc\n", "PARAM,WTMASS"),
     ("shell elements", BEAM + CBAR + "CQUAD4,200,1,1,2,2,1\n", "CQUAD4 200"),
-    ("GRDSET displacement system", "GRDSET,,,,,,5\nCORD2R,5,,0.,0.,0.,0.,0.,1.,\n,1.,0.,0.\n" + BEAM + CBAR,
-     "GRDSET"),
+    ("GRDSET with an undefined system", "GRDSET,,,,,,7\n" + BEAM + CBAR, "GRID 1"),
+    ("GRDSET with text", "GRDSET,,abc\n" + BEAM + CBAR, "GRDSET"),
 ]
 
 #: What pyNastran's own messages carry and a user's message must not.

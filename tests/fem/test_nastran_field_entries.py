@@ -311,3 +311,19 @@ def test_coupled_shear_flexible_cbar_mass_is_euler_bernoulli_cubic(tmp_path):
                  f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,0.,1.\n" for i in range(n))
              + "SPC1,1,123456,1\nSPC1,1,1345,2,THRU,5\n")
     np.testing.assert_allclose(freqs(p, 2 * n), want, rtol=1e-10)
+
+
+# ------------------------------------------------------------------ GRDSET CP / CD
+def test_grdset_cp_and_cd_apply_to_blank_fields_only(tmp_path):
+    """GRDSET CP = CD = 5: GRIDs with those fields blank are in system 5, a GRID with an
+    explicit 0 stays in basic: the same as the deck with every field spelled out."""
+    cord = "CORD2R,5,,0.1,0.2,0.,0.,0.,1.,\n,0.8,0.6,0.\n"
+    tail = ("MAT1,1,70.+9,,0.3,2700.\nPBAR,1,1,1.-4,2.-9,3.-9,4.-9\nCBAR,1,1,1,2,0.,0.,1.\n"
+            "CBAR,2,1,2,3,0.,0.,1.\nSPC1,1,123456,1\nCONM2,9,3,,0.5\n")
+    grdset = (cord + "GRDSET,,5,,,,5\nGRID,1,,0.,0.,0.\nGRID,2,,0.3,0.,0.\nGRID,3,0,0.7,0.1,0.,0\n" + tail)
+    spelled = (cord + "GRID,1,5,0.,0.,0.,5\nGRID,2,5,0.3,0.,0.,5\nGRID,3,0,0.7,0.1,0.,0\n" + tail)
+    a, b = deck(tmp_path, grdset, "a.bdf"), deck(tmp_path, spelled, "b.bdf")
+    np.testing.assert_allclose(read_bdf(a)[0].xyz, read_bdf(b)[0].xyz, rtol=1e-14)
+    np.testing.assert_allclose(freqs(a, 6), freqs(b, 6), rtol=1e-12)
+    basic = deck(tmp_path, spelled.replace("GRID,1,5,0.,0.,0.,5", "GRID,1,0,0.,0.,0.,0"), "c.bdf")
+    assert not np.allclose(read_bdf(basic)[0].xyz, read_bdf(b)[0].xyz)
