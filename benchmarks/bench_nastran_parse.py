@@ -63,6 +63,9 @@ def main(argv=None) -> int:
     ap.add_argument("--modes", type=int, default=20)
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--out", default=str(HERE / "results" / "nastran_parse"))
+    ap.add_argument("--baseline", default=None, metavar="CHECKOUT",
+                    help="also time read_bdf of another checkout of the project (e.g. a git worktree "
+                    "of an older commit) on the same deck, in a subprocess, in the same run")
     args = ap.parse_args(argv)
 
     n = 2
@@ -89,6 +92,7 @@ def main(argv=None) -> int:
                    "eigen": (w_eig, c_eig)}
             for k, v in run.items():
                 best[k] = min(best.get(k, v), v)
+        baseline = _baseline_read(Path(args.baseline), deck) if args.baseline else None
         prof = cProfile.Profile()
         prof.enable()
         nastran.read_bdf(deck)
@@ -102,7 +106,7 @@ def main(argv=None) -> int:
     res = {"elements": int(len(model.beams)), "grids": int(len(model.node_ids)), "dof": int(system.n_dof),
            "deck_mb": size_mb, "modes": args.modes, "lowest_hz": [float(f) for f in modes.frequencies_hz[:3]] if modes is not None else [],
            "wall_s": {k: v[0] for k, v in best.items()}, "cpu_s": {k: v[1] for k, v in best.items()},
-           "load_before": load_before, "load_after": load_after, "machine": info_m,
+           "baseline": baseline, "load_before": load_before, "load_after": load_after, "machine": info_m,
            "parse_build_below_eigen": (best["read_bdf"][0] + best["assemble"][0] < best["eigen"][0]
                                        if args.modes > 0 else None)}
     out = Path(args.out)
@@ -129,6 +133,8 @@ the clamp), {size_mb:.1f} MB of large-field bulk data written by `write_bdf`; co
 {rows}
 
 {versus}
+{'' if baseline is None else f"Same deck, same run, read_bdf of the baseline checkout {baseline['commit']}: "
+    f"{baseline['wall_s']:.2f} s wall, {baseline['cpu_s']:.2f} s CPU."}
 *parse* is pyNastran's reader; *build* (trussid's translation into the model) is
 {w['build']:.2f} s of it.
 
@@ -146,6 +152,38 @@ Where read_bdf's time goes (cProfile, cumulative):
     out.with_suffix(".md").write_text(md)
     print(md)
     return 0
+
+
+_BASELINE_RUNNER = """
+import sys, time
+# The worktree's editable install would shadow the baseline: drop its import finders.
+sys.meta_path = [f for f in sys.meta_path if "editable" not in type(f).__name__.lower()]
+sys.path.insert(0, sys.argv[1])
+from trussid.fem import nastran
+assert nastran.__file__.startswith(sys.argv[1]), nastran.__file__
+w, c = time.perf_counter(), time.process_time()
+nastran.read_bdf(sys.argv[2])
+print(time.perf_counter() - w, time.process_time() - c)
+"""
+
+
+def _baseline_read(checkout: Path, deck: Path) -> dict:
+    """Wall and CPU time of read_bdf from ``checkout`` (its trussid/, fem/, plid/, geometry/
+    linked into one temporary package tree, as the project's installation maps them)."""
+    import subprocess
+
+    with tempfile.TemporaryDirectory() as tmp:
+        pkg = Path(tmp) / "trussid"
+        pkg.mkdir()
+        for item in (checkout / "trussid").iterdir():
+            (pkg / item.name).symlink_to(item)
+        for sub in ("fem", "plid", "geometry"):
+            (pkg / sub).symlink_to(checkout / sub)
+        out = subprocess.run([sys.executable, "-c", _BASELINE_RUNNER, tmp, str(deck)], capture_output=True,
+                             text=True, check=True).stdout.split()
+    commit = subprocess.run(["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    return {"commit": commit, "wall_s": float(out[0]), "cpu_s": float(out[1])}
 
 
 if __name__ == "__main__":
