@@ -328,8 +328,8 @@ def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
         rest = {k: v for k, v in bad.items() if k not in elements}
         also = f"; also unsupported: {', '.join(f'{k} ({v})' for k, v in sorted(rest.items()))}" if rest else ""
         raise ModelError(f"{path}: unsupported element entries: {listing} (trussid reads beam, rod, "
-                         f"spring, mass and rigid elements: CBAR, CBEAM, CROD, CONROD, CELAS1/2, "
-                         f"CBUSH, CONM2, CMASS1/2, RBE2, RBE3, RBAR, CRIGD1/2/3/R){also}")
+                         f"spring, mass and rigid elements: CBAR, CBEAM, CROD, CONROD, CELAS1-4, "
+                         f"CBUSH, GENEL, CONM1, CONM2, CMASS1-4, RBE2, RBE3, RBAR, CRIGD1/2/3/R){also}")
     listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items())) + first
     raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
                      f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")

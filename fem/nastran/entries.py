@@ -17,12 +17,14 @@ SUPPORTED_CARDS = frozenset({
     "RBE2", "RBE3", "RBAR", "MPC", "MPCADD", "CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR",
     "SPC", "SPC1", "SPCADD", "OMIT", "OMIT1", "ASET", "ASET1", "SUPORT", "SUPORT1", "SPOINT",
     "BSET", "BSET1", "QSET", "QSET1", "BAROR", "BEAMOR", "CONM1", "GENEL",
+    "CELAS3", "CELAS4", "CMASS3", "CMASS4",
     "EIGRL", "EIGR", "PARAM", "ENDDATA",
 })
 
 
 #: NASTRAN-95 rigid elements that pyNastran does not parse: read from the raw card lines.
-RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR", "CONM1", "GENEL"})
+RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR", "CONM1", "GENEL",
+                       "CELAS3", "CELAS4", "CMASS3", "CMASS4"})
 
 #: Entries that cannot change the real eigenvalues of the structure: accepted, not
 #: translated, and listed with their counts in :attr:`BdfInfo.ignored`. Loads and enforced

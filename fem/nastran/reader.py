@@ -16,7 +16,7 @@ from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
 from trussid.fem.nastran.preload import add_preload_stiffness
-from trussid.fem.nastran.entries import RAW_CARDS, SECTION_TYPES
+from trussid.fem.nastran.entries import SECTION_TYPES
 from trussid.fem.nastran.conventions import (BAR_SHEAR_FACTOR, CONVENTIONS, ROD_SHEAR_FACTOR,
                                              _nastran_mass_conventions)
 from trussid.fem.nastran.deck import (_is_preload_run, BdfInfo, _card_lines, _case_has, _case_values, _check_cards,
@@ -75,7 +75,16 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     _read_params(bdf, info)
 
     node_ids, xyz, frames = _nodes(bdf)
+    scalar = _scalar_points(bdf, set(node_ids.tolist()), info)
+    if scalar:
+        # Scalar points become nodes of their own with only component 1 free (position and
+        # frame are irrelevant: only scalar elements and MPCs join them).
+        node_ids = np.concatenate([node_ids, np.array(scalar, dtype=np.int64)])
+        xyz = np.concatenate([xyz, np.zeros((len(scalar), 3))])
+        if frames is not None:
+            frames = np.concatenate([frames, np.broadcast_to(np.eye(3), (len(scalar), 3, 3))])
     nodes = _NodeTable(node_ids, xyz, frames)
+    nodes.spoints = set(scalar)
     mats = _materials(bdf, info.wtmass)
     props = _properties(bdf, mats, info.wtmass, conventions)
 
@@ -99,12 +108,14 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     model.add_nodes(node_ids, xyz)
     if nodes.frames is not None:
         model.set_node_frames(node_ids, nodes.frames)
-    _check_scalar_points(bdf, info)
+    if scalar:
+        model.fix(scalar, "23456")
     _add_bars(bdf, model, nodes, props)
     _add_rods(bdf, model, nodes, props, mats, info.wtmass)
     _nastran_mass_conventions(bdf, model, nodes, props, info)
     _add_masses(bdf, model, nodes, info.wtmass)
     _add_scalar_masses(bdf, model, nodes, info.wtmass)
+    _add_scalar_point_elements(bdf, model, nodes, info.wtmass)
     _add_conm1(bdf, model, nodes, info.wtmass)
     _add_genel(bdf, model, nodes)
     _add_springs(bdf, model, nodes)
@@ -177,6 +188,8 @@ def _nodes(bdf):
     depend on the position): returned as frames whose rows are the axes in basic.
     """
     if not bdf.nodes:
+        if getattr(bdf, "spoints", None):  # scalar points only: added by the caller
+            return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), None
         raise ModelError("the deck has no GRID cards")
     grdset = getattr(bdf, "grdset", None)
     if grdset is not None:
@@ -626,8 +639,13 @@ def _scalar_ends(e, card: str, nodes: _NodeTable):
     if g1 == 0:  # grounded at its first end: swap
         g1, g2, c1, c2 = g2, g1, c2, c1
     spoints = getattr(nodes, "spoints", set())
-    if c1 == 0 or (g2 != 0 and c2 == 0) or g1 in spoints or g2 in spoints:
-        raise ModelError(f"{card}: scalar points (SPOINT, component 0) are not supported")
+    # A scalar point's only DOF is its component 1 here (component 0 in the deck).
+    if g1 in spoints and c1 == 0:
+        c1 = 1
+    if g2 in spoints and c2 == 0:
+        c2 = 1
+    if c1 == 0 or (g2 != 0 and c2 == 0):
+        raise ModelError(f"{card}: component 0 is a scalar point's, but {g1 if c1 == 0 else g2} is no SPOINT")
     if not (1 <= c1 <= 6) or (g2 and not 1 <= c2 <= 6):
         raise ModelError(f"{card}: component must be 1-6, got {c1} / {c2}")
     if g2 == g1 and c1 == c2:
@@ -890,7 +908,7 @@ def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
         name = body[0][:8].strip().rstrip("*").upper() if body else ""
         if "," in name:
             name = name.split(",")[0]
-        if name not in RAW_CARDS or name in ("CONM1", "GENEL"):
+        if name not in ("CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR"):
             continue
         f = _raw_fields(body, name)
         try:
@@ -1078,7 +1096,8 @@ def _add_mpcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                 if len(g) == 1:
                     model.fix([int(g[0])], str(_comps(c.components[0], card)[0] + 1))
                     continue
-            comp = [_comps(x, card) for x in c.components]
+            comp = [[0] if int(gi) in nodes.spoints and str(x).strip() in ("0", "") else _comps(x, card)
+                    for gi, x in zip(g, c.components)]
             if any(len(x) != 1 for x in comp):
                 raise ModelError(f"{card}: each term needs exactly one component (scalar points are "
                                  f"not supported)")
@@ -1160,19 +1179,87 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                           "which trussid computes anyway (they come first, at about 0 Hz)")
 
 
-def _check_scalar_points(bdf, info: BdfInfo) -> None:
-    """SPOINTs are accepted only when nothing connects them (then they are inert)."""
-    spoints = set(getattr(bdf, "spoints", {}) or {})
-    if not spoints:
-        return
-    used = set()
+#: Scalar elements between scalar points, read from their raw fields (two elements may share
+#: one entry: EID, PID or value, S1, S2, then a second EID...).
+SCALAR_POINT_CARDS = ("CELAS3", "CELAS4", "CMASS3", "CMASS4")
+
+
+def _scalar_point_refs(bdf) -> set:
+    """Scalar points that scalar elements or selected MPCs reference (besides Q-set points)."""
+    refs = set()
     for e in list(bdf.elements.values()) + list(bdf.masses.values()):
-        used |= {n for n in (getattr(e, "nodes", None) or []) if n in spoints}
-    if used:
-        g = sorted(used)[0]
-        raise ModelError(f"SPOINT {g}: scalar points joined by elements are not supported")
-    info.notes.append(f"SPOINT {', '.join(map(str, sorted(spoints)[:5]))}: unconnected scalar "
-                      f"point(s), no effect on the modes: ignored")
+        if e.type in ("CELAS1", "CELAS2", "CMASS1", "CMASS2"):
+            refs |= {int(n) for n, c in zip(list(e.nodes), (e.c1, e.c2)) if n and not c}
+    for name in SCALAR_POINT_CARDS:
+        for _eid, f in _raw_cards(bdf, name):
+            for k in (3, 4, 7, 8):
+                if k < len(f) and f[k]:
+                    refs.add(int(f[k]))
+    for sid in _case_values(bdf, "MPC")[:1]:
+        for c in bdf.mpcs.get(int(sid), []):
+            refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
+    return refs
+
+
+def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
+    """Ids of the SPOINTs that something connects (sorted); the others are noted and ignored."""
+    spoints = set(getattr(bdf, "spoints", {}) or {})
+    qset = set()
+    for q in getattr(bdf, "qsets", []):
+        qset |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
+    refs = _scalar_point_refs(bdf) - qset
+    missing = sorted(refs - spoints - grids)
+    if missing:
+        raise ModelError(f"scalar point {missing[0]} is referenced (component 0 or a CELAS3/4, CMASS3/4) but "
+                         f"no SPOINT defines it")
+    clash = sorted(spoints & grids)
+    if clash:
+        raise ModelError(f"SPOINT {clash[0]}: the id is also a GRID")
+    used = sorted(refs & spoints)
+    idle = sorted(spoints - refs - qset)
+    if idle:
+        info.notes.append(f"SPOINT {', '.join(map(str, idle[:5]))}{' ...' if len(idle) > 5 else ''}: unconnected "
+                          f"scalar point(s), no effect on the modes: ignored")
+    return used
+
+
+def _add_scalar_point_elements(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
+    """CELAS3/CELAS4 springs and CMASS3/CMASS4 masses between scalar points (or to ground)."""
+    for name in SCALAR_POINT_CARDS:
+        kind = "K" if name.startswith("CELAS") else "M"
+        ends, values, eids = [], [], []
+        for _eid, f in _raw_cards(bdf, name):
+            f = f + [""] * 9
+            for base in (1, 5):  # a second element on the same entry starts in field 5
+                if not f[base]:
+                    continue
+                try:
+                    eid = int(f[base])
+                    ref = int(f[base + 1]) if name.endswith("3") else float(_nastran_value(f[base + 1]))
+                    s1, s2 = (int(x) if x else 0 for x in f[base + 2:base + 4])
+                except (ValueError, TypeError):
+                    raise ModelError(f"{name} {f[base]}: malformed entry") from None
+                if name.endswith("3"):
+                    table = bdf.properties if kind == "K" else bdf.properties_mass
+                    p = table.get(ref)
+                    if p is None or p.type != ("PELAS" if kind == "K" else "PMASS"):
+                        raise ModelError(f"{name} {eid}: property {ref} is not a defined "
+                                         f"{'PELAS' if kind == 'K' else 'PMASS'}")
+                    value = float(p.k if kind == "K" else p.mass)
+                else:
+                    value = ref
+                if not (s1 or s2):
+                    raise ModelError(f"{name} {eid}: no scalar point given")
+                for sp in (s1, s2):
+                    if sp and sp not in nodes.spoints:
+                        raise ModelError(f"{name} {eid}: {sp} is not a scalar point (SPOINT)")
+                if not s1:
+                    s1, s2 = s2, 0
+                ends.append((s1, 1, s2, 1 if s2 else 0))
+                values.append(value * (wtmass if kind == "M" else 1.0))
+                eids.append(eid)
+        _add_scalar_elements(model, nodes, ends, np.array(values, float), np.array(eids, dtype=np.int64),
+                             name, kind)
 
 
 def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
@@ -1231,6 +1318,11 @@ def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
         if g.ps:
             by_comp[str(g.ps)].append(np.array([g.nid], dtype=np.int64))
     for comp, chunks in sorted(by_comp.items()):
-        comp = comp.replace("0", "")  # component 0 is a scalar point's: nothing to fix
-        if comp:
-            model.fix(np.unique(np.concatenate(chunks)), comp)
+        ids = np.unique(np.concatenate(chunks))
+        if "0" in comp or not comp.strip():  # component 0 (or blank): a scalar point's only DOF
+            held = [i for i in ids.tolist() if i in nodes.spoints]
+            if held:
+                model.fix(held, "1")
+        comp = comp.replace("0", "")
+        if comp.strip():
+            model.fix(ids, comp)

@@ -327,3 +327,31 @@ def test_grdset_cp_and_cd_apply_to_blank_fields_only(tmp_path):
     np.testing.assert_allclose(freqs(a, 6), freqs(b, 6), rtol=1e-12)
     basic = deck(tmp_path, spelled.replace("GRID,1,5,0.,0.,0.,5", "GRID,1,0,0.,0.,0.,0"), "c.bdf")
     assert not np.allclose(read_bdf(basic)[0].xyz, read_bdf(b)[0].xyz)
+
+
+# ------------------------------------------------------------------ scalar points
+def test_scalar_point_elements_are_a_spring_mass_chain(tmp_path):
+    """CELAS3/CELAS4 and CMASS3/CMASS4 on SPOINTs (two elements on one CELAS4 entry, as
+    NASTRAN allows), a CELAS2 and CMASS2 to a scalar point by component 0, an SPC1 on one:
+    ground -k1- s1 -k2- s2 -k3- s3 (held), masses m1, m2 and a coupling mass (hand)."""
+    k1, k2, k3, m1, m2, m12 = 1000.0, 2500.0, 400.0, 2.0, 3.0, 0.4
+    bulk = (f"SPOINT,11,THRU,13\nPELAS,7,{k1}\nPMASS,8,{m1}\nCELAS3,1,7,11\n"
+            f"CELAS4,2,{k2},11,12,3,{k3},12,13\nCMASS3,4,8,11\nCMASS4,5,{m2},12\n"
+            f"CMASS2,6,{m12},11,0,12,0\nCELAS2,9,0.,11,0\nSPC1,1,0,13\n")
+    K = np.array([[k1 + k2, -k2], [-k2, k2 + k3]])
+    M = np.array([[m1 + m12, -m12], [-m12, m2 + m12]])
+    np.testing.assert_allclose(freqs(deck(tmp_path, bulk), 2), hand(K, M), rtol=1e-12)
+
+
+def test_mpc_on_a_scalar_point_ties_it_to_a_grid(tmp_path):
+    """MPC u_s = 2 u_x(grid 1): a scalar spring ks on s acts on grid 1 as 4 ks (hand)."""
+    k, ks, m = 1000.0, 300.0, 2.0
+    bulk = (f"GRID,1,,0.,0.,0.,,23456\nSPOINT,20\nCELAS2,1,{k},1,1\nCONM2,2,1,,{m}\nCELAS4,3,{ks},20\n"
+            f"MPC,7,20,0,1.,1,1,-2.\n")
+    p = deck(tmp_path, bulk, case="MPC = 7\n")
+    np.testing.assert_allclose(freqs(p, 1), [math.sqrt((k + 4 * ks) / m) / TWO_PI], rtol=1e-12)
+
+
+def test_component_0_on_a_grid_is_named(tmp_path):
+    with pytest.raises(ModelError, match=r"CELAS2 1: component 0 is a scalar point's, but 1 is no SPOINT"):
+        read_bdf(deck(tmp_path, "GRID,1,,0.,0.,0.\nCELAS2,1,10.,1,0\n"))
