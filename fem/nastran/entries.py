@@ -17,14 +17,14 @@ SUPPORTED_CARDS = frozenset({
     "RBE2", "RBE3", "RBAR", "MPC", "MPCADD", "CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR",
     "SPC", "SPC1", "SPCADD", "OMIT", "OMIT1", "ASET", "ASET1", "SUPORT", "SUPORT1", "SPOINT",
     "BSET", "BSET1", "QSET", "QSET1", "BAROR", "BEAMOR", "CONM1", "GENEL",
-    "CELAS3", "CELAS4", "CMASS3", "CMASS4",
+    "CELAS3", "CELAS4", "CMASS3", "CMASS4", "DMIG",
     "EIGRL", "EIGR", "PARAM", "ENDDATA",
 })
 
 
 #: NASTRAN-95 rigid elements that pyNastran does not parse: read from the raw card lines.
 RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR", "CONM1", "GENEL",
-                       "CELAS3", "CELAS4", "CMASS3", "CMASS4"})
+                       "CELAS3", "CELAS4", "CMASS3", "CMASS4", "DMIG"})
 
 #: Entries that cannot change the real eigenvalues of the structure: accepted, not
 #: translated, and listed with their counts in :attr:`BdfInfo.ignored`. Loads and enforced
@@ -41,7 +41,7 @@ IGNORED_CARDS = frozenset({
     # tables, frequencies, random and transient set-up
     "TABLED1", "TABLED2", "TABLED3", "TABLED4", "TABDMP1", "TABRND1", "TABRNDG", "RANDPS",
     "RANDT1", "FREQ", "FREQ1", "FREQ2", "FREQ3", "FREQ4", "FREQ5", "TSTEP", "TSTEP1", "NLPARM",
-    "EIGC", "EPOINT",
+    "EIGC", "EPOINT", "TF",
     # damping elements (real modes are undamped)
     "CDAMP1", "CDAMP2", "CDAMP3", "CDAMP4", "CVISC", "PDAMP", "PVISC",
     # aeroelastic model

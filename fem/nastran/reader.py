@@ -15,6 +15,7 @@ from trussid.fem.elements import frame_matrices, local_axes, to_global
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
+from trussid.fem.nastran.matrices import add_direct_matrices
 from trussid.fem.nastran.preload import add_preload_stiffness
 from trussid.fem.nastran.entries import SECTION_TYPES
 from trussid.fem.nastran.conventions import (BAR_SHEAR_FACTOR, CONVENTIONS, ROD_SHEAR_FACTOR,
@@ -118,6 +119,7 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     _add_scalar_point_elements(bdf, model, nodes, info.wtmass)
     _add_conm1(bdf, model, nodes, info.wtmass)
     _add_genel(bdf, model, nodes)
+    add_direct_matrices(bdf, model, info, lambda dofs, card, eid: _dof_matrix(nodes, dofs, card, eid))
     _add_springs(bdf, model, nodes)
     _add_rigid(bdf, model, nodes)
     _add_raw_rigid(bdf, model, nodes)

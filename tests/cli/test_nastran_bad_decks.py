@@ -38,7 +38,7 @@ BAD_DECKS = [
     ("CMASS3 without its SPOINT", BEAM + CBAR + "CMASS3,100,1,5\n", "scalar point 5"),
     ("CMASS3 without its PMASS", BEAM + CBAR + "SPOINT,5\nCMASS3,100,1,5\n", "CMASS3 100"),
     ("EIGP", BEAM + CBAR + "EIGP,90,1.,2.,1\n", "EIGP 90"),
-    ("DMIG", BEAM + CBAR + "DMIG,K2GG,0,6,1,0\n", "DMIG K2GG"),
+    ("DMIG with text in a term", BEAM + CBAR + "DMIG,KX,0,6,1,0\nDMIG,KX,1,1,,1,abc,1.\n", "DMIG KX"),
     ("matrix scale factor", BEAM + CBAR + "PARAM,CK1,2.\n", "PARAM,CK1"),
     ("boundary set alone", BEAM + CBAR + "BSET1,123456,1\n", "BSET1 (grid 1)"),
     ("Q-set on a grid", BEAM + CBAR + "QSET1,123456,2\n", "QSET1 2"),

@@ -355,3 +355,43 @@ def test_mpc_on_a_scalar_point_ties_it_to_a_grid(tmp_path):
 def test_component_0_on_a_grid_is_named(tmp_path):
     with pytest.raises(ModelError, match=r"CELAS2 1: component 0 is a scalar point's, but 1 is no SPOINT"):
         read_bdf(deck(tmp_path, "GRID,1,,0.,0.,0.\nCELAS2,1,10.,1,0\n"))
+
+
+# ------------------------------------------------------------------ DMIG through K2GG / M2GG
+DMIG = """GRID,1,,0.,0.,0.,,3456
+DMIG,KX,0,6,1
+DMIG,KX,1,1,,1,1,100.,
+,1,2,-5.
+DMIG,KX,1,2,,1,2,80.
+DMIG,MX,0,6,1
+DMIG,MX,1,1,,1,1,2.
+DMIG,MX,1,2,,1,2,3.
+DMIG,UNUSED,0,6,1
+DMIG,UNUSED,1,1,,1,1,1.+9
+TF,3,1,1,1.
+"""
+
+
+def test_dmig_selected_by_k2gg_and_m2gg_is_the_hand_model(tmp_path):
+    """K2GG (symmetric, lower triangle by columns) and M2GG scaled by the case control's
+    factor; an unselected DMIG, a K2PP request and a TF change nothing (hand)."""
+    p = deck(tmp_path, DMIG, case="K2GG = 2.0*KX\nM2GG = MX\nK2PP = PP\n")
+    model, info = read_bdf(p)
+    assert "TF (1)" in info.ignored
+    assert any(n.startswith("DMIG UNUSED: not selected") for n in info.notes)
+    K = 2.0 * np.array([[100.0, -5.0], [-5.0, 80.0]])
+    np.testing.assert_allclose(freqs(p, 2), hand(K, np.diag([2.0, 3.0])), rtol=1e-12)
+
+
+def test_dmig_not_selected_has_no_effect_and_a_missing_one_is_named(tmp_path):
+    base = "GRID,1,,0.,0.,0.,,23456\nCELAS2,1,100.,1,1\nCONM2,2,1,,2.\n"
+    np.testing.assert_allclose(freqs(deck(tmp_path, base + DMIG.split("\n", 1)[1], "a.bdf"), 1),
+                               freqs(deck(tmp_path, base, "b.bdf"), 1), rtol=1e-14)
+    with pytest.raises(ModelError, match="K2GG = NOPE: no DMIG NOPE is defined"):
+        read_bdf(deck(tmp_path, base, "c.bdf", case="K2GG = NOPE\n"))
+
+
+def test_square_dmig_must_be_symmetric(tmp_path):
+    bulk = "GRID,1,,0.,0.,0.,,3456\nDMIG,KS,0,1,1\nDMIG,KS,1,1,,1,1,100.,\n,1,2,-5.\nDMIG,KS,1,2,,1,2,80.\n"
+    with pytest.raises(ModelError, match="DMIG KS: a square .* must be symmetric"):
+        read_bdf(deck(tmp_path, bulk, case="K2GG = KS\n"))
