@@ -4,16 +4,11 @@ found on real NASTRAN output (the nastran-corpus diagnosis)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from trussid.fem.elements import frame_matrices, local_axes
 from trussid.fem.model import Model
 from trussid.fem.nastran.deck import BdfInfo
-
-if TYPE_CHECKING:  # the reader imports this module: its node table is named for types only
-    from trussid.fem.nastran.reader import _NodeTable
 
 __all__ = ['CONVENTIONS', 'ROD_SHEAR_FACTOR', 'BAR_SHEAR_FACTOR']
 
@@ -30,10 +25,11 @@ ROD_SHEAR_FACTOR = {"nx": 0.9, "msc": 6.0 / 7.0}
 BAR_SHEAR_FACTOR = 5.0 / 6.0
 
 
-def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict, info: BdfInfo) -> None:
+def _nastran_mass_conventions(bdf, model: Model, nodes, props: dict, info: BdfInfo) -> None:
     """NASTRAN's element mass where it differs from the textbook elements of fem.elements.
 
-    Each was found on real NASTRAN output (the nastran-corpus diagnosis) and is added as a
+    ``nodes`` is the reader's node table (ids, coordinates). Each was found on real NASTRAN
+    output (the nastran-corpus diagnosis) and is added as a
     correction, so that :mod:`trussid.fem.elements` stays the textbook formulation:
 
     * lumped CBEAM: the section's torsional inertia ``rho (I1 + I2) L / 2`` about the axis
