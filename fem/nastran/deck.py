@@ -145,6 +145,11 @@ def _is_preload_run(sol: str | None, app: str | None) -> bool:
 
 def _check_solution(path: Path, sol: str | None, app: str | None, text: str) -> None:
     """Refuse analyses whose printed modes trussid cannot reproduce, naming them."""
+    statsub = re.search(r"^\s*STATSUB\b[^\n]*", text, re.IGNORECASE | re.MULTILINE)
+    if statsub:
+        raise ModelError(f"{path}: {statsub.group(0).strip()} asks for the modes of a structure preloaded by "
+                         f"a static subcase with MSC/NX differential stiffness, which trussid does not compute "
+                         f"(it does for NASTRAN-95 rigid format 13)")
     if not _is_preload_run(sol, app):
         return
     m = re.search(r"^\s*(CPSE[234])[\s,]+(\d+)", text, re.IGNORECASE | re.MULTILINE)

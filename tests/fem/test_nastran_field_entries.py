@@ -211,6 +211,12 @@ def test_rigid_format_13_beam_at_half_its_euler_load(tmp_path):
     np.testing.assert_allclose(freqs(pre, 1) / freqs(free, 1), [math.sqrt(0.5)], rtol=1e-6)
 
 
+def test_msc_statsub_preload_is_refused_naming_it(tmp_path):
+    p = deck(tmp_path, CHAIN, case="SUBCASE 1\nLOAD = 5\nSUBCASE 2\nSTATSUB(PRELOAD) = 1\nMETHOD = 1\n")
+    with pytest.raises(ModelError, match=r"STATSUB\(PRELOAD\) = 1 asks for the modes of a structure preloaded"):
+        read_bdf(p)
+
+
 def test_rigid_format_13_with_pressure_stiffness_is_refused_naming_it(tmp_path):
     p = deck(tmp_path, CHAIN + "CPSE2,17,2,1,2\n", executive="APP DISP\nSOL 13,0\n", case="LOAD = 1\n")
     with pytest.raises(ModelError, match=r"SOL 13 .*CPSE2 17 adds pressure stiffness"):
