@@ -224,6 +224,9 @@ def _parse(path: Path):
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             bdf.read_bdf(source, xref=False, validate=False, punch=punch)
     except Exception as exc:  # pyNastran raises many types for malformed decks
+        n95 = _nastran95_free_field(path.read_text(errors="replace"))
+        if n95:
+            raise ModelError(f"{path}: {n95}") from None
         raise ModelError(f"{path}: not a readable bulk-data deck ({_parser_message(exc)})") from None
     if not bdf.card_count:
         raise ModelError(f"{path}: no bulk-data cards found")
@@ -259,6 +262,23 @@ def _named_entry(name: str, prepare):
                 msg = "no orientation (give X1-X3 or G0 on the entry, or a BAROR/BEAMOR default)"
             raise ValueError(f"{name} {'' if ident is None else ident}".strip() + f": {msg}") from None
     return call
+
+
+def _nastran95_free_field(text: str) -> str | None:
+    """A message naming the first NASTRAN-95 free-field line (blank-separated fields after a
+    comma, or a replicator ``=``, ``==``, ``=(n)``, ``*(n)``), or None when there is none."""
+    lines = text.splitlines()
+    start = next((k for k, ln in enumerate(lines) if re.match(r"\s*BEGIN\s+BULK", ln, re.IGNORECASE)), -1)
+    for k, line in enumerate(lines[start + 1:], start + 2):
+        body = line.split("$", 1)[0].rstrip()
+        replicator = re.match(r"^\s*(=\(\d+\)|==|=\s*,|\*\(\d+\))", body)
+        blanks = re.match(r"^([A-Z][A-Z0-9]*)\s*,\s*(\S+)\s+\S", body, re.IGNORECASE)
+        if replicator or blanks:
+            what = ("a replicator" if replicator else f"{blanks.group(1).upper()} {blanks.group(2)} with "
+                    f"blank-separated fields")
+            return (f"NASTRAN-95 free-field input ({what}, line {k}: {body.strip()[:40]!r}) is not "
+                    f"supported: write the entries with commas or in fixed fields")
+    return None
 
 
 def _parser_message(exc: Exception) -> str:

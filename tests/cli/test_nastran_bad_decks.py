@@ -43,6 +43,8 @@ BAD_DECKS = [
     ("boundary set alone", BEAM + CBAR + "BSET1,123456,1\n", "BSET1 (grid 1)"),
     ("Q-set on a grid", BEAM + CBAR + "QSET1,123456,2\n", "QSET1 2"),
     ("text WTMASS", BEAM + CBAR + "PARAM,WTMASS,abc\n", "PARAM,WTMASS"),
+    ("NASTRAN-95 blank-separated free field", BEAM + "CBAR,  10  1   1   2  0. 0. 1.\n", "CBAR 10"),
+    ("NASTRAN-95 replicator", BEAM + CBAR + "=(3),*(1),=,*(1),/\n", "replicator, line"),
     ("shell elements", BEAM + CBAR + "CQUAD4,200,1,1,2,2,1\n", "CQUAD4 200"),
     ("GRDSET with an undefined system", "GRDSET,,,,,,7\n" + BEAM + CBAR, "GRID 1"),
     ("GRDSET with text", "GRDSET,,abc\n" + BEAM + CBAR, "GRDSET"),
