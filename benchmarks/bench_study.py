@@ -244,6 +244,9 @@ def main(argv=None):
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--only", choices=("wall", "fits"), default=None)
     ap.add_argument("--table", action="store_true", help="rewrite study.md from study.json (no run)")
+    ap.add_argument("--quick", action="store_true",
+                    help="CI form: the wall study on a 2 x 2 x 2 grid, 2 s of idle cluster (give --out a "
+                         "scratch folder)")
     args = ap.parse_args(argv)
     if args.table:
         results = json.loads((Path(args.out) / "study.json").read_text())
@@ -263,10 +266,19 @@ def main(argv=None):
     scratch = Path(tempfile.mkdtemp(prefix="bench_study_"))
     results = {"meta": meta}
     try:
-        if args.only in (None, "wall"):
+        if args.quick:
+            from trussid.study import spec_from_dict
+
+            global IDLE_S
+            IDLE_S = 2.0
+            d = wall_spec().to_dict()
+            for axis in ("wall0", "wall1", "wall2"):
+                d["parameters"][axis]["num"] = 2
+            results["wall_study"] = measure("wall", spec_from_dict(d), scratch)
+        elif args.only in (None, "wall"):
             results["wall_study"] = measure("wall", wall_spec(), scratch)
             results["estimate_1e6"] = estimate(results["wall_study"])
-        if args.only in (None, "fits"):
+        if args.only in (None, "fits") and not args.quick:
             results["fit_campaign"] = measure("fits", fit_spec(args.fits), scratch)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
@@ -276,7 +288,7 @@ def main(argv=None):
     tmp = out / ".study.json.tmp"
     tmp.write_text(json.dumps(results, indent=1, default=float))
     os.replace(tmp, out / "study.json")
-    if args.only is None:
+    if args.only is None and not args.quick:
         tmp = out / ".study.md.tmp"
         tmp.write_text(markdown(results) + "\n")
         os.replace(tmp, out / "study.md")

@@ -39,7 +39,15 @@ class Material:
 
     @classmethod
     def isotropic(cls, E: float, nu: float, rho: float, name: str = "material") -> "Material":
-        """Material from Young's modulus [Pa], Poisson's ratio [-] and density [kg/m^3]."""
+        """Material from Young's modulus [Pa], Poisson's ratio [-] and density [kg/m^3].
+
+        Examples
+        --------
+        >>> from trussid.fem import Material
+        >>> titanium = Material.isotropic(E=114e9, nu=0.34, rho=4430.0, name="Ti-6Al-4V")
+        >>> print(f"G = E / (2 (1 + nu)) = {titanium.G / 1e9:.2f} GPa")
+        G = E / (2 (1 + nu)) = 42.54 GPa
+        """
         if not (-1.0 < nu < 0.5):
             raise ModelError(f"material {name!r}: Poisson's ratio must be in (-1, 0.5), got {nu!r}")
         return cls(E=float(E), G=float(E) / (2.0 * (1.0 + nu)), rho=float(rho), name=name)

@@ -293,6 +293,23 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
         A mechanism (a zero-frequency mode that is not a rigid-body motion) in a model
         with supports, or a direction with neither mass nor stiffness, naming the node and
         component where the factorisation of K finds no stiffness.
+
+    Examples
+    --------
+    A steel cantilever, 1 m of 20 x 10 mm solid section in ten elements: its first bending
+    frequencies in the two planes against Euler-Bernoulli, ``(1.8751^2 / 2 pi) sqrt(E I / rho A)``
+    (8.1538 and 16.3075 Hz):
+
+    >>> import numpy as np
+    >>> from trussid.fem import STEEL, Model, Section, solve_modes
+    >>> m = Model()
+    >>> m.add_nodes(np.arange(1, 12), np.c_[np.linspace(0, 1, 11), np.zeros((11, 2))])
+    >>> m.add_beams(np.arange(1, 11), np.c_[np.arange(1, 11), np.arange(2, 12)],
+    ...             Section.rectangle(0.02, 0.01), STEEL, orient=[0, 0, 1])
+    >>> m.fix(1)
+    >>> modes = solve_modes(m, n_modes=4)
+    >>> print(np.round(modes.frequencies_hz[:2], 3))
+    [ 8.154 16.308]
     """
     system = model_or_system if isinstance(model_or_system, System) else assemble(model_or_system, autospc=autospc)
     cholmod_available()  # loads cvxopt's own BLAS before the thread limit is set

@@ -12,6 +12,7 @@ Everything is SI: m, kg, s, N, Pa.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Iterable, Literal
 
@@ -32,6 +33,14 @@ def parse_dofs(dofs: str | Iterable[int]) -> np.ndarray:
 
     ``dofs`` is a NASTRAN-style digit string (``"123"`` = translations, ``"123456"`` = all)
     or an iterable of 0-based component indices.
+
+    Examples
+    --------
+    >>> from trussid.fem import parse_dofs
+    >>> parse_dofs("123")                         # NASTRAN digits: the translations
+    array([ True,  True,  True, False, False, False])
+    >>> parse_dofs([3, 4, 5])                     # 0-based components: the rotations
+    array([False, False, False,  True,  True,  True])
     """
     mask = np.zeros(6, dtype=bool)
     if isinstance(dofs, str):
@@ -250,11 +259,15 @@ class Model:
 
     Examples
     --------
-    >>> from fem import Model, Section, ALUMINIUM
+    A 1 m aluminium tube clamped at node 1 (12 DOFs, 6 of them supported):
+
+    >>> from trussid.fem import ALUMINIUM, Model, Section
     >>> m = Model()
     >>> m.add_nodes([1, 2], [[0, 0, 0], [1, 0, 0]])
     >>> m.add_beams([1], [[1, 2]], Section.tube(0.00635, 0.001), ALUMINIUM, orient=[0, 0, 1])
     >>> m.fix(1)
+    >>> m.n_nodes, m.n_dof
+    (2, 12)
     """
 
     def __init__(self, beam_theory: Literal["euler-bernoulli", "timoshenko"] = "euler-bernoulli",
@@ -427,6 +440,30 @@ class Model:
                                          dtype=np.int64 if k in ("ids", "nodes") else bool if k == "rod"
                                          else object if k == "labels" else float) for k in keys})
         return Beams(**{k: np.concatenate([c[k] for c in self._beams]) for k in keys})
+
+    def with_beam_sections(self, A, Iy, Iz, J) -> "Model":
+        """A copy of the model whose beams have the section properties ``A`` [m^2], ``Iy``,
+        ``Iz``, ``J`` [m^4] (arrays over the beams in :attr:`beams` order); everything else
+        is the same. For design sweeps that move sections without rebuilding a model.
+
+        Raises
+        ------
+        ModelError
+            If an array is not one finite value per beam.
+        """
+        b = self.beams
+        n = len(b.ids)
+        new = {k: np.asarray(v, dtype=float) for k, v in (("A", A), ("Iy", Iy), ("Iz", Iz), ("J", J))}
+        for k, v in new.items():
+            if v.shape != (n,) or not np.isfinite(v).all():
+                raise ModelError(f"with_beam_sections: {k} must be {n} finite values (one per beam), "
+                                 f"got shape {v.shape}")
+        out = copy.copy(self)
+        for key, value in vars(self).items():  # the copy's own lists: adding to one leaves the other
+            if isinstance(value, list):
+                setattr(out, key, list(value))
+        out._beams = [{**{k: getattr(b, k) for k in Beams.__dataclass_fields__}, **new}]
+        return out
 
     def add_point_masses(self, nodes, mass, inertia=None, offset=None) -> None:
         """Add point masses at node ids ``nodes``.

@@ -162,6 +162,24 @@ def read_data(path, inputs=None, outputs=None, fs=None) -> IOData:
     -------
     IOData
         With ``notes`` saying what was assumed (e.g. a time column read as milliseconds).
+
+    Examples
+    --------
+    Columns chosen by name, the sample rate from the time column (in milliseconds, as its
+    header says); a column that is not there is named:
+
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from trussid.plid import read_data
+    >>> rows = "".join(f"{k:.1f},{np.sin(k)},{np.cos(k)},{k % 2}\\n" for k in range(5))
+    >>> _ = Path("lab.csv").write_text("time [ms],shaker,acc,trigger\\n" + rows)
+    >>> d = read_data("lab.csv", inputs=["shaker"], outputs=["acc"])
+    >>> d.u.shape, d.y.shape, d.fs
+    ((5, 1), (5, 1), 1000.0)
+    >>> read_data("lab.csv", inputs=["shaker"], outputs=["acc9"])
+    Traceback (most recent call last):
+    ...
+    trussid.plid.errors.DataError: lab.csv: unknown column 'acc9'; did you mean 'acc'?
     """
     path = Path(path)
     if not path.exists():
@@ -684,6 +702,22 @@ def write_data(data: IOData, path) -> Path:
     NPZ/MAT get ``u``, ``y``, ``fs``, ``input_names``, ``output_names`` (and ``y_clean``
     when known). UFF gets one data set 58 per channel (:func:`trussid.plid.uff.write_uff_data`).
     Returns the path.
+
+    Examples
+    --------
+    A lab record written as CSV (a time column, then ``u_*`` and ``y_*`` columns) and read back:
+
+    >>> import numpy as np
+    >>> from trussid.plid import IOData, read_data, write_data
+    >>> rng = np.random.default_rng(0)
+    >>> record = IOData(u=rng.standard_normal((1000, 1)), y=rng.standard_normal((1000, 2)),
+    ...                 fs=1600.0, input_names=["force"], output_names=["acc1", "acc2"])
+    >>> path = write_data(record, "run1.csv")
+    >>> open(path).readline().strip()
+    't,u_force,y_acc1,y_acc2'
+    >>> again = read_data(path)
+    >>> again.fs, again.input_names, again.output_names, np.allclose(again.y, record.y)
+    (1600.0, ['u_force'], ['y_acc1', 'y_acc2'], True)
     """
     path = Path(path)
     suffix = path.suffix.lower()

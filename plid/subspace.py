@@ -80,6 +80,20 @@ def n4sid(u, y, n: int, block_rows: int, dt: float) -> SubspaceFit:
         Block rows of the Hankel matrices.
     dt : float
         Sample time [s] of the returned models.
+
+    Examples
+    --------
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import excitation, modal_table, n4sid, simulate
+    >>> s = control.tf("s")
+    >>> G = sum(g * (2 * np.pi * f) ** 2 / (s**2 + 0.04 * 2 * np.pi * f * s + (2 * np.pi * f) ** 2)
+    ...         for f, g in ((50.0, 1.0), (120.0, 0.5)))
+    >>> plant = control.c2d(control.ss(G), 1e-3)
+    >>> u = excitation("white", 2000, fs=1000.0, seed=1)
+    >>> fit = n4sid(u, simulate(plant, u), n=4, block_rows=10, dt=1e-3)
+    >>> print(np.round(modal_table(fit.with_d).frequencies_hz, 2))
+    [ 50. 120.]
     """
     u = as_2d(u, "u", finite=True)
     y = as_2d(y, "y", finite=True)

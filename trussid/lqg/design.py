@@ -45,6 +45,7 @@ from trussid.plid.modal import assign_pairs
 
 from .errors import ControlError
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
+from trussid.plid.metrics import choose_predictor
 
 FORMS = ("predictor", "filter")
 ESTIMATORS = ("record", "model")
@@ -222,11 +223,32 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     Returns
     -------
     LQGDesign
+
+    Examples
+    --------
+    Active damping of a two-mode plant (50 and 120 Hz at 0.5 %) to 5 %, designed from the
+    plant and a noisy record of it; the closed loop around the plant:
+
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.lqg import closed_loop, design_lqg
+    >>> from trussid.plid import excitation, modal_table, simulate
+    >>> s = control.tf("s")
+    >>> G = sum(g * (2 * np.pi * f) ** 2 / (s**2 + 0.01 * 2 * np.pi * f * s + (2 * np.pi * f) ** 2)
+    ...         for f, g in ((50.0, 1.0), (120.0, 0.5)))
+    >>> d = control.c2d(control.ss(G), 1e-3)
+    >>> plant = control.ss(d.A, d.B, d.C, d.D, 1e-3, inputs=["u"], outputs=["y"])
+    >>> u = excitation("white", 2000, fs=1000.0, seed=1)
+    >>> y = simulate(plant, u) + 1e-3 * np.random.default_rng(0).standard_normal((2000, 1))
+    >>> design = design_lqg(plant, u, y, target_damping=0.05)
+    >>> [round(m["frequency_hz"], 1) for m in design.target_modes]
+    [50.0, 120.0]
+    >>> loop = modal_table(closed_loop(plant, design.controller))
+    >>> print(np.round(loop.frequencies_hz, 1), np.round(100 * loop.damping, 1))
+    [ 50.1  50.1 120.1 120.1] [4.9 5.  4.9 5. ]
     """
     # One function over 80 lines: the four steps of the recipe (module docstring) in order,
     # with the input checks before them; each step is a few lines calling a helper.
-    from trussid.plid.metrics import choose_predictor
-
     if not (isinstance(target_damping, (int, float)) and 0 < target_damping < 1):
         raise ControlError(f"target damping must lie in (0, 1), got {target_damping!r}")
     if form not in FORMS:

@@ -137,6 +137,31 @@ def damping_table(plant, controller, *, band=(40.0, 450.0), dominant_fraction: f
     dict
         ``rows`` (list of :class:`ModeRow` as dicts, plant modes in ``band``), ``stable``,
         ``spectral_radius``, ``closed_loop_poles`` (complex), ``controller_poles``.
+
+    Examples
+    --------
+    The plant modes of :func:`trussid.lqg.design_lqg`'s example, open and closed loop:
+
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.lqg import damping_table, design_lqg
+    >>> from trussid.plid import excitation, simulate
+    >>> s = control.tf("s")
+    >>> G = sum(g * (2 * np.pi * f) ** 2 / (s**2 + 0.01 * 2 * np.pi * f * s + (2 * np.pi * f) ** 2)
+    ...         for f, g in ((50.0, 1.0), (120.0, 0.5)))
+    >>> d = control.c2d(control.ss(G), 1e-3)
+    >>> plant = control.ss(d.A, d.B, d.C, d.D, 1e-3, inputs=["u"], outputs=["y"])
+    >>> u = excitation("white", 2000, fs=1000.0, seed=1)
+    >>> y = simulate(plant, u) + 1e-3 * np.random.default_rng(0).standard_normal((2000, 1))
+    >>> table = damping_table(plant, design_lqg(plant, u, y, target_damping=0.05).controller,
+    ...                       band=(10.0, 450.0))
+    >>> table["stable"]
+    True
+    >>> for row in table["rows"]:
+    ...     print(f"{row['frequency_hz']:.0f} Hz: {100 * row['damping_open']:.1f} % -> "
+    ...           f"{100 * row['damping_worst_visible']:.1f} %")
+    50 Hz: 0.5 % -> 4.9 %
+    120 Hz: 0.5 % -> 4.9 %
     """
     iu, iy = _check_pair(plant, controller)
     cl = closed_loop(plant, controller)
@@ -291,8 +316,8 @@ def disk_margins(plant, controller, f=None) -> dict:
 # --------------------------------------------------------------------------- time domain
 
 
-def simulate_loop(plant, controller, d, noise_rms, *, bits: int = 12, dac_full_scale=10.0,
-                  adc_full_scale=10.0, seed: int = 0) -> dict:
+def simulate_loop(plant, controller, d, noise_rms, *, bits: int, dac_full_scale,
+                  adc_full_scale, seed: int = 0) -> dict:
     """Closed loop in the time domain with quantising, clipping converters and sensor noise.
 
     ``y_meas = ADC(C xp + n)``, ``u = controller(y_meas)``, the D/A sends ``DAC(u + d)``.
@@ -303,12 +328,17 @@ def simulate_loop(plant, controller, d, noise_rms, *, bits: int = 12, dac_full_s
         Disturbance added to the command at the D/A [V] (e.g. the demo's excitation).
     noise_rms : float or (p,) float
         White sensor noise RMS [V].
+    bits : int
+        D/A and A/D resolution (the lab's; no default).
+    dac_full_scale, adc_full_scale : float or per-channel array
+        Converter ranges +-V (the lab's; no default).
 
     Returns
     -------
     dict
         ``y`` (N, p) measured, ``u`` (N, m) commands, ``dac`` (N, m) what the D/A sent,
-        ``u_rms`` (m,), ``dac_clipped`` and ``adc_clipped`` sample counts per channel.
+        ``u_rms`` (m,), ``dac_clipped`` and ``adc_clipped`` sample counts per channel,
+        ``dac_lsb`` and ``adc_lsb`` the converters' LSB per channel [V].
     """
     iu, iy = _check_pair(plant, controller)
     Ap, Bp, Cp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C))
@@ -342,4 +372,4 @@ def simulate_loop(plant, controller, d, noise_rms, *, bits: int = 12, dac_full_s
         Y[k], U[k], V[k] = ym, uk, v
     return {"y": Y, "u": U, "dac": V, "u_rms": np.sqrt(np.mean(U**2, axis=0)),
             "y_rms": np.sqrt(np.mean(Y**2, axis=0)), "dac_clipped": clip_d.tolist(),
-            "adc_clipped": clip_a.tolist()}
+            "adc_clipped": clip_a.tolist(), "dac_lsb": lsb_d.tolist(), "adc_lsb": lsb_a.tolist()}

@@ -123,8 +123,8 @@ def add_parser(subparsers):
     p.add_argument("--direct", choices=("auto", "yes", "no"), default=None,
                    help="direct term D (feed-through): auto (default for --start subspace or "
                    "scratch) decides on the data by a held-out output-error test, and the "
-                   "report says what it chose; yes / no force it. --via defaults to no "
-                   "(strictly proper candidates); --start plain has none")
+                   "report says what it chose; yes / no force it (with --via: for every "
+                   "candidate); --start plain has none")
     p.add_argument("--json", action="store_true",
                    help="print poles and the prediction ratio as JSON")
     p.set_defaults(func=run)
@@ -163,7 +163,7 @@ def run_orders(args, data) -> int:
     from pathlib import Path
 
     from trussid.plid.datafile import check_enough_samples
-    from trussid.plid.order import format_table, order_table
+    from trussid.plid.order import format_table, order_table, order_warnings
     from trussid.plots import order_figure, save_figure
     from trussid._util.files import atomic_path
 
@@ -186,6 +186,8 @@ def run_orders(args, data) -> int:
         lines.append(f"{r.order},{r.prediction_db:.6g},{ch},{r.unstable_poles},{r.seconds:.3f},"
                      f"{err}")
     ok = [r for r in rows if not r.error]
+    for note in order_warnings(rows):
+        print(f"trussid identify: warning: {note}", file=sys.stderr)
     if not ok:
         raise UserError("no order could be identified: " + "; ".join(
             f"order {r.order}: {r.error}" for r in rows))
