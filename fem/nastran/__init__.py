@@ -6,8 +6,17 @@ theory, SPC set, eigenvalue request, AUTOSPC). :func:`write_bdf` writes a model 
 deck that NASTRAN can run and that :func:`read_bdf` re-reads to the same model.
 
 The deck is parsed by pyNastran (``pyNastran.bdf.bdf.BDF``), so the card formats (small,
-large and free field, continuations, INCLUDE) are pyNastran's. pyNastran's own element
-matrices are not used: this module only translates cards into the model's arrays.
+large and free field, continuations, INCLUDE) are pyNastran's; the executive control, PARAM,
+EIGR, and entries whose pyNastran objects lose information (a GRID's blank CP/CD against 0)
+or that it does not parse are read from their raw fields. pyNastran's own element matrices
+are not used: this package only translates cards into the model's arrays.
+
+Modules: :mod:`~trussid.fem.nastran.entries` (what is read, accepted or refused),
+:mod:`~trussid.fem.nastran.deck` (text to pyNastran, raw fields, case control),
+:mod:`~trussid.fem.nastran.reader` (the translation), :mod:`~trussid.fem.nastran.conventions`
+(NASTRAN's element conventions and the build conventions, ``conventions="nx"|"msc"``),
+:mod:`~trussid.fem.nastran.matrices` (DMIG through K2GG/M2GG),
+:mod:`~trussid.fem.nastran.preload` (rigid format 13) and :mod:`~trussid.fem.nastran.writer`.
 
 Conventions that matter
 -----------------------
