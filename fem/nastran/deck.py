@@ -198,6 +198,13 @@ def _parse(path: Path):
             for h in reversed(heads[1:]):
                 text = text[:h.start()] + text[h.end():]
             notes.append(f"BEGIN BULK repeated {len(heads)} times: read once, as NASTRAN")
+        # BAROR/BEAMOR defaults apply to every CBAR/CBEAM wherever they stand in the deck;
+        # pyNastran applies them only to the entries that follow: move them to the front.
+        orient = re.compile(r"^(BAROR|BEAMOR)\b[^\n]*\n?", re.IGNORECASE | re.MULTILINE)
+        start = text.find("\n", heads[0].start()) + 1 if heads else -1
+        if start > 0 and orient.search(text, start):
+            moved = "".join(m.group(0).rstrip("\n") + "\n" for m in orient.finditer(text, start))
+            text = text[:start] + moved + orient.sub("", text[start:])
         source: str | io.StringIO = io.StringIO("CEND\n" + text)
     else:
         source = str(path)

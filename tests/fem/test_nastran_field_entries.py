@@ -401,3 +401,18 @@ def test_square_dmig_must_be_symmetric(tmp_path):
     bulk = "GRID,1,,0.,0.,0.,,3456\nDMIG,KS,0,1,1\nDMIG,KS,1,1,,1,1,100.,\n,1,2,-5.\nDMIG,KS,1,2,,1,2,80.\n"
     with pytest.raises(ModelError, match="DMIG KS: a square .* must be symmetric"):
         read_bdf(deck(tmp_path, bulk, case="K2GG = KS\n"))
+
+
+# ------------------------------------------------------------------ BAROR / BEAMOR
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_baror_orientation_applies_wherever_it_stands(tmp_path, where):
+    """BAROR X = (0, 1, 0) for CBARs without orientation, before or after them in the deck:
+    the same beam as with the vector on every CBAR."""
+    common = ("MAT1,1,70.+9,,0.3,2700.\nPBAR,1,1,1.-4,2.-9,5.-9,4.-9\nSPC1,1,123456,1\n"
+              + "".join(f"GRID,{i + 1},,{0.2 * i},0.,0.\n" for i in range(5)))
+    bare = "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2}\n" for i in range(4))
+    spelled = "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0.\n" for i in range(4))
+    baror = "BAROR,,,,,0.,1.,0.\n"
+    body = baror + bare if where == "before" else bare + baror
+    a = deck(tmp_path, common + body, "a.bdf", case="TITLE = T\n")
+    np.testing.assert_allclose(freqs(a, 6), freqs(deck(tmp_path, common + spelled, "b.bdf"), 6), rtol=1e-12)
