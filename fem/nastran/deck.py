@@ -159,6 +159,32 @@ def _check_solution(path: Path, sol: str | None, app: str | None, text: str) -> 
                          f"(it computes the differential stiffness of frame and rod elements)")
 
 
+def _bulk_text(rest: str, path: Path, include: str, notes: list) -> str:
+    """Case control and bulk data as pyNastran is given them (from memory, after CEND).
+
+    INCLUDEs are made absolute (pyNastran resolves them from the working directory when
+    reading from memory), a repeated BEGIN BULK is dropped, BAROR/BEAMOR move to the front.
+    """
+    flags = re.IGNORECASE | re.MULTILINE
+    text = re.sub(include, lambda m: m.group(1) + "'" + str((path.parent / (m.group(2) or m.group(3))).resolve())
+                  + "'", rest, flags=flags)
+    # A repeated BEGIN BULK (MSC's HA144D) is accepted by NASTRAN; pyNastran reads the
+    # second as a superelement header.
+    heads = list(re.finditer(r"^\s*BEGIN\s+BULK\b.*$\n?", text, flags))
+    if len(heads) > 1:
+        for h in reversed(heads[1:]):
+            text = text[:h.start()] + text[h.end():]
+        notes.append(f"BEGIN BULK repeated {len(heads)} times: read once, as NASTRAN")
+    # BAROR/BEAMOR defaults apply to every CBAR/CBEAM wherever they stand in the deck;
+    # pyNastran applies them only to the entries that follow: move them to the front.
+    orient = re.compile(r"^(BAROR|BEAMOR)\b[^\n]*\n?", flags)
+    start = text.find("\n", heads[0].start()) + 1 if heads else -1
+    if start > 0 and orient.search(text, start):
+        moved = "".join(m.group(0).rstrip("\n") + "\n" for m in orient.finditer(text, start))
+        text = text[:start] + moved + orient.sub("", text[start:])
+    return text
+
+
 def _parse(path: Path):
     """pyNastran's BDF of ``path``, quietly; any failure becomes a one-line ModelError."""
     from cpylog import SimpleLogger
@@ -185,29 +211,7 @@ def _parse(path: Path):
     sol, app = _solution(executive)
     _check_solution(path, sol, app, text)
     punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, flags) is None
-    if not punch:
-        # The deck goes to pyNastran from memory, with an empty executive control (see
-        # _executive) and INCLUDEs made absolute (pyNastran resolves them from the working
-        # directory when reading from memory).
-        text = re.sub(include, lambda m: m.group(1) + "'" + str((path.parent / (m.group(2) or m.group(3))).resolve())
-                      + "'", rest, flags=flags)
-        # A repeated BEGIN BULK (MSC's HA144D) is accepted by NASTRAN; pyNastran reads the
-        # second as a superelement header.
-        heads = list(re.finditer(r"^\s*BEGIN\s+BULK\b.*$\n?", text, flags))
-        if len(heads) > 1:
-            for h in reversed(heads[1:]):
-                text = text[:h.start()] + text[h.end():]
-            notes.append(f"BEGIN BULK repeated {len(heads)} times: read once, as NASTRAN")
-        # BAROR/BEAMOR defaults apply to every CBAR/CBEAM wherever they stand in the deck;
-        # pyNastran applies them only to the entries that follow: move them to the front.
-        orient = re.compile(r"^(BAROR|BEAMOR)\b[^\n]*\n?", re.IGNORECASE | re.MULTILINE)
-        start = text.find("\n", heads[0].start()) + 1 if heads else -1
-        if start > 0 and orient.search(text, start):
-            moved = "".join(m.group(0).rstrip("\n") + "\n" for m in orient.finditer(text, start))
-            text = text[:start] + moved + orient.sub("", text[start:])
-        source: str | io.StringIO = io.StringIO("CEND\n" + text)
-    else:
-        source = str(path)
+    source = str(path) if punch else io.StringIO("CEND\n" + _bulk_text(rest, path, include, notes))
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     # Cards this reader does not translate are only counted, never parsed, so that a
     # malformed one is reported as unsupported rather than failing the parse; those read
