@@ -43,6 +43,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import control
 import numpy as np
 
 from trussid.fem.errors import ModelError
@@ -353,8 +354,6 @@ def io_plant(model, spec: IOSpec, *, n_modes: int | None = None, damping: float 
     >>> print(np.round(modes.frequencies_hz[:n_kept], 1))
     [  8.2  16.3  51.1 102.2 143.1 280.6 286.2 464.7]
     """
-    import control
-
     damping = spec.damping if damping is None else damping
     damping = 0.02 if damping is None else float(damping)
     if not 0 <= damping < 1:

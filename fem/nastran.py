@@ -386,8 +386,8 @@ def _check_solution(path: Path, sol: str | None, app: str | None) -> None:
 
 def _parse(path: Path):
     """pyNastran's BDF of ``path``, quietly; any failure becomes a one-line ModelError."""
-    from cpylog import SimpleLogger
-    from pyNastran.bdf.bdf import BDF
+    from cpylog import SimpleLogger  # deferred: ~1.5 s to load, decks only
+    from pyNastran.bdf.bdf import BDF  # deferred: ~1.5 s to load, decks only
 
     if not path.exists():
         raise ModelError(f"{path}: no such file")
@@ -1303,7 +1303,7 @@ def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
 
 
 def _raw_fields(lines: list[str], name: str) -> list[str]:
-    from pyNastran.bdf.bdf_interface.utils import to_fields
+    from pyNastran.bdf.bdf_interface.utils import to_fields  # deferred: ~1.5 s to load, decks only
 
     return [f.strip().upper() for f in to_fields(lines, name)]
 
@@ -1690,9 +1690,9 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     >>> print(np.round(f0, 2), np.allclose(f0, f1, rtol=1e-6), info.eigen.n_modes)
     [ 20.71  20.71 106.69 106.69] True 4
     """
-    from cpylog import SimpleLogger
-    from pyNastran.bdf.bdf import BDF
-    from pyNastran.bdf.case_control_deck import CaseControlDeck
+    from cpylog import SimpleLogger  # deferred: ~1.5 s to load, decks only
+    from pyNastran.bdf.bdf import BDF  # deferred: ~1.5 s to load, decks only
+    from pyNastran.bdf.case_control_deck import CaseControlDeck  # deferred: ~1.5 s to load, decks only
 
     bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
     ids, xyz = model.node_ids, model.xyz

@@ -52,6 +52,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import scipy.io
 
 from trussid._util.files import atomic_path
 from trussid.plid.data import (IOData, check_enough_samples, select_channels, unknown_name,
@@ -412,7 +413,6 @@ def _load_arrays(path: Path, source: str) -> dict:
         if path.suffix.lower() == ".npz":
             with np.load(path, allow_pickle=False) as z:
                 return {k: z[k] for k in z.files}
-        import scipy.io
 
         return {k: v for k, v in scipy.io.loadmat(path, squeeze_me=False).items()
                 if not k.startswith("__")}
@@ -752,8 +752,6 @@ def write_data(data: IOData, path) -> Path:
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **arrays)
             else:
-                import scipy.io
-
                 arrays["input_names"] = np.array(data.input_names, dtype=object)
                 arrays["output_names"] = np.array(data.output_names, dtype=object)
                 with open(tmp, "wb") as fh:

@@ -124,14 +124,28 @@ def report_markdown(s: DemoSummary) -> str:
         L += [f"![Bode overlay]({b})" for b in bodes]
         L += ["", f"![poles and zeros](poles_{n}.png)", "",
               f"![measured vs predicted](trace_{n}.png)", "",
-              "Poles in the FRF band (true -> identified):", "",
-              "| true f [Hz] | true damping | identified f [Hz] | identified damping |",
-              "| --- | --- | --- | --- |"]
+              "Poles in the FRF band (true -> identified), with the identified mode's 95 % "
+              "intervals (first-order propagation of the PLID pass's parameter covariance, "
+              "`plid.uncertainty`) and the MAC of the FE mode shape against the identified "
+              "one at the sensors (`plid.modal.mac`):", "",
+              "| true f [Hz] | true damping | identified f [Hz] | 95 % interval f [Hz] | "
+              "identified damping | 95 % interval damping | MAC |",
+              "| --- | --- | --- | --- | --- | --- | --- |"]
         lo, hi = st.frf_band
+        checks = {(round(c.true_frequency_hz, 9), round(c.frequency_hz, 9)): c
+                  for c in m.mode_checks}
         for r in m.poles:
             if r.true_frequency_hz is not None and lo <= r.true_frequency_hz <= hi:
+                c = (checks.get((round(r.true_frequency_hz, 9), round(r.frequency_hz, 9)))
+                     if r.frequency_hz is not None else None)
+                fi = c.frequency_ci95_hz if c else None
+                zi = c.damping_ratio_ci95 if c else None
                 L.append(f"| {r.true_frequency_hz:.2f} | {r.true_damping:.5f} | "
-                         f"{_f(r.frequency_hz)} | {_f(r.damping, '.5f')} |")
+                         f"{_f(r.frequency_hz)} | "
+                         f"{f'{fi[0]:.2f}-{fi[1]:.2f}' if fi else '-'} | "
+                         f"{_f(r.damping, '.5f')} | "
+                         f"{f'{zi[0]:.5f}-{zi[1]:.5f}' if zi else '-'} | "
+                         f"{_f(c.mac if c else None, '.3f')} |")
         L.append("")
     L += ["### Convergence", "", "![convergence](convergence.png)", "",
           "The top panel is the *mean-normalised* one-step ratio of each model's last PLID "
