@@ -68,14 +68,15 @@ def main() -> None:
 
     import control
 
-    from trussid.campaign.control import (control_study, report_markdown, summary, truths)
+    from trussid.campaign.control import (LoopSettings, control_study, report_markdown, summary,
+                                          truths)
     from trussid._util.jsonio import json_safe
     from trussid.campaign.demo import build_plant, demo_settings, identify_model, run_experiments
 
     load0 = os.getloadavg()
     sizes = {} if args.samples is None else {"n_identification": args.samples, "n_validation": args.samples}
     settings = demo_settings(quick=args.quick, simo_channels=(), **sizes)
-    tp = build_plant(settings)
+    tp = build_plant()
     rid, _ = run_experiments(tp, settings)["mimo"]
     d = rid.data
     fit, w_id, c_id = timed(identify_model, d.u, d.y, settings.mimo_order, d.dt,
@@ -85,7 +86,8 @@ def main() -> None:
     plants, w_tr, c_tr = timed(truths, stretch=args.truths is None)
     plants = plants[:args.truths]
     study, w_st, c_st = timed(control_study, model, d.u, d.y, K=fit.K, plants=plants,
-                              baselines=not args.no_baselines, progress=print)
+                              baselines=not args.no_baselines, settings=LoopSettings.for_lab(tp.lab),
+                              progress=print)
     load1 = os.getloadavg()
     t = study["timings_s"]
     kind = "quick (18 states)" if args.quick else "full (36 states)"

@@ -100,7 +100,7 @@ if args.exact:
     report = updating.update_walls(measured, nominal_tb, tbm=nominal_tbm, seed=args.seed)
     title = "exact frequencies (12 bending + 6 UDF modes)"
 else:
-    plant = testbed.testbed_plant(tbm=true_tbm, arrangement="bending", sensors="struts").discrete
+    plant = testbed.testbed_plant(true_tbm, arrangement="bending", sensors="struts").discrete
     fb = true_modes.frequencies_hz[first_bending]
     band = (0.8 * fb.min(), 1.25 * fb.max())  # around the first strut bending modes
     exp = plid.run_experiment(plant, args.n_samples, "white", rms=1.0, band=(30.0, 90.0),

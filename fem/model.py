@@ -12,6 +12,7 @@ Everything is SI: m, kg, s, N, Pa.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Iterable, Literal
 
@@ -439,6 +440,30 @@ class Model:
                                          dtype=np.int64 if k in ("ids", "nodes") else bool if k == "rod"
                                          else object if k == "labels" else float) for k in keys})
         return Beams(**{k: np.concatenate([c[k] for c in self._beams]) for k in keys})
+
+    def with_beam_sections(self, A, Iy, Iz, J) -> "Model":
+        """A copy of the model whose beams have the section properties ``A`` [m^2], ``Iy``,
+        ``Iz``, ``J`` [m^4] (arrays over the beams in :attr:`beams` order); everything else
+        is the same. For design sweeps that move sections without rebuilding a model.
+
+        Raises
+        ------
+        ModelError
+            If an array is not one finite value per beam.
+        """
+        b = self.beams
+        n = len(b.ids)
+        new = {k: np.asarray(v, dtype=float) for k, v in (("A", A), ("Iy", Iy), ("Iz", Iz), ("J", J))}
+        for k, v in new.items():
+            if v.shape != (n,) or not np.isfinite(v).all():
+                raise ModelError(f"with_beam_sections: {k} must be {n} finite values (one per beam), "
+                                 f"got shape {v.shape}")
+        out = copy.copy(self)
+        for key, value in vars(self).items():  # the copy's own lists: adding to one leaves the other
+            if isinstance(value, list):
+                setattr(out, key, list(value))
+        out._beams = [{**{k: getattr(b, k) for k in Beams.__dataclass_fields__}, **new}]
+        return out
 
     def add_point_masses(self, nodes, mass, inertia=None, offset=None) -> None:
         """Add point masses at node ids ``nodes``.

@@ -326,8 +326,8 @@ def _per_channel(value, count: int, what: str) -> np.ndarray:
 
 def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: str = "white",
                    rms=1.0, band=None, seed=None, u=None, snr_db=None, sensor_noise_rms=None,
-                   input_noise_rms=0.0, dac_bits=None, adc_bits=None, dac_full_scale=10.0,
-                   adc_full_scale=10.0, auto_range=4.0, input_names=None,
+                   input_noise_rms=0.0, dac_bits=None, adc_bits=None, dac_full_scale=None,
+                   adc_full_scale=None, auto_range=4.0, input_names=None,
                    output_names=None) -> Experiment:
     """Simulate an identification experiment on a discrete plant (see the module docstring).
 
@@ -351,7 +351,8 @@ def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: s
     dac_bits, adc_bits : int, optional
         Converter resolutions; None means no quantisation (and no clipping).
     dac_full_scale, adc_full_scale : float or array (per channel)
-        Converter ranges +-V. ``adc_full_scale="auto"`` ranges each output channel so that
+        Converter ranges +-V, required with ``dac_bits``/``adc_bits`` (a lab's numbers have
+        no default here: they come from the caller's lab). ``adc_full_scale="auto"`` ranges each output channel so that
         +-full scale is +-``auto_range`` times its measured RMS (as a lab sets amplifier
         gains; with 4, a Gaussian signal clips in 6e-5 of the samples and a 12-bit
         converter's quantisation noise is 65 dB below the signal).
@@ -370,6 +371,10 @@ def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: s
         raise DataError("the plant must be discrete-time (dt > 0); discretise it first")
     if snr_db is not None and sensor_noise_rms is not None:
         raise DataError("give either snr_db or sensor_noise_rms, not both")
+    for which, bits, full in (("dac", dac_bits, dac_full_scale), ("adc", adc_bits, adc_full_scale)):
+        if bits is not None and full is None:
+            raise DataError(f"{which}_bits={bits} needs {which}_full_scale, the converter's "
+                            "range +-V")
 
     require_stable(plant, "the plant", "a simulation of it diverges")
     fs = 1.0 / plant.dt

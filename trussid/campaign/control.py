@@ -69,10 +69,19 @@ def truths(tb=None, stretch: bool = False, progress=None) -> list:
 
 @dataclass(frozen=True)
 class LoopSettings:
-    """How a loop is exercised: the demo's excitation at the D/A, sensor noise, converters.
+    """How a loop is exercised: the lab's converters, the demo's excitation at the D/A,
+    sensor noise.
+
+    The converters have no default: they are the lab's (:meth:`for_lab`, from a
+    :class:`trussid.geometry.lab.LabSpec`: the testbed's ``tb.lab``, a plant's
+    ``TestbedPlant.lab`` or the lab recorded in a plant file).
 
     Attributes
     ----------
+    bits, full_scale : int, float
+        D/A and A/D resolution [-] and range +-``full_scale`` [V].
+    sample_rate : float
+        The converters' rate [Hz]; a plant sampled at another rate is refused.
     band : (float, float)
         Modes tabulated [Hz] (the issue's 40-450 Hz).
     excitation_rms : float
@@ -82,27 +91,43 @@ class LoopSettings:
         Sensor noise RMS at the A/D [V].
     n_samples : int
         Length of the time simulation (at the plant's rate).
-    bits, full_scale : int, float
-        Converters (12-bit, +-10 V).
     seed : int
     """
 
+    bits: int
+    full_scale: float
+    sample_rate: float
     band: tuple = (40.0, 450.0)
     excitation_rms: float = 2.5
     excitation_band_hz: float = 400.0
     noise_rms: float = 0.0245
     n_samples: int = 8000
-    bits: int = 12
-    full_scale: float = 10.0
     seed: int = 14
 
+    @classmethod
+    def for_lab(cls, lab, **overrides) -> "LoopSettings":
+        """The settings with ``lab``'s converters (a :class:`~trussid.geometry.lab.LabSpec`);
+        ``overrides`` set the other fields."""
+        return cls(bits=lab.daq.bits, full_scale=lab.daq.full_scale,
+                   sample_rate=lab.daq.sample_rate, **overrides)
 
-def evaluate_loop(plant, controller, settings: LoopSettings = LoopSettings(),
+
+def evaluate_loop(plant, controller, settings: LoopSettings,
                   margins: bool = True, simulate: bool = True) -> dict:
-    """Every figure of merit of ``controller`` on ``plant`` (one row of the tables)."""
+    """Every figure of merit of ``controller`` on ``plant`` (one row of the tables).
+
+    Raises
+    ------
+    ControlError
+        If ``plant`` is not sampled at the converters' rate ``settings.sample_rate``.
+    """
+    from trussid.lqg.errors import ControlError
     from trussid.lqg.evaluate import damping_table, disk_margins, h2_norm, simulate_loop
     from trussid.plid.experiment import excitation
 
+    if not np.isclose(1.0 / plant.dt, settings.sample_rate, rtol=1e-9):
+        raise ControlError(f"the plant is sampled at {1.0 / plant.dt:g} Hz but the lab's "
+                           f"converters run at {settings.sample_rate:g} Hz")
     t0 = time.perf_counter()
     tab = damping_table(plant, controller, band=settings.band)
     rows = tab["rows"]
@@ -158,6 +183,10 @@ def evaluate_loop(plant, controller, settings: LoopSettings = LoopSettings(),
         out["dac_clipped"] = sim["dac_clipped"]
         out["adc_clipped"] = sim["adc_clipped"]
         out["y_rms_closed"] = np.sqrt(np.mean(sim["y"][skip:] ** 2, axis=0)).tolist()
+        # what the simulated converters were, from the simulation itself
+        out["converters"] = {"sample_rate_hz": 1.0 / plant.dt, "dac_lsb_v": sim["dac_lsb"],
+                             "adc_lsb_v": sim["adc_lsb"], "bits": settings.bits,
+                             "full_scale_v": settings.full_scale}
     out["seconds"] = time.perf_counter() - t0
     return out
 
@@ -223,7 +252,7 @@ def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band
     return des, base, timings
 
 
-def robustness(controller, plants, baselines=None, settings: LoopSettings = LoopSettings(),
+def robustness(controller, plants, baselines, settings: LoopSettings,
                progress=None) -> dict:
     """``controller`` (and each baseline) on every plant of ``plants`` (the first nominal).
 
@@ -264,10 +293,11 @@ def robustness(controller, plants, baselines=None, settings: LoopSettings = Loop
 
 def control_study(model, u, y, *, K=None, target_damping: float = 0.07, band=None,
                   form: str = "predictor", stretch: bool = False, baselines: bool = True,
-                  settings: LoopSettings = LoopSettings(), tb=None, plants=None,
+                  settings: LoopSettings, tb=None, plants=None,
                   progress=None) -> dict:
     """Design from the identified ``model`` and record ``(u, y)``, evaluate on the truths
-    (:func:`truths`, or ``plants``: ``[(label, plant)]``, the first nominal).
+    (:func:`truths` of ``tb``, or ``plants``: ``[(label, plant)]``, the first nominal)
+    with the converters of ``settings`` (:meth:`LoopSettings.for_lab`).
 
     Returns
     -------
@@ -444,7 +474,8 @@ def report_markdown(study: dict, heading: str = "##") -> str:
           "closed- to open-loop damping among the other modes in 40-450 Hz. Disk margins "
           "(balanced, at the plant input): MIMO (all channels at once, mu) and loop at a "
           "time. H2: D/A disturbance to accelerometers, closed over open loop. Command: "
-          "RMS per channel in a 12-bit closed-loop simulation under the demo's excitation "
+          f"RMS per channel in a {study['settings'].bits}-bit closed-loop simulation "
+          "under the demo's excitation "
           f"({study['settings'].excitation_rms:g} V RMS white 0-"
           f"{study['settings'].excitation_band_hz:g} Hz at each D/A) plus sensor noise "
           f"({1000 * study['settings'].noise_rms:.1f} mV RMS).", "",
@@ -517,10 +548,11 @@ def write_report(out, study: dict) -> list:
     return ["report.md", "summary.json", *figs]
 
 
-def demo_section(model, K, data, truth, quick: bool, progress=None):
+def demo_section(model, K, data, truth, quick: bool, settings: LoopSettings, tb,
+                 progress=None):
     """``trussid demo``'s hook: the LQG from its MIMO model and identification record on
-    the FE truth (and, unless ``quick``, on the perturbed truths with the baselines beside
-    it).
+    the FE truth (and, unless ``quick``, on the perturbed truths of testbed ``tb`` with the
+    baselines beside it), exercised with ``settings`` (the demo's lab and excitation).
 
     Returns ``(markdown, {file name: Figure}, summary dict)`` (:func:`report_section`).
     """
@@ -533,7 +565,7 @@ def demo_section(model, K, data, truth, quick: bool, progress=None):
     plants = [("nominal", truth)] if quick else None
     try:
         study = control_study(m, data.u, data.y, K=K, plants=plants, baselines=not quick,
-                              progress=progress)
+                              settings=settings, tb=tb, progress=progress)
     except ControlError as exc:  # e.g. a model too small to hold a lightly damped mode
         md = f"## Closed loop: active damping\n\nNo controller designed: {exc}.\n"
         return md, {}, {"error": str(exc)}

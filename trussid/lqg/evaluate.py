@@ -316,8 +316,8 @@ def disk_margins(plant, controller, f=None) -> dict:
 # --------------------------------------------------------------------------- time domain
 
 
-def simulate_loop(plant, controller, d, noise_rms, *, bits: int = 12, dac_full_scale=10.0,
-                  adc_full_scale=10.0, seed: int = 0) -> dict:
+def simulate_loop(plant, controller, d, noise_rms, *, bits: int, dac_full_scale,
+                  adc_full_scale, seed: int = 0) -> dict:
     """Closed loop in the time domain with quantising, clipping converters and sensor noise.
 
     ``y_meas = ADC(C xp + n)``, ``u = controller(y_meas)``, the D/A sends ``DAC(u + d)``.
@@ -328,12 +328,17 @@ def simulate_loop(plant, controller, d, noise_rms, *, bits: int = 12, dac_full_s
         Disturbance added to the command at the D/A [V] (e.g. the demo's excitation).
     noise_rms : float or (p,) float
         White sensor noise RMS [V].
+    bits : int
+        D/A and A/D resolution (the lab's; no default).
+    dac_full_scale, adc_full_scale : float or per-channel array
+        Converter ranges +-V (the lab's; no default).
 
     Returns
     -------
     dict
         ``y`` (N, p) measured, ``u`` (N, m) commands, ``dac`` (N, m) what the D/A sent,
-        ``u_rms`` (m,), ``dac_clipped`` and ``adc_clipped`` sample counts per channel.
+        ``u_rms`` (m,), ``dac_clipped`` and ``adc_clipped`` sample counts per channel,
+        ``dac_lsb`` and ``adc_lsb`` the converters' LSB per channel [V].
     """
     iu, iy = _check_pair(plant, controller)
     Ap, Bp, Cp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C))
@@ -367,4 +372,4 @@ def simulate_loop(plant, controller, d, noise_rms, *, bits: int = 12, dac_full_s
         Y[k], U[k], V[k] = ym, uk, v
     return {"y": Y, "u": U, "dac": V, "u_rms": np.sqrt(np.mean(U**2, axis=0)),
             "y_rms": np.sqrt(np.mean(Y**2, axis=0)), "dac_clipped": clip_d.tolist(),
-            "adc_clipped": clip_a.tolist()}
+            "adc_clipped": clip_a.tolist(), "dac_lsb": lsb_d.tolist(), "adc_lsb": lsb_a.tolist()}

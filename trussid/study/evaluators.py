@@ -4,7 +4,7 @@ Each evaluator is a plain object with
 
 - ``parameters``: the parameters it takes, each with a check of one value;
 - ``options``: its options and their defaults;
-- ``check(spec, where)``: a :class:`~trussid.study.spec.StudyError` naming the first bad
+- ``check(spec, where)``: a :class:`~trussid.study.errors.StudyError` naming the first bad
   parameter, value or option;
 - ``columns(options)``: its output columns and their Arrow types (fixed per study, so that
   every chunk of the result dataset has the same schema, failed rows included);
@@ -23,13 +23,13 @@ import functools
 import json
 import math
 import warnings
-from types import SimpleNamespace
+from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
 
 from trussid.plid.frf import frequency_response
-from trussid.study.spec import StudyError
+from trussid.study.errors import StudyError
 
 WALLS = tuple(f"wall{i}" for i in range(6))
 
@@ -134,24 +134,29 @@ def _walls(ctx, params):
     return w
 
 
-class _WalledModel:
-    """A testbed model seen at other walls: its beams' tube properties moved, all else shared.
+@dataclass(frozen=True)
+class WallContext:
+    """What every point of a wall study shares: the testbed model at the reference walls
+    and its wall basis (:func:`trussid.testbed.model.wall_basis`)."""
 
-    Every strut element's ``A``, ``Iy``, ``Iz``, ``J`` is the tube's share plus a constant
-    (adapter block, wafers; :mod:`trussid.testbed.model`), so moving the tube's ``A_t``,
-    ``I_t`` (``J_t = 2 I_t``) by ``dA``, ``dI`` gives the model built at the new walls
-    without rebuilding it (0.8 s) — what labelling each design needs.
-    """
+    tbm: object
+    basis: object
 
-    def __init__(self, model, beams):
-        self._model, self._beams = model, beams
 
-    @property
-    def beams(self):
-        return self._beams
+@dataclass(frozen=True)
+class TestbedContext:
+    """What every point of a plant study shares: the testbed parameters."""
 
-    def __getattr__(self, key):
-        return getattr(self._model, key)
+    __test__ = False
+
+    tb: object
+
+
+@dataclass(frozen=True)
+class CaseContext:
+    """What every point of a fit study shares: the benchmark plant case."""
+
+    case: object
 
 
 class ModesEvaluator(Evaluator):
@@ -190,10 +195,7 @@ class ModesEvaluator(Evaluator):
         from trussid.testbed.model import build_testbed, wall_basis
 
         tbm = build_testbed(_testbed_of(options))
-        basis = wall_basis(tbm)
-        b = tbm.model.beams
-        strut = tbm.map.strut_of_element(b.ids)
-        return SimpleNamespace(tbm=tbm, basis=basis, beams=b, strut=strut)
+        return WallContext(tbm=tbm, basis=wall_basis(tbm))
 
     def modes(self, ctx, walls, n):
         from trussid.testbed.model import wall_modes
@@ -202,26 +204,18 @@ class ModesEvaluator(Evaluator):
 
     def point(self, ctx, params, options):
         from trussid.testbed.labels import label_testbed_modes
-        from trussid.testbed.model import tube_properties
+        from trussid.testbed.model import design_at_walls
 
         opts = self.resolved(options)
         w = ctx.basis.check_walls(_walls(ctx, params))
-        f, X = self.modes(ctx, w, opts["n_modes"])
-        out = {f"f{k + 1}": float(v) for k, v in enumerate(f)}
-        if opts["labels"]:
-            A0, I0 = tube_properties(ctx.basis.r_out, ctx.basis.walls_ref)
-            A1, I1 = tube_properties(ctx.basis.r_out, w)
-            b, s = ctx.beams, ctx.strut
-            on = s >= 0
-            dA, dI = np.zeros(len(s)), np.zeros(len(s))
-            dA[on], dI[on] = (A1 - A0)[s[on]], (I1 - I0)[s[on]]
-            import dataclasses
-
-            beams = dataclasses.replace(b, A=b.A + dA, Iy=b.Iy + dI, Iz=b.Iz + dI, J=b.J + 2 * dI)
-            tbm = dataclasses.replace(ctx.tbm, model=_WalledModel(ctx.tbm.model, beams))
-            modes = SimpleNamespace(frequencies_hz=f, shapes_full=ctx.basis.system.T @ X)
-            labels = label_testbed_modes(tbm, modes).labels
-            out.update({f"label{k + 1}": lab for k, lab in enumerate(labels)})
+        if not opts["labels"]:
+            f, _ = self.modes(ctx, w, opts["n_modes"])
+            return {f"f{k + 1}": float(v) for k, v in enumerate(f)}
+        # the design at these walls (a real model and its modes) for the labels
+        design, modes = design_at_walls(ctx.tbm, ctx.basis, w, opts["n_modes"])
+        out = {f"f{k + 1}": float(v) for k, v in enumerate(modes.frequencies_hz)}
+        labels = label_testbed_modes(design, modes).labels
+        out.update({f"label{k + 1}": lab for k, lab in enumerate(labels)})
         return out
 
 
@@ -280,7 +274,7 @@ class PlantEvaluator(Evaluator):
         return [(f"{k}_ch{c}", pa.float64()) for c in (1, 2, 3) for k in ("peak_gain", "peak_hz", "h2")]
 
     def build_context(self, options):
-        return SimpleNamespace(tb=_testbed_of(options))
+        return TestbedContext(tb=_testbed_of(options))
 
     def point(self, ctx, params, options):
         import scipy.linalg as la
@@ -395,7 +389,7 @@ class IdentifyEvaluator(Evaluator):
     def build_context(self, options):
         from trussid.study.plants import PLANTS
 
-        return SimpleNamespace(case=PLANTS[options["plant"]]())
+        return CaseContext(case=PLANTS[options["plant"]]())
 
     def point(self, ctx, params, options):
         import time

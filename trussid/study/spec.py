@@ -39,13 +39,10 @@ from pathlib import Path
 
 import numpy as np
 
-from trussid._util.errors import UserError
+from trussid.study.errors import StudyError
+from trussid.study.evaluators import get_evaluator
 
 SAMPLERS = ("grid", "lhs", "random", "list")
-
-
-class StudyError(UserError):
-    """A mistake in a study specification or its output directory; names the item."""
 
 
 @dataclass(frozen=True)
@@ -177,8 +174,6 @@ def _axis(name: str, raw, where: str) -> Axis:
 
 def spec_from_dict(d: dict, where: str = "spec") -> StudySpec:
     """Build and validate a :class:`StudySpec` from the TOML layout (module docstring)."""
-    from trussid.study.evaluators import get_evaluator
-
     if not isinstance(d, dict):
         raise StudyError(f"{where}: a study must be a table")
     unknown = set(d) - {"study", "evaluate", "sample", "parameters"}

@@ -58,15 +58,15 @@ def run(args) -> int:
           f"beside it)")
     print(f"{'model':<10} {'kind':<5} {'states':>6} {'SPE [dB]':>9} {'per output [dB]':>17} "
           f"{'FRF max':>8} {'FRF RMS':>8} {'seconds':>8}")
-    for m in summary["models"]:
+    for m in summary.models:
         def f(x, w=8, d=2):
             return f"{x:{w}.{d}f}" if x is not None else f"{'-':>{w}}"
-        print(f"{m['name']:<10} {m['kind']:<5} {m['states']:>6} "
-              f"{f(m['signal_to_prediction_error_db'], 9)} "
-              f"{', '.join(f'{v:.1f}' for v in m['signal_to_prediction_error_db_per_output']):>17} "
-              f"{f(m['frf_max_error_db'])} {f(m['frf_rms_error_db'])} {f(m['seconds'], 8, 1)}")
-    lo, hi = summary["settings"]["frf_band"]
+        print(f"{m.name:<10} {m.kind:<5} {m.states:>6} "
+              f"{f(m.signal_to_prediction_error_db, 9)} "
+              f"{', '.join(f'{v:.1f}' for v in m.signal_to_prediction_error_db_per_output):>17} "
+              f"{f(m.frf_max_error_db)} {f(m.frf_rms_error_db)} {f(m.seconds, 8, 1)}")
+    lo, hi = summary.settings.frf_band
     print(f"(SPE: one-step signal-to-prediction-error ratio on validation data; FRF errors "
           f"in dB against the true plant over {lo:g}-{hi:g} Hz)")
-    print(f"total {summary['timings_s']['total']:.1f} s", file=sys.stdout)
+    print(f"total {summary.timings_s['total']:.1f} s", file=sys.stdout)
     return 0
