@@ -16,6 +16,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trussid._util.files import atomic_path
+from trussid._util.jsonio import json_safe
+from trussid.geometry.spec import Testbed
+from trussid.lqg.baselines import decentralised, tune_baseline
+from trussid.lqg.design import design_lqg
+from trussid.lqg.errors import ControlError
+from trussid.lqg.evaluate import (closed_loop, damping_table, disk_margins, frequency_response, h2_norm,
+                                  simulate_loop)
+from trussid.lqg.modal import freq_damping
+from trussid.plid.experiment import excitation
+from trussid.plots import bode_figure, damping_map_figure, decay_figure, save_figure, sigma_figure
+from trussid.testbed.plant import testbed_plant
+
 #: (label, Testbed.replace() changes as factors of the nominal value or absolute values)
 PERTURBATIONS = (
     ("nominal", {}),
@@ -55,9 +68,6 @@ def perturbed_testbed(tb, changes: dict):
 
 def truths(tb=None, stretch: bool = False, progress=None) -> list:
     """``[(label, discrete plant)]``: the nominal truth then each perturbed one."""
-    from trussid.geometry.spec import Testbed
-    from trussid.testbed.plant import testbed_plant
-
     tb = tb or Testbed()
     out = []
     for label, changes in PERTURBATIONS + (STRETCH if stretch else ()):
@@ -121,10 +131,6 @@ def evaluate_loop(plant, controller, settings: LoopSettings,
     ControlError
         If ``plant`` is not sampled at the converters' rate ``settings.sample_rate``.
     """
-    from trussid.lqg.errors import ControlError
-    from trussid.lqg.evaluate import damping_table, disk_margins, h2_norm, simulate_loop
-    from trussid.plid.experiment import excitation
-
     if not np.isclose(1.0 / plant.dt, settings.sample_rate, rtol=1e-9):
         raise ControlError(f"the plant is sampled at {1.0 / plant.dt:g} Hz but the lab's "
                            f"converters run at {settings.sample_rate:g} Hz")
@@ -228,9 +234,6 @@ def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band
         ``{kind: {"gain", "band", "tuning"}}``.
     timings : dict
     """
-    from trussid.lqg.baselines import tune_baseline
-    from trussid.lqg.design import design_lqg
-
     say = progress or (lambda msg: None)
     timings = {}
     t0 = time.perf_counter()
@@ -262,8 +265,6 @@ def robustness(controller, plants, baselines, settings: LoopSettings,
         ``rows`` {label: :func:`evaluate_loop`}, ``checks`` {label: :func:`check`},
         ``baselines`` {kind: {gain, band, rows}}, ``timings_s``, ``nominal``.
     """
-    from trussid.lqg.baselines import decentralised
-
     say = progress or (lambda msg: None)
     rows, checks, timings = {}, {}, {}
     t0 = time.perf_counter()
@@ -359,11 +360,6 @@ def figures(study: dict, prefix: str = "") -> dict:
     """The nominal loop's figures: ``{file name: Figure}`` (sigma and Bode of the D/A
     disturbance to the accelerometers, impulse decay, damping map)."""
     import control
-
-    from trussid.lqg.baselines import decentralised
-    from trussid.lqg.evaluate import closed_loop, frequency_response
-    from trussid.lqg.modal import freq_damping
-    from trussid.plots import bode_figure, damping_map_figure, decay_figure, sigma_figure
 
     label, plant = study["plants"][0]
     ctrl = study["controller"]
@@ -532,10 +528,6 @@ def write_report(out, study: dict) -> list:
     import json
     from pathlib import Path
 
-    from trussid._util.files import atomic_path
-    from trussid._util.jsonio import json_safe
-    from trussid.plots import save_figure
-
     out = Path(out)
     md, figs, summ = report_section(study, prefix="", heading="##")
     out.mkdir(parents=True, exist_ok=True)
@@ -560,8 +552,6 @@ def demo_section(model, K, data, truth, quick: bool, settings: LoopSettings, tb,
 
     m = control.ss(model.A, model.B, model.C, model.D, model.dt,
                    inputs=list(data.input_names), outputs=list(data.output_names))
-    from trussid.lqg.errors import ControlError
-
     plants = [("nominal", truth)] if quick else None
     try:
         study = control_study(m, data.u, data.y, K=K, plants=plants, baselines=not quick,

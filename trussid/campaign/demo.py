@@ -57,13 +57,27 @@ from pathlib import Path
 
 import numpy as np
 
-from trussid._util.files import atomic_path
+from trussid import plots
+from trussid._util.errors import UserError
+from trussid._util.files import atomic_directory, atomic_path
 from trussid._util.jsonio import json_safe
+from trussid.campaign.control import LoopSettings, demo_section
 from trussid.campaign.report import report_markdown
 from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
                                       DemoSummary, ExperimentRow, ModeAudit, ModelSummary,
                                       PlantSummary, Provenance, ReportFiles)
 from trussid.geometry.lab import G0, lab_record
+from trussid.plid.datafile import with_channels, write_data
+from trussid.plid.estimator import PLID, PLIDWarning
+from trussid.plid.evaluate import compare
+from trussid.plid.experiment import excitation, run_experiment, simulate
+from trussid.plid.frf import frequency_response, h1
+from trussid.plid.metrics import choose_predictor
+from trussid.plid.modelfile import save_model
+from trussid.plid.multipass import Stabilised, default_via, fit_model
+from trussid.plid.stability import stabilise
+from trussid.plots import save_figure
+from trussid.testbed.plant import testbed_plant
 
 
 
@@ -151,8 +165,6 @@ def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
 def build_plant(tb=None):
     """The plant of testbed ``tb`` (default: the default testbed) at its lab's sample rate,
     with its lab chain (:class:`trussid.testbed.plant.TestbedPlant`)."""
-    from trussid.testbed.plant import testbed_plant
-
     return testbed_plant(tb)
 
 
@@ -194,8 +206,6 @@ def conditioner_steps(y_rms, full_scale: float, target: float, steps=(1.0, 2.0, 
 
 def drive(settings: DemoSettings, plant, n: int, channels, seed: int) -> np.ndarray:
     """The excitation of the driven ``channels`` (others zero), at the plant's own rate."""
-    from trussid.plid.experiment import excitation
-
     u = np.zeros((n, plant.ninputs))
     u[:, list(channels)] = excitation(settings.excitation, n, len(channels), 1.0 / plant.dt,
                                       settings.excitation_rms, settings.excitation_band, seed)
@@ -206,8 +216,6 @@ def range_conditioners(plant, settings: DemoSettings, channels, seed: int, n_sam
                        noise_v: float, full_scale: float) -> list:
     """Conditioner steps from a noise-free trial run of the experiment (its own seed), for an
     A/D range of +-``full_scale`` [V]."""
-    from trussid.plid.experiment import simulate
-
     trial = drive(settings, plant, n_samples, channels, seed)
     rms = np.sqrt(np.mean(simulate(plant, trial) ** 2, axis=0) + noise_v**2)
     return conditioner_steps(rms, full_scale, settings.range_target, settings.gain_steps)
@@ -217,8 +225,6 @@ def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels
                 n_samples: int, noise_v: float, steps, lab) -> Record:
     """One record with the conditioners at ``steps`` (see the module docstring), through the
     converters of ``lab`` (:class:`trussid.geometry.lab.LabSpec`)."""
-    from trussid.plid.experiment import run_experiment
-
     full_scale, bits = lab.daq.full_scale, lab.daq.bits
     adc_fs = [full_scale / g for g in steps]
     u = drive(settings, plant, n_samples, channels, seed)
@@ -287,10 +293,6 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     ``benchmarks/results/plid_thesis.md``. The parameter history of the winning PLID pass is
     kept for the convergence plot.
     """
-    from trussid.plid.estimator import PLIDWarning
-    from trussid.plid.metrics import choose_predictor
-    from trussid.plid.multipass import Stabilised, default_via, fit_model
-
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         # The candidates' PLID passes warn when a pass loses positive definiteness; the
@@ -309,8 +311,6 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         # No stable candidate (none was measured on the testbed): reflect the poles outside
         # the unit circle in (plid.stability keeps the magnitude response) so that the model
         # can be simulated, and choose its predictor afresh.
-        from trussid.plid.stability import stabilise
-
         st = stabilise(model)
         model = st.model
         stab = Stabilised(bool(st.applied), int(np.size(st.reflected)))
@@ -334,8 +334,6 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
 
 
 def _history_of_last_pass(idn, u, y, order, dt):
-    from trussid.plid.estimator import PLID, PLIDWarning
-
     last = (idn.provenance.passes or [{}])[-1]
     est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
                Q_theta=last.get("Q_theta", 0.0), prior=idn.prior,
@@ -355,8 +353,6 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
     """All metrics of one model, by :func:`trussid.plid.evaluate.compare` (as ``trussid
     compare``): validation prediction and simulation, FRF errors against the true plant and
     the H1 estimate, matched poles."""
-    from trussid.plid.evaluate import compare
-
     model = fit.model
     val = rval.data
     cols = list(rid.channels)
@@ -531,8 +527,6 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> Provenan
 
 def _h1_error(h1_est, truth, keep) -> dict:
     """Magnitude/phase error of the H1 estimate against the true plant at its own frequencies."""
-    from trussid.plid.frf import frequency_response
-
     H, H_ref = h1_est.H[keep], frequency_response(truth, h1_est.f[keep])
     with np.errstate(divide="ignore", invalid="ignore"):
         mag = 20 * np.log10(np.abs(H)) - 20 * np.log10(np.abs(H_ref))
@@ -543,8 +537,6 @@ def _h1_error(h1_est, truth, keep) -> dict:
 
 def h1_estimate(record: Record, nperseg: int):
     """H1 estimate from an identification record (driven channels only)."""
-    from trussid.plid.frf import h1
-
     d = record.data
     return h1(d.u[:, list(record.channels)], d.y, d.fs, nperseg=nperseg)
 
@@ -572,9 +564,6 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
 def write_files(out: Path, records: dict, fits: dict, truth, lab) -> ReportFiles:
     """The records (driven channels only) and the models as data and model files; the true
     plant's file records its ``lab`` (:func:`trussid.geometry.lab.lab_record`)."""
-    from trussid.plid.datafile import with_channels, write_data
-    from trussid.plid.modelfile import save_model
-
     files = ReportFiles()
     for name, (rid, rval) in records.items():
         for rec in (rid, rval):
@@ -598,8 +587,6 @@ def write_files(out: Path, records: dict, fits: dict, truth, lab) -> ReportFiles
 def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
                   settings: DemoSettings) -> list:
     """Bode overlays, pole maps, traces and the convergence plot; their file names."""
-    from trussid import plots
-
     written = []
 
     def save(fig, fname):
@@ -655,9 +642,6 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     DemoSummary
         The summary (written as ``summary.json`` and ``report.md``).
     """
-    from trussid._util.errors import UserError
-    from trussid._util.files import atomic_directory
-
     settings = settings or demo_settings()
     say = progress or (lambda msg: None)
     out = Path(out)
@@ -704,8 +688,6 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
     control = None
     if "mimo" in records:  # close the loop on the MIMO model (issue 14)
-        from trussid.campaign.control import LoopSettings, demo_section
-
         t0 = time.perf_counter()
         say("      closing the loop: LQG from the MIMO model, on the FE truths ...")
         # the plant's own lab and the demo's excitation at the D/A
@@ -732,8 +714,6 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
     files = write_files(out, records, fits, truth, tp.lab)
     files.figures = write_figures(out, records, fits, h1s, truth, settings)
     if control is not None:
-        from trussid.plots import save_figure
-
         for fname, fig in control[1].items():
             save_figure(fig, out / fname)
         files.figures += list(control[1])
