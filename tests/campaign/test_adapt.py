@@ -199,3 +199,15 @@ def test_acceptance_3_disk_margin_at_least_4_db(report):
     alpha = 1.0 / np.linalg.norm(S - eye / 2, ord=2, axis=(1, 2)).max()
     gm = 20 * np.log10((1 + alpha / 2) / (1 - alpha / 2)) if alpha < 2 else np.inf
     assert gm >= 4.0, gm
+
+
+def test_adapt_on_a_deck_is_one_line_on_stderr(tmp_path, capsys):
+    from trussid.cli import main
+
+    deck = tmp_path / "frame.bdf"
+    deck.write_text("BEGIN BULK\nENDDATA\n")
+    code = main(["demo", str(deck), "--io", str(tmp_path / "io.toml"), "--adapt",
+                 "--out", str(tmp_path / "r")])
+    err = capsys.readouterr().err
+    assert code == 2 and "--adapt" in err and "deck" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "r").exists()

@@ -86,6 +86,7 @@ def test_a_stabilised_winner_reports_the_poles_reflected_in_itself(monkeypatch):
         innovations = np.zeros((10, 1))
         form = "direct"
         finite = True
+        theta_cov = None
 
     Result.model = high
     prov = Provenance(chosen="via 4, reduced, stabilised",
@@ -124,6 +125,15 @@ def test_summary_lists_every_model_with_the_required_fields(report):
         assert matched, "no identified pole matched a true one"
         for p in m["poles"]:
             assert POLE_KEYS <= set(p)
+        # every matched pole: the MAC of the FE shape against the identified one at the
+        # sensors, and the identified mode's 95 % intervals around its estimate
+        assert len(m["mode_checks"]) == len(matched)
+        for c in m["mode_checks"]:
+            assert 0.0 <= c["mac"] <= 1.0 + 1e-12
+            if c.get("frequency_ci95_hz"):
+                lo, hi = c["frequency_ci95_hz"]
+                assert lo <= c["frequency_hz"] <= hi
+        assert max(c["mac"] for c in m["mode_checks"]) > 0.9
 
 
 @pytest.mark.slow

@@ -20,14 +20,24 @@ def report_markdown(s: DemoSummary) -> str:
     included (attributes of the typed summary only: a renamed field fails here)."""
     # Long: a report template, read best top to bottom in the order of the report.
     st, pl = s.settings, s.plant
-    L = ["# trussid demo: PLID on the simulated testbed", ""]
+    testbed = pl.structure == "the default testbed"
+    L = ["# trussid demo: PLID on the simulated " + ("testbed" if testbed else "structure"), ""]
     L += provenance_lines(s.provenance)
     L += [f"Run: {'quick' if st.quick else 'full'}; total {s.timings_s['total']:.1f} s "
           f"(plant {s.timings_s['plant']:.1f} s, experiments "
           f"{s.timings_s['experiments']:.1f} s, identification "
           f"{s.timings_s['identification']:.1f} s, evaluation "
           f"{s.timings_s['evaluation']:.1f} s).", ""]
-    L += ["## Plant", "",
+    if not testbed:
+        L += ["## Plant", "",
+              f"{pl.structure[0].upper() + pl.structure[1:]}, {pl.modes} modes below Nyquist, "
+              f"modal damping {100 * pl.modal_damping:.2f} %; discrete plant of {pl.states} "
+              f"states, {len(pl.inputs)} commands ({', '.join(pl.inputs)}) to "
+              f"{len(pl.outputs)} sensors ({', '.join(pl.outputs)}) at "
+              f"{pl.sample_rate_hz:g} Hz, in the IO file's units; {pl.converter_bits}-bit "
+              f"converters, +-{pl.converter_full_scale_v:g} units (lab: {pl.lab_source}); "
+              "sensor noise 60 dB under each output in the all-channel record.", ""]
+    L += [] if not testbed else ["## Plant", "",
           f"Default testbed, {pl.modes} modes below Nyquist, modal damping "
           f"{100 * pl.modal_damping:.2f} %; discrete plant of {pl.states} states, "
           f"{len(pl.inputs)} D/A channels ({', '.join(pl.inputs)}) to "
@@ -114,14 +124,28 @@ def report_markdown(s: DemoSummary) -> str:
         L += [f"![Bode overlay]({b})" for b in bodes]
         L += ["", f"![poles and zeros](poles_{n}.png)", "",
               f"![measured vs predicted](trace_{n}.png)", "",
-              "Poles in the FRF band (true -> identified):", "",
-              "| true f [Hz] | true damping | identified f [Hz] | identified damping |",
-              "| --- | --- | --- | --- |"]
+              "Poles in the FRF band (true -> identified), with the identified mode's 95 % "
+              "intervals (first-order propagation of the PLID pass's parameter covariance, "
+              "`plid.uncertainty`) and the MAC of the FE mode shape against the identified "
+              "one at the sensors (`plid.modal.mac`):", "",
+              "| true f [Hz] | true damping | identified f [Hz] | 95 % interval f [Hz] | "
+              "identified damping | 95 % interval damping | MAC |",
+              "| --- | --- | --- | --- | --- | --- | --- |"]
         lo, hi = st.frf_band
+        checks = {(round(c.true_frequency_hz, 9), round(c.frequency_hz, 9)): c
+                  for c in m.mode_checks}
         for r in m.poles:
             if r.true_frequency_hz is not None and lo <= r.true_frequency_hz <= hi:
+                c = (checks.get((round(r.true_frequency_hz, 9), round(r.frequency_hz, 9)))
+                     if r.frequency_hz is not None else None)
+                fi = c.frequency_ci95_hz if c else None
+                zi = c.damping_ratio_ci95 if c else None
                 L.append(f"| {r.true_frequency_hz:.2f} | {r.true_damping:.5f} | "
-                         f"{_f(r.frequency_hz)} | {_f(r.damping, '.5f')} |")
+                         f"{_f(r.frequency_hz)} | "
+                         f"{f'{fi[0]:.2f}-{fi[1]:.2f}' if fi else '-'} | "
+                         f"{_f(r.damping, '.5f')} | "
+                         f"{f'{zi[0]:.5f}-{zi[1]:.5f}' if zi else '-'} | "
+                         f"{_f(c.mac if c else None, '.3f')} |")
         L.append("")
     L += ["### Convergence", "", "![convergence](convergence.png)", "",
           "The top panel is the *mean-normalised* one-step ratio of each model's last PLID "

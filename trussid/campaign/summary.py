@@ -55,6 +55,8 @@ class PlantSummary:
     sensor_noise_g_rms: float
     sensor_noise_v_rms: float
     lab: LabSpec                  # the lab the plant and its records were made in
+    structure: str = "the default testbed"  # or "deck X.bdf with io.toml"
+    lab_source: str = ""          # where a deck's lab came from
 
 
 @dataclass(frozen=True)
@@ -150,14 +152,28 @@ class ModelSummary:
     seconds: float
     method: str
     unstable_poles: int
-    stabilised: Stabilised
-    poles: list                   # matched pole rows (plid.evaluate.compare)
+    stabilised: Stabilised        # poles reflected into the unit circle, if any
+    poles: list                   # of trussid.plid.metrics.PoleMatch (plid.evaluate.compare)
     poles_in_band_matched: int
     poles_in_band_true: int
     validation_output_rms_v: list
     h1_coherence: dict
     modes_check: ModeAudit
     identification: dict          # the identification's provenance (JSON-safe)
+    mode_checks: list = field(default_factory=list)  # ModeCheck per matched pole
+
+
+@dataclass(frozen=True)
+class ModeCheck:
+    """A matched true (FE) and identified mode: the identified mode's 95 % intervals
+    (:mod:`trussid.plid.uncertainty`; None without one) and the MAC of the two mode shapes
+    at the sensors (:func:`trussid.plid.modal.mac`)."""
+
+    true_frequency_hz: float
+    frequency_hz: float
+    mac: float
+    frequency_ci95_hz: list | None = None
+    damping_ratio_ci95: list | None = None
 
 
 @dataclass
