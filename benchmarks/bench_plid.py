@@ -168,7 +168,7 @@ def accuracy_case(name, m, n_samples, seed, plant_seed, log=print):
             ident = identify(u, y, ORDER, dt, start=start)
         sec = time.perf_counter() - t0
         r = measure_all(ident.model, case, val, sec,
-                    {"prior_block_rows": ident.info.get("subspace", {}).get("block_rows")})
+                    {"prior_block_rows": (ident.provenance.subspace or {}).get("block_rows")})
         key = "PLID default (subspace prior)" if start == "subspace" else "PLID scratch"
         out["methods"][key] = r
         log(f"  {key}: max {r['max_db']:.4f} rms {r['rms_db']:.5f} sim {r['sim_db']} "

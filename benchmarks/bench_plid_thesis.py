@@ -61,11 +61,11 @@ def measure(model, case, val, seconds, extra=None, K=None):
                 band=BAND)
     fe, de = [], []
     for r in c.poles:
-        tf = r["true_frequency_hz"]
-        if tf is None or r["frequency_hz"] is None or not 30 < tf < 400:
+        tf = r.true_frequency_hz
+        if not r.matched or not 30 < tf < 400:
             continue
-        fe.append(abs(r["frequency_error_percent"]))
-        de.append(abs(r["damping"] - r["true_damping"]) / r["true_damping"] * 100)
+        fe.append(abs(r.frequency_error_percent))
+        de.append(abs(r.damping - r.true_damping) / r.true_damping * 100)
     out = {"max_db": c.frf.max_db, "rms_db": c.frf.rms_db,
            "sim_db": c.simulation.overall if c.stable else None, "stable": c.stable,
            "one_step_db_val": c.prediction.overall if K is not None else None,
@@ -111,7 +111,7 @@ def run_case(case, noise, orders, seed=11, methods=("n4sid", "subspace", "scratc
                 warnings.simplefilter("ignore", PLIDWarning)
                 ident = identify(u, y, n, dt, start=start)
             sec = time.perf_counter() - t0
-            extra = {"prior_block_rows": ident.info.get("subspace", {}).get("block_rows")}
+            extra = {"prior_block_rows": (ident.provenance.subspace or {}).get("block_rows")}
             mm = measure(ident.model, case, val, sec, extra, K=ident.K)
             res[f"PLID {start}"] = mm
             log(f"  n={n} PLID {start}: rms {mm['rms_db']:.4f} max {mm['max_db']:.3f} "
@@ -207,9 +207,9 @@ def run_testbed(seed=21, band=None, log=print):
                                           "one_step_db_val_mean_normalised":
                                               prv.mean_normalised,
                                           "one_step_db_val_per_channel": prv.per_output,
-                                          "chosen": ident.info.get("chosen"),
+                                          "chosen": ident.provenance.chosen,
                                           "one_step_db_id": pr_id, "seconds": sec,
-                                          "prior_block_rows": ident.info.get("subspace", {}).get("block_rows")}
+                                          "prior_block_rows": (ident.provenance.subspace or {}).get("block_rows")}
         log(f"  PLID {start}: stable {stable}, one-step {pr:.2f} dB validation "
             f"{np.round(prv.per_output, 2).tolist()}, "
             f"{pr_id:.2f} dB identification data ({sec:.1f}s)")

@@ -160,11 +160,11 @@ def fit_plid(u, y, n, dt, h=None):
 
     idn = identify(u, y, order=n, dt=dt)
     m = idn.model
-    info = idn.info
-    note = (f"block rows {info.get('subspace', {}).get('block_rows')}; "
-            f"D {'estimated' if info['direct']['estimated'] else '= 0'}; "
-            f"K: {(info.get('predictor') or {}).get('chosen')}"
-            + (f"; {info['structure']}" if "structure" in info else ""))
+    prov = idn.provenance
+    note = (f"block rows {(prov.subspace or {}).get('block_rows')}; "
+            f"D {'estimated' if prov.direct.estimated else '= 0'}; "
+            f"K: {(prov.predictor or {}).get('chosen')}"
+            + (f"; {prov.structure}" if prov.structure is not None else ""))
     out = _mk(m.A, m.B, m.C, m.D, idn.K, note)
     out["recursion_seconds"] = info.get("recursion_seconds")
     out["recursion_cpu_seconds"] = info.get("recursion_cpu_seconds")

@@ -11,7 +11,7 @@ channels the PLID comparison uses: inputs columns 1-2, accelerometers 1, 10, 19 
 
 1. PLID models over a range of orders, each pole marked stable in frequency (1 %), damping
    (5 %) and mode shape (MAC 0.98) against the order below, drawn over the summed H1
-   (:func:`trussid.plid.stabilisation.stabilisation`, :func:`trussid.plots.stabilisation_figure`);
+   (:func:`trussid.plid.stabilisation_diagram.stabilisation`, :func:`trussid.plots.stabilisation_figure`);
 2. the same order identified separately on the first and the second half of the record, and
    the MAC between the two sets of mode shapes at the three accelerometers
    (:func:`trussid.plid.modal.mac`): a physical mode gives the same shape in both halves.
@@ -50,7 +50,7 @@ def main(argv=None) -> int:
     from trussid.plid.datafile import read_data
     from trussid.plid.frf import h1
     from trussid.plid.modal import mac, modal_table
-    from trussid.plid.stabilisation import stabilisation
+    from trussid.plid.stabilisation_diagram import stabilisation
     from trussid.plid.multipass import identify
     from trussid.plots import mac_figure, save_figure, stabilisation_figure
 

@@ -162,6 +162,4 @@ def testbed_layout(tb: Testbed) -> Layout:
     )
 
 
-testbed_layout.__test__ = False  # a "test*" name: keep pytest from collecting it
-
 __all__ = ["Layout", "testbed_layout", "STRUT_BASE", "STRUT_VERTEX"]

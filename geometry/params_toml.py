@@ -139,7 +139,3 @@ def save_testbed(tb: Testbed, path: str | os.PathLike) -> None:
     text = dumps_testbed(tb)
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
-
-
-testbed_to_dict.__test__ = False  # "test*" names: keep pytest from collecting them
-testbed_from_dict.__test__ = False

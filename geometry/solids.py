@@ -218,6 +218,3 @@ def testbed_solids(tb: Testbed, sections: int = SECTIONS) -> list:
     """Every solid part of the testbed in the global frame: struts, adapters, wafers, UDF, base."""
     layout = testbed_layout(tb)
     return strut_solids(tb, layout, sections) + [udf_solid(tb, layout), base_solid(tb, layout, sections)]
-
-
-testbed_solids.__test__ = False  # a "test*" name: keep pytest from collecting it

@@ -495,8 +495,6 @@ class Testbed:
     and the top vertices are at height ``sqrt(L^2 - run^2)`` (33.94 in) above the plate.
     """
 
-    __test__ = False  # not a pytest test class despite the name
-
     struts: StrutParams = field(default_factory=StrutParams)
     adapter: AdapterParams = field(default_factory=AdapterParams)
     pzt: PztParams = field(default_factory=PztParams)

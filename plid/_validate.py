@@ -6,6 +6,8 @@ import numpy as np
 
 from trussid.plid.errors import DataError
 
+__all__ = ["as_2d", "check_time"]
+
 
 def as_2d(a, name: str, n_samples: int | None = None, finite: bool = False) -> np.ndarray:
     """``a`` as a float (samples x channels) array; a 1-D array is one channel.

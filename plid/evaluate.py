@@ -16,7 +16,7 @@ import numpy as np
 
 from trussid.plid.errors import DataError
 from trussid.plid.frf import FRF, frequency_response
-from trussid.plid.metrics import (compare_poles, default_noise_covariances, frf_error,
+from trussid.plid.metrics import (PoleMatch, compare_poles, default_noise_covariances, frf_error,
                                   modal_parameters, prediction_burn_in, prediction_ratio_db,
                                   predictor_gain, simulation_fit)
 
@@ -89,9 +89,10 @@ class Comparison:
         Against the reference plant (when one was given).
     frf_vs_estimate : FRFScore or None
         Against a nonparametric estimate (H1) of the record.
-    poles : list of dict
+    poles : list of PoleMatch
         Identified poles matched to the reference plant's
-        (:func:`.metrics.compare_poles`), or the model's own poles when there is no plant.
+        (:func:`.metrics.compare_poles`), or the model's own poles (true fields None) when
+        there is no plant.
     """
 
     states: int
@@ -194,7 +195,7 @@ def compare(model: control.StateSpace, plant: control.StateSpace | None = None, 
         poles = compare_poles(model, plant)
     else:
         fr, z, _ = modal_parameters(model)
-        poles = [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(fr, z)]
+        poles = [PoleMatch(frequency_hz=float(a), damping=float(b)) for a, b in zip(fr, z)]
     if estimate is not None:
         frf_est = _frf_score(model, estimate, band,
                              f"H1 ({estimate.n_averages} averages)" if estimate.n_averages else "estimate",
@@ -203,4 +204,4 @@ def compare(model: control.StateSpace, plant: control.StateSpace | None = None, 
                       prediction, simulation, frf, frf_est, poles)
 
 
-__all__ = ["Comparison", "PredictionScore", "SimulationScore", "FRFScore", "compare", "frf_grid"]
+__all__ = ["PoleMatch", "Comparison", "PredictionScore", "SimulationScore", "FRFScore", "compare", "frf_grid"]

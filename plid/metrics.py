@@ -30,6 +30,8 @@ Poles
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import control
 import numpy as np
 import scipy.linalg
@@ -423,7 +425,34 @@ def prediction_burn_in(model, K, n_samples: int) -> int:
     return int(min(max(k, 10 * n), n_samples // 4))
 
 
-def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) -> list[dict]:
+@dataclass(frozen=True)
+class PoleMatch:
+    """One row of a pole comparison: a true pole, its identified match, or both.
+
+    Attributes
+    ----------
+    true_frequency_hz, true_damping : float or None
+        The true pole's frequency [Hz] and damping ratio [-]; None for an identified pole
+        that matches no true one (or when there is no truth).
+    frequency_hz, damping : float or None
+        The identified pole's; None for a true pole that nothing identified matches.
+    frequency_error_percent : float or None
+        ``100 (f - f_true) / f_true`` of a matched pair.
+    """
+
+    true_frequency_hz: float | None = None
+    true_damping: float | None = None
+    frequency_hz: float | None = None
+    damping: float | None = None
+    frequency_error_percent: float | None = None
+
+    @property
+    def matched(self) -> bool:
+        """A true pole with its identified match."""
+        return self.true_frequency_hz is not None and self.frequency_hz is not None
+
+
+def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) -> list[PoleMatch]:
     """Match identified poles to true ones and list frequencies and damping side by side.
 
     Parameters
@@ -436,11 +465,9 @@ def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) 
 
     Returns
     -------
-    list of dict
-        One per true pole (sorted by true frequency) with ``true_frequency_hz``,
-        ``true_damping``, ``frequency_hz``, ``damping`` (None when unmatched) and
-        ``frequency_error_percent``; unmatched identified poles follow with the true fields
-        None.
+    list of PoleMatch
+        One per true pole (sorted by true frequency), its identified fields None when
+        unmatched; unmatched identified poles follow with the true fields None.
     """
     fi, zi, si = modal_parameters(identified)
     ft, zt, st = modal_parameters(truth)
@@ -454,19 +481,14 @@ def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) 
                 match[j] = i
     for j in range(st.size):
         i = match.get(j)
-        row = {"true_frequency_hz": float(ft[j]), "true_damping": float(zt[j]),
-               "frequency_hz": None, "damping": None, "frequency_error_percent": None}
-        if i is not None:
-            row.update(frequency_hz=float(fi[i]), damping=float(zi[i]),
-                       frequency_error_percent=float(100 * (fi[i] - ft[j]) / ft[j])
-                       if ft[j] > 0 else None)
-        rows.append(row)
+        if i is None:
+            rows.append(PoleMatch(true_frequency_hz=float(ft[j]), true_damping=float(zt[j])))
+        else:
+            rows.append(PoleMatch(float(ft[j]), float(zt[j]), float(fi[i]), float(zi[i]),
+                                  float(100 * (fi[i] - ft[j]) / ft[j]) if ft[j] > 0 else None))
     used = set(match.values())
-    for i in range(si.size):
-        if i not in used:
-            rows.append({"true_frequency_hz": None, "true_damping": None,
-                         "frequency_hz": float(fi[i]), "damping": float(zi[i]),
-                         "frequency_error_percent": None})
+    rows += [PoleMatch(frequency_hz=float(fi[i]), damping=float(zi[i]))
+             for i in range(si.size) if i not in used]
     return rows
 
 
@@ -536,6 +558,6 @@ def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
     return out
 
 
-__all__ = ["predictor_gain", "default_noise_covariances", "one_step_predict",
+__all__ = ["PoleMatch", "predictor_gain", "default_noise_covariances", "one_step_predict",
            "prediction_ratio_db", "choose_predictor", "simulation_fit", "modal_parameters", "compare_poles",
            "frf_error", "prediction_burn_in", "s_plane", "best_predictor", "refine_predictor_gain"]

@@ -38,7 +38,7 @@ from trussid.plid.data import ModeShapes
 from trussid.plid.errors import DataError
 
 # ModeShapes lives in plid.data (imported here for the callers that know it from this
-# module); the stabilisation diagram in plid.stabilisation
+# module); the stabilisation diagram in plid.stabilisation_diagram
 __all__ = ["modal_table", "format_modal_table", "mac", "s_plane", "pole_parameters", "assign_pairs", "pair_modes",
            "mode_groups", "pole_std"]
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 
 import control
 import numpy as np
@@ -43,7 +43,7 @@ from trussid.plid.subspace import (direct_term_test, output_error_fit, refit_inp
                                    subspace_prior)
 
 __all__ = ["Pass", "multipass", "identify", "identify_reduced", "fit_model", "default_via",
-           "Identification", "Candidate", "RECIPES",
+           "Identification", "Provenance", "Stabilised", "DirectTerm", "Candidate", "RECIPES",
            "SCRATCH_SCHEDULE", "check_data"]
 
 
@@ -111,6 +111,93 @@ def multipass(u, y, order: int, dt: float, schedule, *, basis: ObserverBasis | N
 
 
 @dataclass
+class Stabilised:
+    """Whether poles outside the unit circle were reflected in (:func:`trussid.plid.stabilise`)."""
+
+    applied: bool = False
+    reflected_poles: int = 0
+
+
+@dataclass
+class DirectTerm:
+    """How the direct term D was decided, and its estimate.
+
+    Attributes
+    ----------
+    mode : {"auto", True, False}
+        What was asked for.
+    estimated : bool
+        Whether D was estimated (else D = 0, or the prior's D).
+    test : dict or None
+        The held-out evidence of :func:`trussid.plid.subspace.direct_term_test`
+        (``held_out_nmse_without``, ``held_out_nmse_with``, ``margin``, ``folds``).
+    D, D_std : list of lists
+        The direct term (p x m) and its standard errors (None when not estimated).
+    """
+
+    mode: object
+    estimated: bool
+    test: dict | None
+    D: list
+    D_std: list | None
+
+
+@dataclass
+class Provenance:
+    """How an identification was made: what the recipe ran, tried, chose and measured.
+
+    Every field is None (or empty) when the recipe that made the model has no such step;
+    :meth:`as_dict` keeps the steps that ran, for a JSON record.
+
+    Attributes
+    ----------
+    subspace : dict or None
+        The N4SID prior's choice of block rows (:func:`trussid.plid.subspace.subspace_prior`).
+    subspace_seconds, recursion_seconds, recursion_cpu_seconds, seconds : float or None
+        Wall seconds of the prior, wall and CPU seconds of the PLID recursion alone (the
+        CPU figure stays meaningful on a loaded machine), wall seconds of the whole fit.
+    passes : list of dict
+        The PLID passes run (``Q``, ``Q_theta``, ``prior_theta_var``, ...).
+    stabilised : Stabilised or None
+    direct : DirectTerm or None
+    predictor : dict or None
+        How the one-step predictor gain was chosen
+        (:func:`trussid.plid.metrics.best_predictor`: ``chosen``, ``identification_ratio_db``,
+        ``skip``, ...).
+    structure : str or None
+        An order that is not a multiple of the outputs: how the model was reduced to it.
+    candidates, chosen, via : list, str, list or None
+        :func:`identify_reduced`: every candidate's row, the winner's label, the via orders.
+    K_source : str or None
+        Where the returned predictor gain came from (:func:`fit_model`).
+    warnings : list of str
+        The estimator's warnings (:func:`fit_model`).
+    """
+
+    subspace: dict | None = None
+    subspace_seconds: float | None = None
+    passes: list = field(default_factory=list)
+    recursion_seconds: float | None = None
+    recursion_cpu_seconds: float | None = None
+    stabilised: Stabilised | None = None
+    direct: DirectTerm | None = None
+    predictor: dict | None = None
+    seconds: float | None = None
+    structure: str | None = None
+    candidates: list | None = None
+    chosen: str | None = None
+    via: list | None = None
+    K_source: str | None = None
+    warnings: list = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        """The fields that are set (not None), in declaration order, nested dataclasses as
+        they are (:func:`trussid._util.jsonio.json_safe` turns them into dicts)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if getattr(self, f.name) is not None}
+
+
+@dataclass
 class Identification:
     """What :func:`identify` produced."""
 
@@ -121,7 +208,7 @@ class Identification:
     basis: ObserverBasis
     R: np.ndarray
     prior: control.StateSpace | None
-    info: dict = field(default_factory=dict)
+    provenance: Provenance = field(default_factory=Provenance)
 
 
 def check_data(u, y, dt) -> tuple[np.ndarray, np.ndarray]:
@@ -170,7 +257,7 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         directly (PLID's observer form gives every output ``order / p`` states); any
         other order is identified at the next multiple of ``p`` (at least ``p``) and
         reduced to ``order`` states by input-weighted balanced truncation, ``B`` (and
-        ``D``) refitted by output error (``info["structure"]`` says so).
+        ``D``) refitted by output error (``provenance.structure`` says so).
     dt : float
         Sample time [s].
     start : {"subspace", "scratch"}
@@ -197,10 +284,10 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         driven by a force input typically not. With ``D``, PLID runs on ``y - D0 u``
         (``D0`` from the prior, which makes the data strictly proper, so the recursion is
         unchanged) and ``B, D`` are then refitted by output error with PLID's ``A, C``.
-        ``info["direct"]`` records the choice and the evidence.
+        ``provenance.direct`` records the choice and the evidence.
     stabilise : bool
         Reflect any pole outside the unit circle into it (:mod:`trussid.plid.stability`;
-        ``info["stabilised"]`` says whether and how many).
+        ``provenance.stabilised`` says whether and how many).
 
     Returns
     -------
@@ -208,7 +295,7 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         ``K`` is the predictor gain with the best one-step prediction of the
         identification data (:func:`trussid.plid.metrics.best_predictor`: candidates
         ``K = 0``, i.e. free-run simulation, the recursion's own gain and steady-state
-        Kalman gains); ``info["predictor"]`` lists them with their scores.
+        Kalman gains); ``provenance.predictor`` lists them with their scores.
     """
     u, y = check_data(u, y, dt)
     p = y.shape[1]
@@ -223,14 +310,14 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     if order % p:
         return _identify_by_reduction(u, y, int(order), dt, kw)
 
-    info = {}
+    prov = Provenance()
     t0 = time.perf_counter()
     use_d, test, D0 = direct is True, None, None
     y_fit = y
     if start == "subspace":
         prior, pinfo = subspace_prior(u, y, order, dt, block_rows=block_rows)
-        info["subspace"] = pinfo
-        info["subspace_seconds"] = time.perf_counter() - t0
+        prov.subspace = pinfo
+        prov.subspace_seconds = time.perf_counter() - t0
         if direct == "auto":
             test = direct_term_test(prior, u, y)
             use_d = test["direct"]
@@ -256,26 +343,25 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     t1, c1 = time.perf_counter(), time.process_time()
     res, hist = multipass(u, y_fit, order, dt, sched, basis=basis, prior=prior, R=R, form=form,
                           progress=progress)
-    info["passes"] = hist
+    prov.passes = hist
     # wall and CPU seconds of the PLID recursion alone (the CPU figure is the one that
     # stays meaningful on a shared, loaded machine)
-    info["recursion_seconds"] = time.perf_counter() - t1
-    info["recursion_cpu_seconds"] = time.process_time() - c1
+    prov.recursion_seconds = time.perf_counter() - t1
+    prov.recursion_cpu_seconds = time.process_time() - c1
     R = np.atleast_1d(np.asarray(R, float))
     model, n_unstable = res.model, _count_unstable(res.model)
     if stabilise and n_unstable:
         model = _stable(model)
-    info["stabilised"] = {"applied": bool(stabilise and n_unstable),
-                          "reflected_poles": n_unstable if stabilise else 0}
+    prov.stabilised = Stabilised(bool(stabilise and n_unstable), n_unstable if stabilise else 0)
     stable = _count_unstable(model) == 0
     if start == "scratch" and direct == "auto" and stable:
         test = direct_term_test(model, u, y)
         use_d = test["direct"]
     model, use_d, D_std = _with_direct_term(model, u, y, use_d, stable, D0)
-    info["direct"] = _direct_info(direct, use_d, test, model, D_std)
-    K, info["predictor"] = _best_gain(model, u, y, R, {"estimator": res.K})
-    info["seconds"] = time.perf_counter() - t0
-    return Identification(res, model, K, start, basis, R, prior, info)
+    prov.direct = _direct_info(direct, use_d, test, model, D_std)
+    K, prov.predictor = _best_gain(model, u, y, R, {"estimator": res.K})
+    prov.seconds = time.perf_counter() - t0
+    return Identification(res, model, K, start, basis, R, prior, prov)
 
 
 def _with_direct_term(model, u, y, use_d: bool, stable: bool, D0):
@@ -297,14 +383,14 @@ def _count_unstable(model) -> int:
     return int(np.sum(np.abs(np.linalg.eigvals(A)) >= 1)) if A.size else 0
 
 
-def _direct_info(mode, used, test, model, D_std):
-    return {"mode": mode, "estimated": bool(used),
-            "test": None if test is None else {
-                "held_out_nmse_without": test["held_out_nmse"]["without"],
-                "held_out_nmse_with": test["held_out_nmse"]["with"],
-                "margin": test["margin"], "folds": test["folds"]},
-            "D": np.asarray(model.D, float).tolist(),
-            "D_std": None if D_std is None else np.asarray(D_std).tolist()}
+def _direct_info(mode, used, test, model, D_std) -> DirectTerm:
+    return DirectTerm(mode=mode, estimated=bool(used),
+                      test=None if test is None else {
+                          "held_out_nmse_without": test["held_out_nmse"]["without"],
+                          "held_out_nmse_with": test["held_out_nmse"]["with"],
+                          "margin": test["margin"], "folds": test["folds"]},
+                      D=np.asarray(model.D, float).tolist(),
+                      D_std=None if D_std is None else np.asarray(D_std).tolist())
 
 
 def _best_gain(model, u, y, R, own):
@@ -343,21 +429,21 @@ def _identify_by_reduction(u, y, order, dt, kw):
             # that does not excite them); the plain balanced truncation then still works
             red = balanced_truncation(base, order).model
         red = _stable(red)
-        use_d = high.info["direct"]["estimated"]
+        use_d = high.provenance.direct.estimated
         red, _, D_std = output_error_fit(red, u, y, direct=use_d)
     except (IdentificationError, np.linalg.LinAlgError) as exc:
         raise IdentificationError(
             f"order {order} is not a multiple of the {p} outputs, and reducing the "
             f"order-{hi} model to it failed ({exc}); try order {hi}") from None
-    info = dict(high.info)
-    info["structure"] = (f"identified at order {hi} (PLID's observer form needs a multiple "
-                         f"of the {p} outputs) and reduced to {order} states by "
-                         "input-weighted balanced truncation, B and D refitted by output error")
-    info["direct"] = _direct_info(kw["direct"], use_d, None, red, D_std)
-    info["direct"]["test"] = high.info["direct"]["test"]
-    K, info["predictor"] = _best_gain(red, u, y, high.R, {})
-    info["seconds"] = time.perf_counter() - t0
-    return Identification(high.result, red, K, high.start, high.basis, high.R, high.prior, info)
+    prov = replace(high.provenance)
+    prov.structure = (f"identified at order {hi} (PLID's observer form needs a multiple "
+                      f"of the {p} outputs) and reduced to {order} states by "
+                      "input-weighted balanced truncation, B and D refitted by output error")
+    prov.direct = _direct_info(kw["direct"], use_d, None, red, D_std)
+    prov.direct.test = high.provenance.direct.test
+    K, prov.predictor = _best_gain(red, u, y, high.R, {})
+    prov.seconds = time.perf_counter() - t0
+    return Identification(high.result, red, K, high.start, high.basis, high.R, high.prior, prov)
 
 
 def _default_gain(model, u, y, R):
@@ -435,9 +521,9 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
         Of the winner, ``K`` its chosen one-step predictor gain. ``result`` is the PLID
         pass that produced it (for a reduced model that was not refined: the pass at the
         higher order, with that pass's ``basis``, ``R`` and ``prior``).
-        ``info["candidates"]`` lists every candidate (label, states, stable,
-        identification one-step ratio [dB], seconds), ``info["chosen"]`` the winner's
-        label and ``info["predictor"]`` how its predictor was chosen.
+        ``provenance.candidates`` lists every candidate (label, states, stable,
+        identification one-step ratio [dB], seconds), ``provenance.chosen`` the winner's
+        label and ``provenance.predictor`` how its predictor was chosen.
     """
     u, y = check_data(u, y, dt)
     p = y.shape[1]
@@ -478,17 +564,18 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
     for c in cands:
         _score(c, u, y, order)
     best = _winner(cands)
-    info = dict(best.idn.info)
+    prov = replace(best.idn.provenance)
     if best.passes is not None:
-        info["passes"] = best.passes
-    info.update({"candidates": [c.row(order) for c in cands], "chosen": best.label_shown,
-                 "via": list(via), "predictor": best.kinfo,
-                 "stabilised": {"applied": best.reflected_poles > 0,
-                                "reflected_poles": best.reflected_poles},
-                 "seconds": time.perf_counter() - t_all})
+        prov.passes = best.passes
+    prov.candidates = [c.row(order) for c in cands]
+    prov.chosen = best.label_shown
+    prov.via = list(via)
+    prov.predictor = best.kinfo
+    prov.stabilised = Stabilised(best.reflected_poles > 0, best.reflected_poles)
+    prov.seconds = time.perf_counter() - t_all
     K = best.K if best.K is not None else best.idn.K
     return Identification(best.result, best.model, K, best.idn.start, best.basis,
-                          np.atleast_1d(np.asarray(best.R, float)), best.prior, info)
+                          np.atleast_1d(np.asarray(best.R, float)), best.prior, prov)
 
 
 @dataclass
@@ -652,8 +739,8 @@ def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
     -------
     Identification
         ``K`` is always set (the recipe's chosen gain, or the steady-state gain of the plain
-        fit's noise model); ``info["K_source"]`` says where it came from,
-        ``info["warnings"]`` lists the estimator's warnings.
+        fit's noise model); ``provenance.K_source`` says where it came from,
+        ``provenance.warnings`` lists the estimator's warnings.
     """
 
     if start not in RECIPES:
@@ -672,17 +759,18 @@ def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
                        progress=progress).fit(u, y)
             idn = Identification(res, res.model, res.K, "plain", res.basis,
                                  np.atleast_1d(np.asarray(R, float)), None,
-                                 {"passes": [{"Q": Q}] * passes, "K_source": res.K_source})
+                                 Provenance(passes=[{"Q": Q}] * passes, K_source=res.K_source))
         elif via is not None:
             idn = identify_reduced(u, y, order, dt, via=via, start=start, form=form,
                                    block_rows=block_rows, progress=progress, log=log,
                                    direct=False if direct is None else direct)
-            idn.info["K_source"] = (idn.info.get("predictor") or {}).get("chosen")
+            idn.provenance.K_source = (idn.provenance.predictor or {}).get("chosen")
         else:
             idn = identify(u, y, order, dt, start=start, R=R, form=form, block_rows=block_rows,
                            direct="auto" if direct is None else direct, progress=progress)
-            idn.info["K_source"] = (idn.info.get("predictor") or {}).get("chosen")
-    idn.info["warnings"] = [str(w.message) for w in caught if issubclass(w.category, PLIDWarning)]
+            idn.provenance.K_source = (idn.provenance.predictor or {}).get("chosen")
+    idn.provenance.warnings = [str(w.message) for w in caught
+                               if issubclass(w.category, PLIDWarning)]
     if not idn.result.finite:
         raise IdentificationError(
             f"PLID ({form} form) diverged on {len(u)} samples: the estimate is not finite; "
@@ -691,5 +779,5 @@ def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
         res = idn.result
         B = np.asarray(idn.model.B)
         idn.K = predictor_gain(idn.model, res.Q + B @ res.N @ B.T, res.R)
-        idn.info["K_source"] = "steady state of the estimator's noise model"
+        idn.provenance.K_source = "steady state of the estimator's noise model"
     return idn

@@ -42,6 +42,7 @@ from trussid._util.files import atomic_path
 from trussid.plid.data import IOData, ModeShapes, unknown_name
 from trussid.plid.errors import DataError
 from trussid.plid.frf import FRF
+from trussid.plid.modal import pole_parameters
 
 __all__ = ["Geometry", "UFFContents", "read_uff", "write_uff", "read_uff_data",
            "write_uff_data"]
@@ -301,10 +302,9 @@ def _mode_data(recs: list[dict], source: str):
             freqs.append(float(ds["freq"]))
             damps.append(float(ds.get("modal_damp_vis", 0.0)))
         elif at in (3, 7):
-            s = complex(ds["eig"])
-            wn = abs(s)
-            freqs.append(wn / (2 * np.pi))
-            damps.append(-s.real / wn if wn > 0 else 1.0)
+            f, z, _ = pole_parameters([complex(ds["eig"])])
+            freqs.append(float(f[0]))
+            damps.append(float(z[0]))
         else:
             raise DataError(f"{source}: record {rec} (data set 55) has analysis type {at}, "
                             "not a mode shape (2 normal, 3 complex)")

@@ -5,7 +5,7 @@ import pytest
 
 from trussid.plid.data import ModeShapes
 from trussid.plid.modal import mac
-from trussid.plid.stabilisation import Stabilisation
+from trussid.plid.stabilisation_diagram import Stabilisation
 from trussid.plots import mac_figure, save_figure, stabilisation_figure
 
 

@@ -393,7 +393,7 @@ def stabilisation_figure(stab, frf=None, title: str = "stabilisation diagram",
 
     Parameters
     ----------
-    stab : trussid.plid.stabilisation.Stabilisation
+    stab : trussid.plid.stabilisation_diagram.Stabilisation
     frf : (f [Hz], H (n_freq, p, m)), optional
         Drawn behind the poles as the sum over channels of ``|H|`` [dB] (right axis), so that
         stable columns can be checked against the resonance peaks.

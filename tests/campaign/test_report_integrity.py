@@ -15,10 +15,11 @@ from trussid._util.errors import UserError
 from trussid._util.files import atomic_directory
 from trussid.campaign import demo as demo_mod
 from trussid.campaign.demo import mode_audit
+from trussid.plid.metrics import PoleMatch
 
 
 def row(ft, zt, fi, zi):
-    return {"true_frequency_hz": ft, "true_damping": zt, "frequency_hz": fi, "damping": zi}
+    return PoleMatch(true_frequency_hz=ft, true_damping=zt, frequency_hz=fi, damping=zi)
 
 
 POLES = [

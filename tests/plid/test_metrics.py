@@ -50,27 +50,27 @@ def test_pole_matching_pairs_each_true_mode_with_its_estimate(plant):
     rows = compare_poles(ident, plant)
     assert len(rows) == 4
     for row, (f, z) in zip(rows[:3], MODES):
-        assert row["true_frequency_hz"] == pytest.approx(f)
+        assert row.true_frequency_hz == pytest.approx(f)
         est = next(s for s in shifted if abs(s[0] - f) < 2)
-        assert row["frequency_hz"] == pytest.approx(est[0], rel=1e-9)
-        assert row["damping"] == pytest.approx(est[1], rel=1e-6)
-        assert row["frequency_error_percent"] == pytest.approx(100 * (est[0] / f - 1), rel=1e-6)
+        assert row.frequency_hz == pytest.approx(est[0], rel=1e-9)
+        assert row.damping == pytest.approx(est[1], rel=1e-6)
+        assert row.frequency_error_percent == pytest.approx(100 * (est[0] / f - 1), rel=1e-6)
     spurious = rows[3]
-    assert spurious["true_frequency_hz"] is None
-    assert spurious["frequency_hz"] == pytest.approx(np.log(0.3) * -FS / (2 * np.pi))
+    assert spurious.true_frequency_hz is None
+    assert spurious.frequency_hz == pytest.approx(np.log(0.3) * -FS / (2 * np.pi))
 
 
 def test_far_pairs_are_not_called_matches(plant):
     far = control.c2d(continuous_plant([(60.0, 0.02), (420.0, 0.02), (330.0, 0.05)]), 1 / FS)
     rows = compare_poles(far, plant)
-    by_true = {round(r["true_frequency_hz"]): r for r in rows
-               if r["true_frequency_hz"] is not None}
-    assert by_true[60]["frequency_hz"] == pytest.approx(60.0)
-    assert by_true[210]["frequency_hz"] is None  # 420 Hz is 100 % away
-    extra = [r for r in rows if r["true_frequency_hz"] is None]
-    assert [r["frequency_hz"] for r in extra] == [pytest.approx(420.0)]
+    by_true = {round(r.true_frequency_hz): r for r in rows
+               if r.true_frequency_hz is not None}
+    assert by_true[60].frequency_hz == pytest.approx(60.0)
+    assert by_true[210].frequency_hz is None  # 420 Hz is 100 % away
+    extra = [r for r in rows if r.true_frequency_hz is None]
+    assert [r.frequency_hz for r in extra] == [pytest.approx(420.0)]
     kept = compare_poles(far, plant, max_relative_distance=None)
-    assert all(r["frequency_hz"] is not None for r in kept) and len(kept) == 3
+    assert all(r.frequency_hz is not None for r in kept) and len(kept) == 3
 
 
 def test_frf_error_of_a_gain_error_is_that_gain_in_db(plant):

@@ -72,7 +72,7 @@ def test_scratch_multipass_converges_on_noiseless_data(simo):
     ident = identify(u, y, 6, 1 / FS, start="scratch", R=1e-10)
     err = frf_error(ident.model, simo, band=(30, 790))
     assert err["rms_db"] < 1e-4
-    assert len(ident.info["passes"]) == 4
+    assert len(ident.provenance.passes) == 4
 
 
 def test_a_pass_started_at_the_truth_with_a_tight_prior_stays_there(simo):
@@ -162,18 +162,18 @@ def test_identify_reduced_returns_the_candidate_with_the_best_identification_pre
     plant = modal_plant([70.0, 150.0, 260.0, 380.0, 520.0, 690.0], 0.01, 1, 2, seed=3)
     u, y = data(plant, 3000, snr_db=50, seed=4)
     idn = identify_reduced(u, y, 4, 1 / FS, via=(8, 12))
-    rows = idn.info["candidates"]
+    rows = idn.provenance.candidates
     assert [r["label"].split(",")[0] for r in rows] == ["direct 4", "via 8", "via 8",
                                                           "via 12", "via 12"]
     assert all(r["states"] == 4 for r in rows)
     scored = [r for r in rows if r["identification_ratio_db"] is not None]
     best = max(scored, key=lambda r: r["identification_ratio_db"])
-    assert idn.info["chosen"] == best["label"]
+    assert idn.provenance.chosen == best["label"]
     assert idn.model.nstates == 4
     assert np.max(np.abs(np.linalg.eigvals(np.asarray(idn.model.A)))) < 1
     # the score is the returned model's one-step ratio with the returned gain, computed as
     # choose_predictor scores (identification record, after its burn-in)
-    r = prediction_ratio_db(idn.model, u, y, K=idn.K, skip=idn.info["predictor"]["skip"])
+    r = prediction_ratio_db(idn.model, u, y, K=idn.K, skip=idn.provenance.predictor["skip"])
     assert r["overall"] == pytest.approx(best["identification_ratio_db"], rel=1e-12)
 
 
@@ -201,9 +201,9 @@ def test_identify_reduced_survives_a_failed_candidate_and_names_total_failure(si
 
     monkeypatch.setattr(mp, "identify", direct_fails)
     idn = mp.identify_reduced(u, y, 6, 1 / FS, via=(8,))
-    rows = {r["label"]: r for r in idn.info["candidates"]}
+    rows = {r["label"]: r for r in idn.provenance.candidates}
     assert "diverged" in rows["direct 6"]["error"]
-    assert idn.info["chosen"].startswith("via 8") and idn.model.nstates == 6
+    assert idn.provenance.chosen.startswith("via 8") and idn.model.nstates == 6
 
     def all_fail(*a, **k):
         raise IdentificationError("PLID diverged in its first pass (estimate not finite)")
@@ -281,27 +281,27 @@ def test_identify_recovers_an_accelerometers_direct_term_within_the_noise():
     plant = accelerometer_plant()
     u, y = record(plant, 2500, 40, seed=11)
     ident = identify(u, y, 6, plant.dt)
-    d = ident.info["direct"]
-    assert d["estimated"] and d["mode"] == "auto"
+    d = ident.provenance.direct
+    assert d.estimated and d.mode == "auto"
     err = np.abs(np.asarray(ident.model.D) - plant.D)
     # within four least-squares standard errors, and small against D itself
-    assert np.all(err <= 4 * np.asarray(d["D_std"]) + 1e-12)
+    assert np.all(err <= 4 * np.asarray(d.D_std) + 1e-12)
     assert np.abs(ident.model.D - plant.D).max() < 0.02 * np.abs(plant.D).max()
 
 
 def test_identify_chooses_no_direct_term_for_a_strictly_proper_plant(simo):
     u, y = data(simo, 2000, snr_db=40, seed=12)
     ident = identify(u, y, 6, 1 / FS)
-    assert not ident.info["direct"]["estimated"]
+    assert not ident.provenance.direct.estimated
     assert not np.any(ident.model.D)
-    test = ident.info["direct"]["test"]
+    test = ident.provenance.direct.test
     assert test["held_out_nmse_with"] > (1 - test["margin"]) * test["held_out_nmse_without"]
 
 
 def test_identify_can_be_told_to_estimate_or_omit_D(simo):
     u, y = data(simo, 2000, snr_db=40, seed=13)
-    assert identify(u, y, 6, 1 / FS, direct=True).info["direct"]["estimated"]
-    assert not identify(u, y, 6, 1 / FS, direct=False).info["direct"]["estimated"]
+    assert identify(u, y, 6, 1 / FS, direct=True).provenance.direct.estimated
+    assert not identify(u, y, 6, 1 / FS, direct=False).provenance.direct.estimated
     with pytest.raises(IdentificationError, match="direct"):
         identify(u, y, 6, 1 / FS, direct="sometimes")
 
@@ -312,8 +312,8 @@ def test_returned_predictor_is_never_worse_than_free_run_simulation_on_the_ident
     plant = accelerometer_plant(seed=5)
     u, y = record(plant, 2000, 30, seed=14)
     ident = identify(u, y, 4, plant.dt)          # under-modelled: K has work to do
-    scores = ident.info["predictor"]["identification_ratio_db"]
-    chosen = ident.info["predictor"]["chosen"]
+    scores = ident.provenance.predictor["identification_ratio_db"]
+    chosen = ident.provenance.predictor["chosen"]
     assert scores[chosen] >= scores["none (free-run simulation)"]
     assert scores[chosen] == max(scores.values())
 
@@ -323,7 +323,7 @@ def test_orders_that_are_not_multiples_of_the_outputs_are_identified_by_reductio
     u, y = data(simo, 1200, snr_db=40, seed=15)
     ident = identify(u, y, order, 1 / FS)
     assert ident.model.nstates == order
-    assert "reduced to" in ident.info["structure"]
+    assert "reduced to" in ident.provenance.structure
     assert np.max(np.abs(np.linalg.eigvals(ident.model.A))) < 1
     assert ident.K.shape == (order, 2)
 

@@ -293,7 +293,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     """
     from trussid.plid.estimator import PLIDWarning
     from trussid.plid.metrics import choose_predictor
-    from trussid.plid.multipass import default_via, fit_model
+    from trussid.plid.multipass import Stabilised, default_via, fit_model
 
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -306,8 +306,9 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
                         log=log, block_rows=None if block_rows is None else list(block_rows))
     res = idn.result
     model = idn.model
-    chosen = idn.info.get("chosen", "")
-    stab = dict(idn.info.get("stabilised") or {"applied": False, "reflected_poles": 0})
+    prov = idn.provenance
+    chosen = prov.chosen or ""
+    stab = prov.stabilised or Stabilised()
     if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
         # No stable candidate (none was measured on the testbed): reflect the poles outside
         # the unit circle in (plid.stability keeps the magnitude response) so that the model
@@ -316,10 +317,10 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
 
         st = stabilise(model)
         model = st.model
-        stab = {"applied": bool(st.applied), "reflected_poles": int(np.size(st.reflected))}
+        stab = Stabilised(bool(st.applied), int(np.size(st.reflected)))
         K, K_source, kinfo = choose_predictor(model, u, y)
     else:
-        K, kinfo = idn.K, idn.info.get("predictor") or {}
+        K, kinfo = idn.K, prov.predictor or {}
         K_source = kinfo.get("chosen", "")
     hist, hidx = res.theta_history, res.history_index
     if hist.shape[0] < 2 and idn.prior is not None:
@@ -329,8 +330,8 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     info = {"recipe": "trussid.plid.multipass.identify_reduced", "start": idn.start,
             "stabilised": stab, "basis": getattr(idn.basis, "name", ""),
             "R": np.asarray(idn.R).tolist(), "predictor": kinfo,
-            **{k: v for k, v in idn.info.items() if k not in ("passes", "predictor")},
-            "passes": idn.info.get("passes", [])}
+            **{k: v for k, v in prov.as_dict().items() if k not in ("passes", "predictor")},
+            "passes": prov.passes}
     method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
     return Identified(model, K, K_source, time.perf_counter() - t0, method,
                       res.innovations, hist, hidx, info)
@@ -339,7 +340,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
 def _history_of_last_pass(idn, u, y, order, dt):
     from trussid.plid.estimator import PLID, PLIDWarning
 
-    last = (idn.info.get("passes") or [{}])[-1]
+    last = (idn.provenance.passes or [{}])[-1]
     est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
                Q_theta=last.get("Q_theta", 0.0), prior=idn.prior,
                prior_theta_var=last.get("prior_theta_var", 1e-4), basis=idn.basis,
@@ -369,8 +370,8 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
     # H1 itself against the truth: how far the nonparametric estimate is to be trusted.
     keep = (h1_est.f >= settings.frf_band[0]) & (h1_est.f <= settings.frf_band[1])
     h1_true = _h1_error(h1_est, tcols, keep)
-    in_band = [r for r in c.poles if r["true_frequency_hz"] is not None
-               and settings.frf_band[0] <= r["true_frequency_hz"] <= settings.frf_band[1]]
+    in_band = [r for r in c.poles if r.true_frequency_hz is not None
+               and settings.frf_band[0] <= r.true_frequency_hz <= settings.frf_band[1]]
     y_rms = np.sqrt(np.mean(val.y**2, axis=0))
     p, s, e, eh = c.prediction, c.simulation, c.frf, c.frf_vs_estimate
     lo_x, hi_x = settings.excitation_band
@@ -402,7 +403,7 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
         "seconds": fit.seconds, "method": fit.method, "unstable_poles": c.unstable_poles,
         "stabilised": fit.info.get("stabilised", {}),
         "poles": c.poles,
-        "poles_in_band_matched": sum(r["frequency_hz"] is not None for r in in_band),
+        "poles_in_band_matched": sum(r.frequency_hz is not None for r in in_band),
         "poles_in_band_true": len(in_band),
         "validation_output_rms_v": y_rms.tolist(),
         "h1_coherence": coherence,
@@ -426,9 +427,8 @@ def mode_audit(poles: list, band, excited) -> dict:
 
     Parameters
     ----------
-    poles : list of dict
-        ``true_frequency_hz``, ``true_damping``, ``frequency_hz``, ``damping`` per row (true
-        pole with its match, or an unmatched identified pole with the true fields None).
+    poles : list of trussid.plid.metrics.PoleMatch
+        A true pole with its match, or an unmatched identified pole (true fields None).
     band : (float, float)
         The band [Hz] in which every true mode should be found (the FRF band).
     excited : (float, float)
@@ -446,24 +446,24 @@ def mode_audit(poles: list, band, excited) -> dict:
         LIGHT_DAMPING anywhere, each with ``spurious`` and ``in_excited_band``.
     """
     lo, hi = band
-    true_modes = sorted({(r["true_frequency_hz"], r["true_damping"]) for r in poles
-                         if r["true_frequency_hz"] is not None
-                         and r["true_damping"] <= MODE_DAMPING_MAX})
+    true_modes = sorted({(r.true_frequency_hz, r.true_damping) for r in poles
+                         if r.true_frequency_hz is not None
+                         and r.true_damping <= MODE_DAMPING_MAX})
     f_true = np.array([f for f, _ in true_modes]) if true_modes else np.zeros(0)
     rows, filters = [], 0
     for r in poles:
-        ft = r["true_frequency_hz"]
+        ft = r.true_frequency_hz
         if ft is None or not lo <= ft <= hi:
             continue
-        if r["true_damping"] > MODE_DAMPING_MAX:
+        if r.true_damping > MODE_DAMPING_MAX:
             filters += 1
             continue
-        fi = r["frequency_hz"]
-        found = (fi is not None and r["damping"] <= MODE_DAMPING_MAX
+        fi = r.frequency_hz
+        found = (fi is not None and r.damping <= MODE_DAMPING_MAX
                  and abs(fi - ft) <= FOUND_TOLERANCE * ft)
-        rows.append({"true_frequency_hz": ft, "true_damping": r["true_damping"],
+        rows.append({"true_frequency_hz": ft, "true_damping": r.true_damping,
                      "found": bool(found), "frequency_hz": fi if found else None,
-                     "damping": r["damping"] if found else None})
+                     "damping": r.damping if found else None})
 
     def nearest(f):
         if not f_true.size:
@@ -473,17 +473,17 @@ def mode_audit(poles: list, band, excited) -> dict:
 
     identified, spurious, light = [], [], []
     for r in poles:
-        fi = r["frequency_hz"]
-        if fi is None or r["damping"] > MODE_DAMPING_MAX:
+        fi = r.frequency_hz
+        if fi is None or r.damping > MODE_DAMPING_MAX:
             continue
         near, rel = nearest(fi)
-        entry = {"frequency_hz": fi, "damping": r["damping"], "nearest_true_hz": near,
+        entry = {"frequency_hz": fi, "damping": r.damping, "nearest_true_hz": near,
                  "spurious": bool(near is None or rel > FOUND_TOLERANCE),
                  "in_excited_band": bool(excited[0] <= fi <= excited[1])}
         identified.append(entry)
         if entry["spurious"]:
             spurious.append(entry)
-        if r["damping"] < LIGHT_DAMPING:
+        if r.damping < LIGHT_DAMPING:
             light.append(entry)
     key = lambda e: e["frequency_hz"]  # noqa: E731
     return {"band_hz": [lo, hi], "excited_band_hz": list(excited),

@@ -40,7 +40,8 @@ from dataclasses import dataclass, field
 
 import control
 import numpy as np
-from scipy.optimize import linear_sum_assignment
+
+from trussid.plid.modal import assign_pairs
 
 from .errors import ControlError
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
@@ -155,7 +156,9 @@ def _mode_damping(Acl, T_blocks, n_modes, dt):
     up = lam.imag > 0
     lam, V = lam[up], V[:, up]
     share = np.array([[np.linalg.norm(V[idx, j]) for j in range(lam.size)] for idx in T_blocks])
-    r, c = linear_sum_assignment(-share)
+    pole = assign_pairs(-share)
+    r = np.flatnonzero(pole >= 0)
+    c = pole[r]
     zeta = np.full(n_modes, np.nan)
     _, z = freq_damping(lam[c], dt)
     zeta[r] = z

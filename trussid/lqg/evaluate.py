@@ -14,13 +14,12 @@ from dataclasses import dataclass, field
 
 import control
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from trussid.plid.frf import frequency_response
+from trussid.plid.modal import assign_pairs, s_plane
 
 from .errors import ControlError
 from .modal import freq_damping, modal_data
-
 
 
 def check_pair(plant, controller, label: str = "plant") -> None:
@@ -155,14 +154,11 @@ def damping_table(plant, controller, *, band=(40.0, 450.0), dominant_fraction: f
     # share of each closed-loop eigenvector's plant part in each open-loop plant mode
     proj = np.abs(ol.Vinv @ V[:npl])
     share = proj / np.maximum(np.linalg.norm(proj, axis=0, keepdims=True), 1e-300)
-    r, c = linear_sum_assignment(-share)
-    tracked = np.full(npl, -1)
-    tracked[r] = c
+    tracked = assign_pairs(-share)  # every open-loop mode gets a closed-loop pole
     is_ctrl = np.ones(lam.size, bool)
-    is_ctrl[c] = False
+    is_ctrl[tracked[tracked >= 0]] = False
     f_cl, z_cl = freq_damping(lam, dt)
-    s_ol = np.log(np.where(np.abs(ol.poles) > 0, ol.poles, 1e-300).astype(complex)) / dt
-    s_cl = np.log(np.where(np.abs(lam) > 0, lam, 1e-300).astype(complex)) / dt
+    s_ol, s_cl = s_plane(ol.poles, dt), s_plane(lam, dt)
     # every closed-loop pole also belongs to the open-loop mode nearest in the s-plane: a
     # pole whose eigenvector the assignment gave to a neighbour still rings at this mode
     owner = np.argmin(np.abs(s_ol[None, :] - s_cl[:, None]), axis=1)

@@ -28,6 +28,7 @@ from types import SimpleNamespace
 import numpy as np
 import pyarrow as pa
 
+from trussid.plid.frf import frequency_response
 from trussid.study.spec import StudyError
 
 WALLS = tuple(f"wall{i}" for i in range(6))
@@ -296,12 +297,11 @@ class PlantEvaluator(Evaluator):
         d = tp.discrete
         A, B, C, D = (np.asarray(x, float) for x in (d.A, d.B, d.C, d.D))
         f = np.linspace(0.0, 0.5 / d.dt, opts["n_freq"])[1:]
-        z = np.exp(2j * np.pi * f * d.dt)
+        H_all = frequency_response(d, f)  # (n_freq, p, m)
         Wo = la.solve_discrete_lyapunov(A.T, C.T @ C)
         out = {}
         for c in range(B.shape[1]):
-            # H(z) e_c for every frequency: one solve per frequency of (zI - A) x = B e_c.
-            H = np.array([C @ np.linalg.solve(zz * np.eye(len(A)) - A, B[:, c]) + D[:, c] for zz in z])
+            H = H_all[:, :, c]
             g = np.abs(H).max(axis=1)
             k = int(np.argmax(g))
             out[f"peak_gain_ch{c + 1}"] = float(g[k])
@@ -435,7 +435,7 @@ class IdentifyEvaluator(Evaluator):
             else:
                 ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1], progress=False)
         out = _score(ident.model, case, val, time.perf_counter() - t0, opts, K=ident.K)
-        out["block_rows"] = ident.info.get("subspace", {}).get("block_rows") or -1
+        out["block_rows"] = (ident.provenance.subspace or {}).get("block_rows") or -1
         return out
 
 
@@ -449,11 +449,11 @@ def _score(model, case, val, seconds, opts, K=None) -> dict:
     lo, hi = opts["mode_band"]
     fe, de = [], []
     for r in c.poles:
-        tf = r["true_frequency_hz"]
-        if tf is None or r["frequency_hz"] is None or not lo < tf < hi:
+        tf = r.true_frequency_hz
+        if not r.matched or not lo < tf < hi:
             continue
-        fe.append(abs(r["frequency_error_percent"]))
-        de.append(abs(r["damping"] - r["true_damping"]) / r["true_damping"] * 100)
+        fe.append(abs(r.frequency_error_percent))
+        de.append(abs(r.damping - r.true_damping) / r.true_damping * 100)
     nan = float("nan")
     return {"max_db": float(c.frf.max_db), "rms_db": float(c.frf.rms_db),
             "sim_db": float(c.simulation.overall) if c.stable else nan,

@@ -141,8 +141,6 @@ class TestbedMap:
         Rigid-body ids (``base_body`` is -1 when clamped).
     """
 
-    __test__ = False
-
     strut_nodes: np.ndarray
     strut_elements: np.ndarray
     strut_s: np.ndarray
@@ -182,8 +180,6 @@ class TestbedModel:
     testbed : geometry.testbed.Testbed
     elements_per_segment : int
     """
-
-    __test__ = False
 
     model: Model
     map: TestbedMap

@@ -42,8 +42,6 @@ class TestbedPlant:
     tbm : fem.testbed.TestbedModel
     """
 
-    __test__ = False
-
     continuous: control.StateSpace
     discrete: control.StateSpace
     structure: control.StateSpace
@@ -249,9 +247,6 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
     return TestbedPlant(continuous=cont, discrete=disc, structure=structure,
                         modes=modes, loads=F,
                         capacitance=tb.pzt.wafers_per_strut * wafer.capacitance, chain=chain, tbm=tbm)
-
-
-testbed_plant.__test__ = False  # a builder, not a pytest test, despite its name
 
 
 def plant_summary(plant: TestbedPlant) -> dict:

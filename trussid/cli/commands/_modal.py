@@ -75,7 +75,7 @@ def modal_outputs(args, data, model, start: str, form: str, summary: dict) -> li
 
 def _stabilisation(args, data, start, form, summary) -> list[str]:
     from trussid.plid.frf import h1
-    from trussid.plid.stabilisation import stabilisation
+    from trussid.plid.stabilisation_diagram import stabilisation
     from trussid.plid.multipass import identify
     from trussid.plots import save_figure, stabilisation_figure
 

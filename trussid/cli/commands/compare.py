@@ -208,10 +208,10 @@ def _print_metrics(args, metrics, c, written, out) -> None:
               f"RMS {e.rms_db:.3f} dB; phase max {e.max_deg:.2f} deg, RMS {e.rms_deg:.2f} deg")
         print("poles: true [Hz, damping] -> model [Hz, damping]")
         for row in c.poles:
-            t = ("-" if row["true_frequency_hz"] is None
-                 else f"{row['true_frequency_hz']:10.3f} {row['true_damping']:9.5f}")
-            mdl = ("-" if row["frequency_hz"] is None
-                   else f"{row['frequency_hz']:10.3f} {row['damping']:9.5f}")
+            t = ("-" if row.true_frequency_hz is None
+                 else f"{row.true_frequency_hz:10.3f} {row.true_damping:9.5f}")
+            mdl = ("-" if row.frequency_hz is None
+                   else f"{row.frequency_hz:10.3f} {row.damping:9.5f}")
             print(f"  {t:>21} -> {mdl}")
     if c.frf_vs_estimate is not None:
         e = c.frf_vs_estimate

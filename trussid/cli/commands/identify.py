@@ -258,29 +258,29 @@ def run(args) -> int:
                    output_names=data.output_names)
     stability_note = stability.message(f"the identified model {out}")
     freq, damp, _ = modal_parameters(model)
+    prov = ident.provenance
     summary = {
         "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
         "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
         "start": start, "form": ident.result.form,
-        "passes": len(ident.info["passes"]), "Q": [ps["Q"] for ps in ident.info["passes"]],
+        "passes": len(prov.passes), "Q": [ps["Q"] for ps in prov.passes],
         "R": [float(r) for r in np.atleast_1d(ident.R)],
-        "seconds": seconds, "K_source": ident.info.get("K_source"),
+        "seconds": seconds, "K_source": prov.K_source,
         # in-sample: scored on the identification data itself
         "signal_to_prediction_error_db": ratio["overall"],
         "signal_to_prediction_error_db_per_output": ratio["per_channel"],
         "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
         "prediction_skip_samples": skip, "unstable_poles": unstable,
         "poles": [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(freq, damp)],
-        "warnings": ident.info["warnings"] + ([stability_note] if stability_note else []),
+        "warnings": prov.warnings + ([stability_note] if stability_note else []),
         "stable": stability.stable, "stability": stability_note,
     }
-    if "direct" in ident.info:
-        summary["direct_term"] = ident.info["direct"]
-    if "structure" in ident.info:
-        summary["structure"] = ident.info["structure"]
+    if prov.direct is not None:
+        summary["direct_term"] = prov.direct
+    if prov.structure is not None:
+        summary["structure"] = prov.structure
     if via is not None:
-        summary.update(via=list(ident.info["via"]), chosen=ident.info["chosen"],
-                       candidates=ident.info["candidates"])
+        summary.update(via=list(prov.via), chosen=prov.chosen, candidates=prov.candidates)
     modal_lines = modal_outputs(args, data, model, start, ident.result.form, summary)
     for note in summary["warnings"]:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
@@ -302,12 +302,12 @@ def _print_summary(s: dict, via: bool) -> None:
     if "structure" in s:
         print(f"structure: {s['structure']}")
     if "direct_term" in s:
-        d = s["direct_term"]
-        t = d.get("test")
+        d = s["direct_term"]  # a plid.multipass.DirectTerm
+        t = d.test
         why = (f" (held-out output error {t['held_out_nmse_with']:.3g} with D against "
                f"{t['held_out_nmse_without']:.3g} without)" if t else "")
-        print(f"direct term D: {'estimated' if d['estimated'] else 'none (D = 0)'}"
-              f"{' (' + str(d['mode']) + ')' if d['mode'] != 'auto' else ''}{why}")
+        print(f"direct term D: {'estimated' if d.estimated else 'none (D = 0)'}"
+              f"{' (' + str(d.mode) + ')' if d.mode != 'auto' else ''}{why}")
     print(f"predictor gain K: {s['K_source']}")
     per = ", ".join(f"{name} {v:.2f}" for name, v in
                     zip(s["outputs"], s["signal_to_prediction_error_db_per_output"]))
