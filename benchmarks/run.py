@@ -42,6 +42,10 @@ BENCHMARKS = {
                          "--tools", "trussid", "--json", "{json}"]),
     "testbed": (["bench_testbed.py", "--json", "{json}"], ["bench_testbed.py", "--quick", "--json", "{json}"]),
     "plant": (["bench_plant.py", "--json", "{json}"], ["bench_plant.py", "--quick", "--json", "{json}"]),
+    # study engine: serial loop vs local and command-line Dask clusters (~3 min quiet; quick
+    # ~1 min); a 1e5-design study interrupted and resumed (~30 min quiet; quick: 600 designs)
+    "study": (["bench_study.py", "--json", "{json}"], ["bench_study.py", "--quick", "--json", "{json}"]),
+    "study_scale": (["bench_study_scale.py", "--json", "{json}"], ["bench_study_scale.py", "--quick", "--json", "{json}"]),
 }
 
 #: The scaling guards: pytest files run by both modes.
