@@ -29,6 +29,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from distributed import Client
+
 from trussid.study.engine import WORKER_CONFIG, WORKER_ENV
 from trussid.study.spec import StudyError
 
@@ -128,8 +130,6 @@ def jobqueue_cluster(cfg: ClusterConfig):
 @contextlib.contextmanager
 def jobqueue_client(cfg: ClusterConfig):
     """A Client of the cluster of ``cfg`` with its jobs submitted; cancels them on exit."""
-    from distributed import Client
-
     cluster = jobqueue_cluster(cfg)
     try:
         cluster.scale(jobs=cfg.jobs)

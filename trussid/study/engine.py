@@ -40,7 +40,9 @@ import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import dask
 import pyarrow as pa
+from distributed import Client, LocalCluster, as_completed
 
 from trussid._util.threads import blas_threads
 from trussid.study.evaluators import get_evaluator
@@ -350,17 +352,16 @@ def local_cluster(workers: int):
     The workers get :data:`WORKER_ENV` and :data:`WORKER_CONFIG`, set only while the cluster
     is created (``dask.config.set`` as a context). Yields the cluster; closes it on exit.
     """
-    import dask
-    from distributed import LocalCluster
-
     pre_spawn = {**dask.config.get("distributed.nanny.pre-spawn-environ", {}), **WORKER_ENV}
     with dask.config.set({**WORKER_CONFIG, "distributed.nanny.pre-spawn-environ": pre_spawn}):
         # silence_logs: Dask's own log lines about its processes (a slow worker shutdown on
         # a loaded machine; after Ctrl-C, workers losing the scheduler they were
         # heartbeating to) are not the user's business: what matters reaches the user as
         # failed rows, lost batches or an exception.
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.CRITICAL)
+        # The scheduler's HTTP server on a free loopback port (with None it takes 8787 and
+        # warns when another cluster holds it).
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address="127.0.0.1:0", silence_logs=logging.CRITICAL)
     try:
         yield cluster
     finally:
@@ -380,16 +381,20 @@ def _thread_count(client):
     return threads
 
 
-def _stream(client, submit, source, threads, saved, run: StudyRun) -> None:
+def _check(stop) -> None:
+    if stop is not None and stop():
+        raise KeyboardInterrupt
+
+
+def _stream(client, submit, source, threads, saved, run: StudyRun, stop=None) -> None:
     """Keep :data:`IN_FLIGHT` batches per worker thread submitted; save each as it returns.
 
     ``submit(batch)`` makes a future, ``source`` yields the batches, ``saved(result)``
     writes one. A batch Dask gave up on (its workers kept dying: KilledWorker) counts as
-    lost and is left for a rerun. On any exception (Ctrl-C included) the submitted batches
-    are cancelled before it is passed on.
+    lost and is left for a rerun. ``stop()`` true after a saved batch ends the loop as
+    Ctrl-C does. On any exception (Ctrl-C included) the submitted batches are cancelled
+    before it is passed on.
     """
-    from distributed import as_completed
-
     pending, sizes = as_completed(), {}
 
     def top_up(n_tasks):
@@ -415,6 +420,7 @@ def _stream(client, submit, source, threads, saved, run: StudyRun) -> None:
             fut.release()
             if res is not None:
                 saved(res)
+            _check(stop)
             top_up(max(1, IN_FLIGHT * threads() - pending.count()))  # more if workers joined
     except BaseException:  # Ctrl-C included: cancel the submitted batches, then re-raise
         client.cancel(list(pending.futures))
@@ -422,7 +428,7 @@ def _stream(client, submit, source, threads, saved, run: StudyRun) -> None:
 
 
 def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None,
-              workers: int | None = None, chunk: int | None = None, progress=None) -> StudyRun:
+              workers: int | None = None, chunk: int | None = None, progress=None, stop=None) -> StudyRun:
     """Evaluate every point of ``spec`` not yet in ``out`` and save the rows there.
 
     Parameters
@@ -442,6 +448,11 @@ def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None
         :class:`BatchSizer`). Does not change results.
     progress : callable, optional
         ``progress(batch)`` after each saved batch, with its :class:`BatchResult`.
+    stop : callable, optional
+        ``stop()`` is asked after each saved batch; true ends the run as Ctrl-C does
+        (``KeyboardInterrupt``). For a caller whose signal handler only sets a flag: an
+        exception raised by a handler while Python runs a finaliser (a Dask future's
+        ``__del__``) is lost, so a plain Ctrl-C can go unnoticed in a long study.
 
     Returns
     -------
@@ -495,9 +506,8 @@ def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None
         run.start_s, c_submit = time.perf_counter() - t_start, time.process_time()
         for batch in batches(lambda: 1):
             saved(evaluate_batch(spec.evaluate, spec.options, names, batch, schema))
+            _check(stop)
         return finish()
-
-    from distributed import Client
 
     with contextlib.ExitStack() as stack:
         if client is None:
@@ -516,7 +526,7 @@ def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None
                                  key=f"{token}-{batch[0][0]}", pure=False)
 
         run.start_s, c_submit = time.perf_counter() - t_start, time.process_time()
-        _stream(client, submit, batches(threads), threads, saved, run)
+        _stream(client, submit, batches(threads), threads, saved, run, stop)
         finish()  # before the cluster's shutdown: the run's own cost
     run.seconds = time.perf_counter() - t_start
     return run

@@ -12,7 +12,9 @@ spec on the same DIR is refused. ``trussid study DIR`` resumes the study stored 
 
 from __future__ import annotations
 
+import contextlib
 import json
+import signal
 import sys
 from pathlib import Path
 
@@ -74,9 +76,32 @@ def run(args) -> int:
     return _run(spec, out, args)
 
 
-def _run(spec, out: Path, args) -> int:
-    import contextlib
+@contextlib.contextmanager
+def _stop_on_signals():
+    """``stop()``: true once SIGINT or SIGTERM arrived; a second one raises KeyboardInterrupt.
 
+    The handler only sets a flag that the engine reads after each saved batch: a
+    KeyboardInterrupt raised from the handler while Python runs a finaliser (a Dask future
+    released) is lost ("Exception ignored in ..."), and a study went on after Ctrl-C.
+    SIGTERM (a batch system ending the job) stops the same way. The previous handlers are
+    restored on exit.
+    """
+    got = []
+
+    def handler(signum, frame):
+        if got:
+            raise KeyboardInterrupt
+        got.append(signum)
+
+    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield lambda: bool(got)
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def _run(spec, out: Path, args) -> int:
     from tqdm import tqdm
 
     from trussid.study.engine import plan, run_study
@@ -108,8 +133,9 @@ def _run(spec, out: Path, args) -> int:
                 from trussid.study.cluster import jobqueue_client
 
                 client = stack.enter_context(jobqueue_client(cluster))
+            stop = stack.enter_context(_stop_on_signals())
             res = run_study(spec, out, client=client, scheduler=args.scheduler, workers=args.workers,
-                            chunk=args.chunk, progress=progress)
+                            chunk=args.chunk, progress=progress, stop=stop)
     except KeyboardInterrupt:
         bar.close()
         done = len(StudyStore(out, spec, schema, len(points)).done_points())
