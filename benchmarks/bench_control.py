@@ -8,6 +8,10 @@ and CPU), the machine, load and commit into the Markdown file, and the raw numbe
 beside it. BLAS is limited to one thread before numpy loads (2-core shared machine).
 
     python benchmarks/bench_control.py [--quick] [--out benchmarks/results/control.md]
+
+CI (``benchmarks/run.py --quick``) adds ``--samples 3000 --truths 2 --no-baselines``: a shorter
+record, the nominal truth and one perturbed one, no decentralised baselines (minutes less; the
+figures then say only that the script runs).
 """
 
 from __future__ import annotations
@@ -55,26 +59,35 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the --quick demo's 18-state model")
     ap.add_argument("--out", default=None, help="Markdown file to write (default: print)")
+    ap.add_argument("--truths", type=int, default=None,
+                    help="evaluate on the first N truths only (default: all 7 + 2 stretch)")
+    ap.add_argument("--no-baselines", action="store_true", help="skip the decentralised baselines")
+    ap.add_argument("--samples", type=int, default=None,
+                    help="identification record length (default: the demo's); validation the same")
     args = ap.parse_args()
 
     import control
 
-    from trussid.campaign.control import (control_study, report_markdown, summary, truths)
+    from trussid.campaign.control import (LoopSettings, control_study, report_markdown, summary,
+                                          truths)
     from trussid._util.jsonio import json_safe
     from trussid.campaign.demo import build_plant, demo_settings, identify_model, run_experiments
 
     load0 = os.getloadavg()
-    settings = demo_settings(quick=args.quick, simo_channels=())
-    tp = build_plant(settings)
+    sizes = {} if args.samples is None else {"n_identification": args.samples, "n_validation": args.samples}
+    settings = demo_settings(quick=args.quick, simo_channels=(), **sizes)
+    tp = build_plant()
     rid, _ = run_experiments(tp, settings)["mimo"]
     d = rid.data
     fit, w_id, c_id = timed(identify_model, d.u, d.y, settings.mimo_order, d.dt,
                             block_rows=settings.block_rows)
     m = fit.model
     model = control.ss(m.A, m.B, m.C, m.D, m.dt, inputs=d.input_names, outputs=d.output_names)
-    plants, w_tr, c_tr = timed(truths, stretch=True)
+    plants, w_tr, c_tr = timed(truths, stretch=args.truths is None)
+    plants = plants[:args.truths]
     study, w_st, c_st = timed(control_study, model, d.u, d.y, K=fit.K, plants=plants,
-                              baselines=True, progress=print)
+                              baselines=not args.no_baselines,
+                              settings=LoopSettings.for_lab(tp.lab), progress=print)
     load1 = os.getloadavg()
     t = study["timings_s"]
     kind = "quick (18 states)" if args.quick else "full (36 states)"

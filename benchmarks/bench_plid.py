@@ -59,7 +59,8 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, os.path.dirname(__file__))
 
 from bench_plid_thesis import measure  # noqa: E402
-from plid_cases import Case, _freqs, _modes, _unit_rms_outputs, record  # noqa: E402
+from plid_cases import Case, record  # noqa: E402
+from trussid.study.plants import _freqs, _modes, _unit_rms_outputs  # noqa: E402 - the plants' private builders
 from trussid.plid.metrics import frf_error  # noqa: E402
 from trussid.plid.multipass import identify  # noqa: E402
 from trussid.plid.subspace import n4sid  # noqa: E402
@@ -115,7 +116,8 @@ def real_nfoursid(u, y, n, block_rows, dt):
     return control.ss(ss.a, ss.b, ss.c, ss.d, dt)
 
 
-def accuracy_case(name, m, n_samples, seed, plant_seed, log=print):
+def accuracy_case(name, m, n_samples, seed, plant_seed, log=print, block_rows=BLOCK_ROWS,
+                  starts=("subspace", "scratch")):
     case = displacement_plant(6, m, 3, plant_seed)
     ex = record(case, n_samples, "60dB", seed)
     val = record(case, N_VAL, "none", seed + 1000)
@@ -126,7 +128,7 @@ def accuracy_case(name, m, n_samples, seed, plant_seed, log=print):
     log(f"[{name}] {case.name}; {n_samples} samples, seed {seed}")
     rows = {}
     search_seconds = 0.0
-    for i in BLOCK_ROWS:
+    for i in block_rows:
         if i * 3 < ORDER + 3 or n_samples - 2 * i < 2 * i * (m + 3):
             continue
         t0 = time.perf_counter()
@@ -161,14 +163,14 @@ def accuracy_case(name, m, n_samples, seed, plant_seed, log=print):
     log(f"  nfoursid package i={best_rms}: max {r['max_db']:.4f} rms {r['rms_db']:.5f} "
         f"sim {r['sim_db']} ({sec:.1f} s); FRF differs from the thin-SVD model by "
         f"{diff:.2e} dB at most")
-    for start in ("subspace", "scratch"):
+    for start in starts:
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             ident = identify(u, y, ORDER, dt, start=start)
         sec = time.perf_counter() - t0
         r = measure_all(ident.model, case, val, sec,
-                    {"prior_block_rows": (ident.provenance.subspace or {}).get("block_rows")})
+                    {"prior_block_rows": getattr(ident.provenance.subspace, "block_rows", None)})
         key = "PLID default (subspace prior)" if start == "subspace" else "PLID scratch"
         out["methods"][key] = r
         log(f"  {key}: max {r['max_db']:.4f} rms {r['rms_db']:.5f} sim {r['sim_db']} "
@@ -180,6 +182,8 @@ def verdicts(res):
     o = res["n4sid_oracle"]
     v = {}
     for key in ("PLID default (subspace prior)", "PLID scratch"):
+        if key not in res["methods"]:  # the quick form runs the default start only
+            continue
         r = res["methods"][key]
         sim_ok = r["sim_db"] is not None and o["sim_db"][1] is not None and \
             r["sim_db"] >= o["sim_db"][1]
@@ -212,12 +216,12 @@ def accuracy_tables(results) -> str:
 # ----------------------------------------------------------------------------- acceptance 7
 
 
-def speed(n_samples=3000, repeats=3, log=print):
+def speed(n_samples=3000, repeats=3, log=print, shapes=((12, 1, 3), (30, 1, 3), (30, 3, 3))):
     from trussid.plid.bases import basis_for, model_frequencies
     from trussid.plid.estimator import PLID
 
     out = []
-    for n, m, p in ((12, 1, 3), (30, 1, 3), (30, 3, 3)):
+    for n, m, p in shapes:
         case = displacement_plant(n // 2, m, p, seed=100 + n + m)
         ex = record(case, n_samples, "60dB", 7)
         u, y = ex.data.u, ex.data.y
@@ -281,6 +285,9 @@ def main(argv=None):
     ap.add_argument("which", nargs="*", default=["accuracy", "speed"])
     ap.add_argument("--seeds", type=int, nargs="+", default=[11])
     ap.add_argument("--json", help="write the raw results here")
+    ap.add_argument("--quick", action="store_true",
+                    help="CI form: case (a) on 3000 samples at 2 block rows, the default start; speed "
+                         "on 1000 samples, (12,1,3), 1 repeat")
     args = ap.parse_args(argv)
     t_start = time.perf_counter()
     report = {"machine_start": machine()}
@@ -288,6 +295,10 @@ def main(argv=None):
     if "accuracy" in args.which:
         results = []
         for seed in args.seeds:
+            if args.quick:
+                results.append(accuracy_case("a (1x3, 3000)", 1, 3000, seed, plant_seed=41,
+                                             block_rows=(10, 20), starts=("subspace",)))
+                continue
             results.append(accuracy_case("a (1x3, 8000)", 1, 8000, seed, plant_seed=41))
             results.append(accuracy_case("b (3x3, 10000)", 3, 10000, seed, plant_seed=42))
         for r in results:
@@ -296,7 +307,7 @@ def main(argv=None):
         report["accuracy"] = results
         print(accuracy_tables(results))
     if "speed" in args.which:
-        report["speed"] = speed()
+        report["speed"] = speed(1000, 1, shapes=((12, 1, 3),)) if args.quick else speed()
         print(speed_table(report["speed"]))
     report["machine_end"] = machine()
     report["wall_seconds"] = time.perf_counter() - t_start

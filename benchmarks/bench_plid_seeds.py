@@ -33,10 +33,14 @@ def main(argv=None):
     ap.add_argument("--out", default=str(HERE / "results"))
     ap.add_argument("--study", default=None, help="study output directory (default: temporary)")
     ap.add_argument("--workers", type=int, default=None, help="local Dask workers (default: one per core)")
+    ap.add_argument("--quick", action="store_true",
+                    help="CI form: 3000 + 1000 samples, block rows 20 and 30 (with --seeds 11-11)")
     args = ap.parse_args(argv)
     lo, hi = (int(v) for v in args.seeds.split("-"))
     d = load_spec(HERE / "studies" / "plid_seeds.toml").to_dict()
     d["parameters"]["seed"] = {"values": list(range(lo, hi + 1))}
+    if args.quick:
+        d["evaluate"].update(n_samples=3000, n_validation=1000, block_rows=[20, 30])
     spec = spec_from_dict(d)
     t_all = time.perf_counter()
     study = args.study or tempfile.mkdtemp(prefix="plid_seeds_")

@@ -19,6 +19,10 @@ so that this benchmark runs from the repository alone):
 PLID is ``trussid.plid.identify(u, y, order, dt)`` with its defaults (no setting swept: it
 chooses its block rows, its direct term and its predictor gain on the data it is given).
 
+The command line: the identification part of each set is written as a CSV and identified
+by ``trussid identify DATA.csv --order N --out MODEL.npz`` (defaults only) at PLID's chosen
+order; the model file is scored on the validation part like the rest.
+
 Timing: the fit at the chosen order is repeated (min of 3; 2 on the subframe) for PLID and
 nfoursid N4SID, CPU and wall seconds, in the same run; for PLID the recursion's own time and
 samples/s are reported from ``info["recursion_seconds"]``.
@@ -161,7 +165,7 @@ def fit_plid(u, y, n, dt, h=None):
     idn = identify(u, y, order=n, dt=dt)
     m = idn.model
     prov = idn.provenance
-    note = (f"block rows {(prov.subspace or {}).get('block_rows')}; "
+    note = (f"block rows {getattr(prov.subspace, 'block_rows', None)}; "
             f"D {'estimated' if prov.direct.estimated else '= 0'}; "
             f"K: {(prov.predictor or {}).get('chosen')}"
             + (f"; {prov.structure}" if prov.structure is not None else ""))
@@ -405,7 +409,10 @@ def report(all_res, env):
     n_ok = sum(v["pred_ok"] and v["sim_ok"] for v in verdicts.values())
     L.append("")
     L.append(f"PLID best or within 1 point of the best on both measures on **{n_ok} of "
-             f"{len(verdicts)}** sets; one-step >= simulation on "
+             f"{len(verdicts)}** sets (on one-step prediction on "
+             f"**{sum(v['pred_ok'] for v in verdicts.values())} of {len(verdicts)}**, on "
+             f"simulation on **{sum(v['sim_ok'] for v in verdicts.values())} of "
+             f"{len(verdicts)}**); one-step >= simulation on "
              f"{sum(v['pred_ge_sim'] for v in verdicts.values())} of {len(verdicts)}; "
              f"unstable PLID models at the chosen order: "
              f"{sum(not v['stable'] for v in verdicts.values())}.\n")
@@ -442,6 +449,23 @@ def report(all_res, env):
                  f"{b['wall']:.2f} / {b['cpu']:.2f} (n={b['order']}, i={b['setting']}) | "
                  f"{a['cpu'] / b['cpu']:.1f}x |")
     L.append("")
+    cli = {name: res["cli"] for name, res in all_res.items() if res.get("cli")}
+    if cli:
+        L.append("## `trussid identify` with its defaults\n")
+        L.append("The identification part of each set written as a CSV (`t, u1.., y1..`) and "
+                 "identified by `trussid identify DATA.csv --order N --out MODEL.npz` (no other "
+                 "option) at PLID's chosen order; the model file (with its K) scored on the "
+                 "validation part as above.\n")
+        L.append("| set | order | `identify()` 1-step / sim | `trussid identify` 1-step / sim | "
+                 "CLI wall s |")
+        L.append("|---|---|---|---|---|")
+        for name, c in cli.items():
+            s = select(all_res[name], "PLID")
+            L.append(f"| {name} | {c['order']} | {_f(s['pred'])} / {_f(s['sim'])} | "
+                     f"{_f(c.get('pred'))} / {_f(c.get('sim'))}"
+                     f"{' (' + c['error'] + ')' if c.get('error') else ''} | "
+                     f"{c.get('wall', float('nan')):.1f} |")
+        L.append("")
     L.append("## Notes of PLID's chosen fits\n")
     for name, res in all_res.items():
         s = select(res, "PLID")
@@ -450,6 +474,43 @@ def report(all_res, env):
                      f"{s['note']}")
     L.append("")
     return "\n".join(L), verdicts
+
+
+def cli_check(name, res, log=print):
+    """``trussid identify`` with its defaults on a CSV of the identification part, at PLID's
+    chosen order, scored on the validation part like every method here."""
+    import tempfile
+
+    from trussid.plid.modelfile import load_model
+
+    s = select(res, "PLID")
+    if s is None:
+        return None
+    d = DATASETS[name]
+    u, y = load(name)
+    (ui, yi), (uv, yv) = split(u, y)
+    out = {"order": s["order"]}
+    with tempfile.TemporaryDirectory() as tmp:
+        csv = os.path.join(tmp, f"{name}.csv")
+        cols = ["t"] + [f"u{j + 1}" for j in range(ui.shape[1])] + [
+            f"y{j + 1}" for j in range(yi.shape[1])]
+        t = np.arange(ui.shape[0]) * d["dt"]
+        np.savetxt(csv, np.column_stack([t, ui, yi]), delimiter=",", header=",".join(cols),
+                   comments="", fmt="%.17g")
+        npz = os.path.join(tmp, "model.npz")
+        t0 = time.perf_counter()
+        r = subprocess.run([sys.executable, "-m", "trussid", "identify", csv, "--order",
+                            str(s["order"]), "--out", npz], capture_output=True, text=True)
+        out["wall"] = time.perf_counter() - t0
+        if r.returncode:
+            out["error"] = (r.stderr.strip().splitlines() or ["exit %d" % r.returncode])[-1]
+            return out
+        model, meta = load_model(npz)
+        mdl = _mk(model.A, model.B, model.C, model.D, meta["K"])
+        out.update(sim=sim_fit(mdl, uv, yv), pred=pred_fit(mdl, uv, yv))
+    log(f"[{name}] trussid identify --order {s['order']}: 1-step {_f(out['pred'])} "
+        f"sim {_f(out['sim'])} ({out['wall']:.1f} s wall)")
+    return out
 
 
 def profile_subframe(out):
@@ -510,6 +571,8 @@ def main(argv=None):
             res = evaluate(name, methods, log=lambda s: print(s, flush=True))
             res["retime"] = retime(name, res, [m for m in ("PLID", "N4SID") if m in methods],
                                    log=lambda s: print(s, flush=True))
+            if "PLID" in methods:
+                res["cli"] = cli_check(name, res, log=lambda s: print(s, flush=True))
             all_res[name] = res
         env["loadavg_end"] = os.getloadavg()
         env["seconds"] = time.perf_counter() - t0

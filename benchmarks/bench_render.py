@@ -65,7 +65,7 @@ def load(name: str):
     return model, solve_modes(model, n_modes=12), decorations
 
 
-def one(name: str) -> dict:
+def one(name: str, warm_repeats: int = 5, gif_repeats: int = 3) -> dict:
     from trussid.fem import render
 
     model, modes, decorations = load(name)
@@ -75,7 +75,7 @@ def one(name: str) -> dict:
     render.render_mode(model, modes, first, out / "cold.png", window_size=PNG_SIZE, decorations=decorations)
     cold = time.perf_counter() - t0
     warm = []
-    for k in range(5):
+    for k in range(warm_repeats):
         t0 = time.perf_counter()
         render.render_mode(model, modes, first + 1 + k, out / f"m{k}.png", window_size=PNG_SIZE, decorations=decorations)
         warm.append(time.perf_counter() - t0)
@@ -84,7 +84,7 @@ def one(name: str) -> dict:
     scene.meshes(1.0)
     build = time.perf_counter() - t0
     gif = []
-    for _ in range(3):
+    for _ in range(gif_repeats):
         t0 = time.perf_counter()
         frames = render.render_mode_gif(model, modes, first, out / "m.gif", frames=GIF_FRAMES,
                                         window_size=GIF_SIZE, decorations=decorations)
@@ -111,17 +111,21 @@ def one(name: str) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--one", metavar="MODEL")
+    parser.add_argument("--quick", action="store_true",
+                        help="CI form: the example deck with the default backend, 1 warm PNG, 1 GIF")
+    parser.add_argument("--out", type=Path, default=RESULTS, help="Markdown file to write")
     args = parser.parse_args()
     if args.one:
-        print(json.dumps(one(args.one)))
+        print(json.dumps(one(args.one, *((1, 1) if args.quick else ()))))
         return
+    backends = dict(list(BACKENDS.items())[:1]) if args.quick else BACKENDS
     cases = ["frame.bdf"]
-    if (ROOT / "benchmarks" / "fem_models.py").exists():
+    if (ROOT / "benchmarks" / "fem_models.py").exists() and not args.quick:
         cases.append("lattice6")
     try:
         import importlib.util
 
-        if importlib.util.find_spec("trussid.testbed.model") is not None:
+        if importlib.util.find_spec("trussid.testbed.model") is not None and not args.quick:
             cases.insert(0, "testbed")
     except ImportError:
         pass
@@ -130,13 +134,13 @@ def main() -> None:
     # cases outer, backends inner: the two backends of a case run close together in time,
     # so a burst of load from other jobs hits both alike
     for case in cases:
-        for backend, window in BACKENDS.items():
+        for backend, window in backends.items():
             env = {k: v for k, v in os.environ.items()
                    if k not in ("DISPLAY", "WAYLAND_DISPLAY", "VTK_DEFAULT_OPENGL_WINDOW")}
             if window:
                 env["VTK_DEFAULT_OPENGL_WINDOW"] = window
-            res = subprocess.run([sys.executable, __file__, "--one", case], capture_output=True, text=True,
-                                 env=env, cwd=ROOT)
+            res = subprocess.run([sys.executable, __file__, "--one", case, *(["--quick"] if args.quick else [])],
+                                 capture_output=True, text=True, env=env, cwd=ROOT)
             if res.returncode != 0:
                 print(res.stderr, file=sys.stderr)
                 raise SystemExit(f"{case} with {backend} failed")
@@ -145,10 +149,10 @@ def main() -> None:
             row["stderr_warnings"] = sum("WARN" in line or "ERR" in line for line in res.stderr.splitlines())
             rows.append(row)
             print(json.dumps(row), flush=True)
-    write_md(rows, cases, (load_before, os.getloadavg()[0]))
+    write_md(rows, cases, (load_before, os.getloadavg()[0]), args.out)
 
 
-def write_md(rows, cases, load) -> None:
+def write_md(rows, cases, load, path: Path = RESULTS) -> None:
     import vtk
     import pyvista
 
@@ -194,9 +198,9 @@ def write_md(rows, cases, load) -> None:
     if "testbed" not in cases:
         lines += ["", "The default testbed FE model (`fem.testbed`) did not exist when this was run; "
                   "the table uses the example deck and a lattice instead."]
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    RESULTS.write_text("\n".join(lines) + "\n")
-    print(f"wrote {RESULTS}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines) + "\n")
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":

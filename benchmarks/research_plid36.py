@@ -18,8 +18,11 @@ Research script, not a library recipe (session 2, issue 6): it was settled after
 records 12-14, and it fails the FRF max on one of four further records (30 dB, seed 12).
 Its figures are in benchmarks/results/plid_thesis.md ("36 states, session 2").
 
-Usage: python3 benchmarks/research_plid36.py 60dB 11 [30dB 11 ...]
+Usage: python3 benchmarks/research_plid36.py 60dB 11 [30dB 11 ...] [--out DIR] [--quick]
+(``--quick``, the CI form: 3000 identification and 1000 validation samples, N4SID at 20 and 30
+block rows; its figures say only that the script runs.)
 """
+import argparse
 import json
 import os
 import sys
@@ -153,16 +156,24 @@ def identify36(u, y, dt, order=ORDER, var_a=1e-4, var_b=1e-2, obs_radius=0.9, fo
 
 
 def main(argv):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("runs", nargs="*", default=["60dB", "11", "30dB", "11", "12bit", "11", "60dB", "12"],
+                    help="NOISE SEED pairs")
+    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results"))
+    ap.add_argument("--quick", action="store_true", help="CI form (see the module docstring)")
+    args = ap.parse_args(argv)
+    n_id, n_val, block_rows = (3000, 1000, (20, 30)) if args.quick else (N_ID, N_VAL, (20, 30, 40, 60, 80))
+    argv = args.runs
     case = case_b()
     dt = case.plant.dt
     out = []
     for noise, seed in zip(argv[0::2], argv[1::2]):
         seed = int(seed)
-        ex = record(case, N_ID, noise, seed)
-        val = record(case, N_VAL, "none", seed + 1000)
+        ex = record(case, n_id, noise, seed)
+        val = record(case, n_val, "none", seed + 1000)
         u, y = ex.data.u, ex.data.y
         best = None
-        for i in (20, 30, 40, 60, 80):
+        for i in block_rows:
             t0 = time.perf_counter()
             fit = n4sid(u, y, ORDER, i, dt)
             mw = measure(fit.with_d, case, val, time.perf_counter() - t0, {"block_rows": i})
@@ -180,12 +191,12 @@ def main(argv):
               f"({info['seconds']:.0f} s, of which 42-state fit {info['seconds_42']:.0f} s) | its start (before the pass) "
               f"max {mp['max_db']:.3f} rms {mp['rms_db']:.4f} sim {mp['sim_db']} | beats all three: {ok}", flush=True)
         out.append({"noise": noise, "seed": seed, "n4sid_best": best, "plid36": mm, "start": mp, "info": info, "beats": ok})
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results",
-                        "plid36_research_%s.json" % "_".join(argv))
+    os.makedirs(args.out, exist_ok=True)
+    path = os.path.join(args.out, "plid36_research_%s.json" % "_".join(argv))
     with open(path + ".tmp", "w") as fh:
         json.dump(out, fh, indent=1, default=float)
     os.replace(path + ".tmp", path)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:] or ["60dB", "11", "30dB", "11", "12bit", "11", "60dB", "12"])
+    main(sys.argv[1:])

@@ -247,6 +247,17 @@ def assemble(model, autospc: bool = False) -> System:
         Bad element data or references (naming the element, spring, mass or body), a DOF
         without stiffness when the model has supports (``"mechanism: node 7 rz has no
         stiffness"``), or a DOF with neither stiffness nor mass when ``autospc`` is off.
+
+    Examples
+    --------
+    >>> from trussid.fem import ALUMINIUM, Model, Section, assemble
+    >>> m = Model()
+    >>> m.add_nodes([1, 2, 3], [[0, 0, 0], [0.5, 0, 0], [1, 0, 0]])
+    >>> m.add_beams([1, 2], [[1, 2], [2, 3]], Section.tube(0.01, 0.001), ALUMINIUM, orient=[0, 0, 1])
+    >>> m.fix(1)
+    >>> system = assemble(m)
+    >>> system.K.shape                            # 18 DOFs less the 6 clamped ones
+    (12, 12)
     """
     node_ids = model.node_ids
     if len(node_ids) == 0:

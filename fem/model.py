@@ -12,6 +12,7 @@ Everything is SI: m, kg, s, N, Pa.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Iterable, Literal
 
@@ -32,6 +33,14 @@ def parse_dofs(dofs: str | Iterable[int]) -> np.ndarray:
 
     ``dofs`` is a NASTRAN-style digit string (``"123"`` = translations, ``"123456"`` = all)
     or an iterable of 0-based component indices.
+
+    Examples
+    --------
+    >>> from trussid.fem import parse_dofs
+    >>> parse_dofs("123")                         # NASTRAN digits: the translations
+    array([ True,  True,  True, False, False, False])
+    >>> parse_dofs([3, 4, 5])                     # 0-based components: the rotations
+    array([False, False, False,  True,  True,  True])
     """
     mask = np.zeros(6, dtype=bool)
     if isinstance(dofs, str):
@@ -235,6 +244,49 @@ class GeneralElements:
         return len(self.ids)
 
 
+def _ids(values, what: str) -> np.ndarray:
+    """Integer ids from ``values``; a non-whole or non-finite number is a ModelError naming
+    it (``np.asarray(.., dtype=int64)`` would store node 4.5 as 4 without a word)."""
+    a = np.asarray(values)
+    if a.dtype.kind in "iu":
+        return a.astype(np.int64)
+    if a.dtype.kind == "b" or a.dtype.kind not in "f":
+        try:
+            a = a.astype(float)
+        except (TypeError, ValueError):
+            raise ModelError(f"{what} must be whole numbers, got {values!r}") from None
+    bad = ~np.isfinite(a) | (a != np.round(a))
+    if bad.any():
+        raise ModelError(f"{what} must be whole numbers, got {a[bad].ravel()[0]!r}")
+    return a.astype(np.int64)
+
+
+def _inertia_tensors(inertia, n: int, nodes) -> np.ndarray:
+    """(n, 3, 3) inertia tensors from the forms :meth:`Model.add_point_masses` takes,
+    checked symmetric and positive semi-definite (a negative moment is no body's)."""
+    if inertia is None:
+        return np.zeros((n, 3, 3))
+    a = np.asarray(inertia, dtype=float)
+    if a.shape == (3,) or a.shape == (n, 3) and a.shape != (3, 3):
+        a = np.einsum("...i,ij->...ij", a, np.eye(3))
+    if a.shape not in ((3, 3), (n, 3, 3)):
+        raise ModelError(f"add_point_masses: inertia must be 3 principal moments, a (3, 3) "
+                         f"tensor or one per mass, got shape {a.shape}")
+    a = np.broadcast_to(a, (n, 3, 3)).copy()
+    scale = np.maximum(np.abs(a).max(axis=(1, 2)), 1e-300)
+    for k in range(n):
+        t = a[k]
+        if not np.all(np.isfinite(t)):
+            raise ModelError(f"point mass at node {nodes[k]}: inertia is not finite")
+        if np.abs(t - t.T).max() > 1e-12 * scale[k]:
+            raise ModelError(f"point mass at node {nodes[k]}: inertia tensor is not symmetric")
+        low = np.linalg.eigvalsh(t).min()
+        if low < -1e-12 * scale[k]:
+            raise ModelError(f"point mass at node {nodes[k]}: inertia tensor has a negative "
+                             f"principal moment ({low:.3g} kg m^2)")
+    return a
+
+
 class Model:
     """A 3-D frame model under construction.
 
@@ -250,11 +302,15 @@ class Model:
 
     Examples
     --------
-    >>> from fem import Model, Section, ALUMINIUM
+    A 1 m aluminium tube clamped at node 1 (12 DOFs, 6 of them supported):
+
+    >>> from trussid.fem import ALUMINIUM, Model, Section
     >>> m = Model()
     >>> m.add_nodes([1, 2], [[0, 0, 0], [1, 0, 0]])
     >>> m.add_beams([1], [[1, 2]], Section.tube(0.00635, 0.001), ALUMINIUM, orient=[0, 0, 1])
     >>> m.fix(1)
+    >>> m.n_nodes, m.n_dof
+    (2, 12)
     """
 
     def __init__(self, beam_theory: Literal["euler-bernoulli", "timoshenko"] = "euler-bernoulli",
@@ -284,7 +340,7 @@ class Model:
     # ------------------------------------------------------------------ nodes
     def add_nodes(self, ids, xyz) -> None:
         """Add nodes with integer ``ids`` (n,) at coordinates ``xyz`` (n, 3) [m]."""
-        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        ids = np.atleast_1d(_ids(ids, "add_nodes: node ids"))
         xyz = np.atleast_2d(np.asarray(xyz, dtype=float))
         if xyz.shape != (len(ids), 3):
             raise ModelError(f"add_nodes: xyz must have shape ({len(ids)}, 3), got {xyz.shape}")
@@ -401,10 +457,18 @@ class Model:
         label : str, optional
             Property label for messages (defaults to the section's name).
         """
-        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        ids = np.atleast_1d(_ids(ids, "add_beams: element ids"))
         n = len(ids)
-        nodes = np.asarray(nodes, dtype=np.int64).reshape(n, 2)
-        orient = np.broadcast_to(np.asarray(orient, dtype=float), (n, 3)).copy()
+        nodes = _ids(nodes, "add_beams: nodes")
+        if nodes.size != 2 * n:
+            raise ModelError(f"add_beams: nodes must be {n} pairs of node ids (shape ({n}, 2)), "
+                             f"got shape {nodes.shape}")
+        nodes = nodes.reshape(n, 2)
+        orient = np.asarray(orient, dtype=float)
+        if orient.shape not in ((3,), (n, 3)):
+            raise ModelError(f"add_beams: orient must be a 3-vector or ({n}, 3), got shape "
+                             f"{orient.shape}")
+        orient = np.broadcast_to(orient, (n, 3)).copy()
         sec = section if isinstance(section, dict) else {
             k: getattr(section, k) for k in ("A", "Iy", "Iz", "J", "Asy", "Asz")}
         mat = material if isinstance(material, dict) else {
@@ -428,6 +492,30 @@ class Model:
                                          else object if k == "labels" else float) for k in keys})
         return Beams(**{k: np.concatenate([c[k] for c in self._beams]) for k in keys})
 
+    def with_beam_sections(self, A, Iy, Iz, J) -> "Model":
+        """A copy of the model whose beams have the section properties ``A`` [m^2], ``Iy``,
+        ``Iz``, ``J`` [m^4] (arrays over the beams in :attr:`beams` order); everything else
+        is the same. For design sweeps that move sections without rebuilding a model.
+
+        Raises
+        ------
+        ModelError
+            If an array is not one finite value per beam.
+        """
+        b = self.beams
+        n = len(b.ids)
+        new = {k: np.asarray(v, dtype=float) for k, v in (("A", A), ("Iy", Iy), ("Iz", Iz), ("J", J))}
+        for k, v in new.items():
+            if v.shape != (n,) or not np.isfinite(v).all():
+                raise ModelError(f"with_beam_sections: {k} must be {n} finite values (one per beam), "
+                                 f"got shape {v.shape}")
+        out = copy.copy(self)
+        for key, value in vars(self).items():  # the copy's own lists: adding to one leaves the other
+            if isinstance(value, list):
+                setattr(out, key, list(value))
+        out._beams = [{**{k: getattr(b, k) for k in Beams.__dataclass_fields__}, **new}]
+        return out
+
     def add_point_masses(self, nodes, mass, inertia=None, offset=None) -> None:
         """Add point masses at node ids ``nodes``.
 
@@ -436,19 +524,26 @@ class Model:
         nodes : (n,) int
         mass : float or (n,) float
             [kg], >= 0.
-        inertia : (3, 3) or (n, 3, 3) float, optional
-            About each mass's centre of gravity, global axes [kg m^2]; default zero.
+        inertia : (3,), (n, 3), (3, 3) or (n, 3, 3) float, optional
+            About each mass's centre of gravity, global axes [kg m^2]; default zero. Three
+            numbers are the principal moments about the global axes (a diagonal tensor).
+            Each tensor must be symmetric and positive semi-definite.
         offset : (3,) or (n, 3) float, optional
             Centre of gravity relative to the node [m]; default zero.
         """
-        nodes = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        nodes = np.atleast_1d(_ids(nodes, "add_point_masses: nodes"))
         n = len(nodes)
-        chunk = {
-            "nodes": nodes,
-            "mass": np.broadcast_to(np.asarray(mass, dtype=float), (n,)).copy(),
-            "inertia": np.broadcast_to(np.zeros((3, 3)) if inertia is None else np.asarray(inertia, float), (n, 3, 3)).copy(),
-            "offset": np.broadcast_to(np.zeros(3) if offset is None else np.asarray(offset, float), (n, 3)).copy(),
-        }
+        inertia = _inertia_tensors(inertia, n, nodes)
+        try:
+            chunk = {
+                "nodes": nodes,
+                "mass": np.broadcast_to(np.asarray(mass, dtype=float), (n,)).copy(),
+                "inertia": inertia,
+                "offset": np.broadcast_to(np.zeros(3) if offset is None else np.asarray(offset, float), (n, 3)).copy(),
+            }
+        except ValueError as exc:
+            raise ModelError(f"add_point_masses: mass must be one number or {n}, and offset a "
+                             f"3-vector or ({n}, 3) ({exc})") from None
         bad = (chunk["mass"] < 0) | ~np.isfinite(chunk["mass"])
         if bad.any():
             raise ModelError(f"point mass at node {nodes[bad][0]}: mass must be >= 0, got {chunk['mass'][bad][0]!r}")
@@ -473,9 +568,9 @@ class Model:
         frame : (3, 3) or (n, 3, 3) float, optional
             Rows are the spring axes in global coordinates; default global axes.
         """
-        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        ids = np.atleast_1d(_ids(ids, "add_springs: spring ids"))
         n = len(ids)
-        nodes = np.asarray(nodes, dtype=np.int64)
+        nodes = _ids(nodes, "add_springs: nodes")
         if nodes.ndim == 1:
             nodes = np.column_stack([nodes, np.full(n, -1)])
         nodes = nodes.reshape(n, 2)

@@ -69,6 +69,36 @@ def modal_plant(modes, loads: np.ndarray, sensors: list[Sensor], damping=0.0025,
     control.StateSpace
         States ``[eta; eta']`` (2 n_kept), inputs as ``loads`` columns then the
         disturbances, outputs one per sensor (then per performance sensor) named after it.
+
+    Examples
+    --------
+    A force at the tip of a 1 m steel cantilever (20 x 10 mm) to the tip's displacement. Six
+    modes hold 99.9 % of the static flexibility ``L^3 / (3 E I)`` = 1 mm/N; the static correction
+    of the truncated modes restores the rest:
+
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.fem import (STEEL, Model, Section, Sensor, assemble, modal_plant,
+    ...                          residual_flexibility, solve_modes)
+    >>> m = Model()
+    >>> m.add_nodes(np.arange(1, 12), np.c_[np.linspace(0, 1, 11), np.zeros((11, 2))])
+    >>> m.add_beams(np.arange(1, 11), np.c_[np.arange(1, 11), np.arange(2, 12)],
+    ...             Section.rectangle(0.02, 0.01), STEEL, orient=[0, 0, 1])
+    >>> m.fix(1)
+    >>> system = assemble(m)
+    >>> modes = solve_modes(system, n_modes=6)
+    >>> force = np.zeros(m.n_dof)
+    >>> force[6 * 10 + 1] = 1.0                       # 1 N along y at node 11 (index 10)
+    >>> tip = Sensor(11, (0, 1, 0), "displacement", name="tip_y")
+    >>> G = modal_plant(modes, force, [tip], damping=0.01, input_names=["force"])
+    >>> G.nstates, G.input_labels, G.output_labels
+    (12, ['force'], ['tip_y'])
+    >>> print(f"{1e3 * control.dcgain(G):.4f} mm/N")
+    0.9994 mm/N
+    >>> R = residual_flexibility(system, modes, force, 6)
+    >>> G = modal_plant(modes, force, [tip], damping=0.01, residual_flexibility=R)
+    >>> print(f"{1e3 * control.dcgain(G):.4f} mm/N")
+    1.0000 mm/N
     """
     F = np.asarray(loads, dtype=float)
     if F.ndim == 1:

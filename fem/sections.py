@@ -71,6 +71,15 @@ class Section:
         """Hollow circle: outer radius ``r_out`` [m], wall thickness ``t`` [m].
 
         Shear factor from Cowper (1966) for a hollow circle.
+
+        Examples
+        --------
+        A 12.7 mm tube with a 1 mm wall: ``A = pi (r_o^2 - r_i^2)``, ``J = 2 I``:
+
+        >>> from trussid.fem import Section
+        >>> t = Section.tube(0.00635, 0.001)
+        >>> print(f"A = {t.A * 1e6:.3f} mm^2, I = {t.Iy * 1e12:.1f} mm^4, J = {t.J * 1e12:.1f} mm^4")
+        A = 36.757 mm^2, I = 633.5 mm^4, J = 1267.1 mm^4
         """
         _positive(name, r_out=r_out, t=t)
         if not t < r_out:
@@ -90,6 +99,13 @@ class Section:
 
         Torsion constant from Roark's series approximation (error < 0.5 %); Cowper shear
         factor 10(1+nu)/(12+11nu).
+
+        Examples
+        --------
+        >>> from trussid.fem import Section
+        >>> r = Section.rectangle(0.02, 0.01)         # b = 20 mm along local y, h = 10 mm along z
+        >>> print(f"Iy = b h^3/12 = {r.Iy * 1e12:.1f} mm^4, Iz = h b^3/12 = {r.Iz * 1e12:.1f} mm^4")
+        Iy = b h^3/12 = 1666.7 mm^4, Iz = h b^3/12 = 6666.7 mm^4
         """
         _positive(name, b=b, h=h)
         A = b * h

@@ -33,6 +33,24 @@ def solve_static(model_or_system, f_full, *, autospc: bool = False) -> np.ndarra
     ModelError
         The stiffness is singular (free rigid-body motion or a mechanism), naming the
         node and component where the factorisation broke down.
+
+    Examples
+    --------
+    A 10 N tip load on a 1 m steel cantilever (20 x 10 mm): the tip deflects
+    ``P L^3 / (3 E I)`` = 10 mm, exactly (cubic elements):
+
+    >>> import numpy as np
+    >>> from trussid.fem import STEEL, Model, Section, solve_static
+    >>> m = Model()
+    >>> m.add_nodes(np.arange(1, 12), np.c_[np.linspace(0, 1, 11), np.zeros((11, 2))])
+    >>> m.add_beams(np.arange(1, 11), np.c_[np.arange(1, 11), np.arange(2, 12)],
+    ...             Section.rectangle(0.02, 0.01), STEEL, orient=[0, 0, 1])
+    >>> m.fix(1)
+    >>> f = np.zeros(m.n_dof)
+    >>> f[6 * 10 + 1] = 10.0                      # node 11 (index 10), force along y [N]
+    >>> u = solve_static(m, f)
+    >>> print(f"{1e3 * u[6 * 10 + 1]:.4f} mm")
+    10.0000 mm
     """
     system = model_or_system if isinstance(model_or_system, System) else assemble(model_or_system, autospc=autospc)
     f_full = np.asarray(f_full, dtype=float)

@@ -1,8 +1,10 @@
 """The testbed's parametric description and its solids (trimesh). Knows nothing of FE.
 
 :class:`Testbed` is the validated, provenance-tagged parameter set of the thesis testbed
-(structure, transducers, electronics, acquisition, damping); :mod:`.layout` turns it into
-node positions, :mod:`.solids` into solids and mass properties. Names load on first use,
+(structure, transducers, electronics, acquisition, damping); :class:`LabSpec` (:mod:`.lab`)
+is the lab around it (converters, electronics, filters, sensors), the one home of the lab's
+numbers; :mod:`.layout` turns the testbed into node positions, :mod:`.solids` into solids
+and mass properties. Names load on first use,
 so parameter sweeps that only need ``Testbed`` and ``testbed_layout`` never import trimesh.
 """
 
@@ -11,9 +13,10 @@ from trussid.geometry.errors import ParameterError
 
 _LAZY = {
     "Testbed": "spec", "StrutParams": "spec", "AdapterParams": "spec", "PztParams": "spec",
-    "UdfParams": "spec", "BaseParams": "spec", "AccelerometerParams": "spec",
-    "ElectricsParams": "spec", "FilterParams": "spec", "DaqParams": "spec",
-    "DampingParams": "spec", "INCH": "spec", "POUND": "spec", "G0": "spec",
+    "UdfParams": "spec", "BaseParams": "spec", "DampingParams": "spec", "INCH": "spec",
+    "POUND": "spec",
+    "LabSpec": "lab", "AccelerometerParams": "lab", "ElectricsParams": "lab",
+    "FilterParams": "lab", "DaqParams": "lab", "G0": "lab",
     "Layout": "layout", "testbed_layout": "layout",
     "load_testbed": "params_toml", "save_testbed": "params_toml", "dumps_testbed": "params_toml",
     "Solid": "solids", "MassProperties": "solids", "mass_properties": "solids",

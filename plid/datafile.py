@@ -52,6 +52,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import scipy.io
 
 from trussid._util.files import atomic_path
 from trussid.plid.data import (IOData, check_enough_samples, select_channels, unknown_name,
@@ -162,6 +163,24 @@ def read_data(path, inputs=None, outputs=None, fs=None) -> IOData:
     -------
     IOData
         With ``notes`` saying what was assumed (e.g. a time column read as milliseconds).
+
+    Examples
+    --------
+    Columns chosen by name, the sample rate from the time column (in milliseconds, as its
+    header says); a column that is not there is named:
+
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from trussid.plid import read_data
+    >>> rows = "".join(f"{k:.1f},{np.sin(k)},{np.cos(k)},{k % 2}\\n" for k in range(5))
+    >>> _ = Path("lab.csv").write_text("time [ms],shaker,acc,trigger\\n" + rows)
+    >>> d = read_data("lab.csv", inputs=["shaker"], outputs=["acc"])
+    >>> d.u.shape, d.y.shape, d.fs
+    ((5, 1), (5, 1), 1000.0)
+    >>> read_data("lab.csv", inputs=["shaker"], outputs=["acc9"])
+    Traceback (most recent call last):
+    ...
+    trussid.plid.errors.DataError: lab.csv: unknown column 'acc9'; did you mean 'acc'?
     """
     path = Path(path)
     if not path.exists():
@@ -394,7 +413,6 @@ def _load_arrays(path: Path, source: str) -> dict:
         if path.suffix.lower() == ".npz":
             with np.load(path, allow_pickle=False) as z:
                 return {k: z[k] for k in z.files}
-        import scipy.io
 
         return {k: v for k, v in scipy.io.loadmat(path, squeeze_me=False).items()
                 if not k.startswith("__")}
@@ -684,6 +702,22 @@ def write_data(data: IOData, path) -> Path:
     NPZ/MAT get ``u``, ``y``, ``fs``, ``input_names``, ``output_names`` (and ``y_clean``
     when known). UFF gets one data set 58 per channel (:func:`trussid.plid.uff.write_uff_data`).
     Returns the path.
+
+    Examples
+    --------
+    A lab record written as CSV (a time column, then ``u_*`` and ``y_*`` columns) and read back:
+
+    >>> import numpy as np
+    >>> from trussid.plid import IOData, read_data, write_data
+    >>> rng = np.random.default_rng(0)
+    >>> record = IOData(u=rng.standard_normal((1000, 1)), y=rng.standard_normal((1000, 2)),
+    ...                 fs=1600.0, input_names=["force"], output_names=["acc1", "acc2"])
+    >>> path = write_data(record, "run1.csv")
+    >>> open(path).readline().strip()
+    't,u_force,y_acc1,y_acc2'
+    >>> again = read_data(path)
+    >>> again.fs, again.input_names, again.output_names, np.allclose(again.y, record.y)
+    (1600.0, ['u_force'], ['y_acc1', 'y_acc2'], True)
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -700,7 +734,9 @@ def write_data(data: IOData, path) -> Path:
         table = np.column_stack([t, data.u, data.y])
         with atomic_path(path) as tmp:
             with open(tmp, "w", newline="") as fh:
-                fh.write(",".join(["t", *in_names, *out_names]) + "\n")
+                # csv quotes a name holding a comma, a quote or a line break, which the
+                # reader takes back (a bare comma would split the name into two columns)
+                csv.writer(fh, lineterminator="\n").writerow(["t", *in_names, *out_names])
                 # %s of a float64 is its shortest exact form (0.000625, not %.17g's
                 # 0.00062500000000000001); the channels keep 17 digits, exact on reading
                 np.savetxt(fh, table, delimiter=",",
@@ -716,8 +752,6 @@ def write_data(data: IOData, path) -> Path:
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **arrays)
             else:
-                import scipy.io
-
                 arrays["input_names"] = np.array(data.input_names, dtype=object)
                 arrays["output_names"] = np.array(data.output_names, dtype=object)
                 with open(tmp, "wb") as fh:

@@ -209,6 +209,25 @@ class PLID:
         OpenBLAS threads while the recursion runs (restored afterwards). Default 1: the
         per-sample products are small and threads only add synchronisation (20 times
         slower on a loaded 2-core machine). None leaves the setting alone.
+
+    Examples
+    --------
+    One PLID pass over a noise-free record of a two-mode plant (50 and 120 Hz, 2 % damping):
+
+    >>> import warnings
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import PLID, excitation, modal_table, simulate
+    >>> s = control.tf("s")
+    >>> G = sum(g * (2 * np.pi * f) ** 2 / (s**2 + 0.04 * 2 * np.pi * f * s + (2 * np.pi * f) ** 2)
+    ...         for f, g in ((50.0, 1.0), (120.0, 0.5)))
+    >>> plant = control.c2d(control.ss(G), 1e-3)
+    >>> u = excitation("white", 2000, fs=1000.0, seed=1)
+    >>> result = PLID(4, dt=1e-3, progress=False).fit(u, simulate(plant, u))
+    >>> result.finite, result.n_samples
+    (True, 2000)
+    >>> print(np.round(modal_table(result.model).frequencies_hz, 2))
+    [ 50. 120.]
     """
 
     def __init__(self, order: int, *, form: str = "sqrt", dt: float = 1.0, Q=1e-6, R=1e-4,

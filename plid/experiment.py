@@ -21,6 +21,7 @@ it is clipped to the end code and counted.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import os
 
 import control
 import numpy as np
@@ -77,6 +78,15 @@ def excitation(kind: str, n_samples: int, n_channels: int = 1, fs: float = 1.0,
     Returns
     -------
     ndarray, shape (N, m)
+
+    Examples
+    --------
+    >>> from trussid.plid import excitation
+    >>> u = excitation("white", 8000, n_channels=3, fs=1600.0, rms=2.5, band=(0.0, 400.0), seed=3)
+    >>> u.shape
+    (8000, 3)
+    >>> print(u.std(axis=0).round(3))             # [V], exactly the RMS asked for
+    [2.5 2.5 2.5]
     """
     if kind not in EXCITATIONS:
         raise DataError(f"unknown excitation '{kind}' (use {', '.join(EXCITATIONS)})")
@@ -154,6 +164,18 @@ def quantize(x: np.ndarray, bits: int, full_scale: float):
     clipped : ndarray of int, shape (k,) (or scalar for 1-D x)
         Samples per channel that fell beyond the last code by more than LSB/2 and were
         clipped.
+
+    Examples
+    --------
+    A 12-bit +-10 V converter: LSB 4.88 mV, codes rounded to the nearest, beyond full scale clipped:
+
+    >>> import numpy as np
+    >>> from trussid.plid.experiment import lsb, quantize
+    >>> print(f"{1e3 * lsb(12, 10.0):.4f} mV")
+    4.8828 mV
+    >>> xq, clipped = quantize(np.array([0.0012, 0.0049, -0.0074, 12.0]), bits=12, full_scale=10.0)
+    >>> print(np.round(xq / lsb(12, 10.0), 3), clipped)
+    [   0.    1.   -2. 2047.] 1
     """
     bits = int(bits)
     if not 1 <= bits <= 32:
@@ -189,6 +211,15 @@ def simulate(plant: control.StateSpace, u: np.ndarray, x0=None) -> np.ndarray:
     ``control.forced_response`` (scipy's ``dlsim``) does the same recursion with two
     products and more Python work per sample, about 10x slower, and identification
     scores many candidate models with it.
+
+    Examples
+    --------
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import simulate
+    >>> G = control.ss([[0.5]], [[1.0]], [[2.0]], [[0.0]], 1.0)   # x' = 0.5 x + u, y = 2 x
+    >>> simulate(G, np.ones((4, 1))).ravel().tolist()
+    [0.0, 2.0, 3.0, 3.5]
     """
     if not control.isdtime(plant, strict=True):
         raise DataError("the plant must be discrete-time (dt > 0); discretise it first")
@@ -261,8 +292,6 @@ def available_memory_bytes() -> int | None:
     except OSError:
         pass
     try:
-        import os
-
         return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
     except (ValueError, OSError, AttributeError):
         return None
@@ -296,8 +325,8 @@ def _per_channel(value, count: int, what: str) -> np.ndarray:
 
 def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: str = "white",
                    rms=1.0, band=None, seed=None, u=None, snr_db=None, sensor_noise_rms=None,
-                   input_noise_rms=0.0, dac_bits=None, adc_bits=None, dac_full_scale=10.0,
-                   adc_full_scale=10.0, auto_range=4.0, input_names=None,
+                   input_noise_rms=0.0, dac_bits=None, adc_bits=None, dac_full_scale=None,
+                   adc_full_scale=None, auto_range=4.0, input_names=None,
                    output_names=None) -> Experiment:
     """Simulate an identification experiment on a discrete plant (see the module docstring).
 
@@ -321,7 +350,8 @@ def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: s
     dac_bits, adc_bits : int, optional
         Converter resolutions; None means no quantisation (and no clipping).
     dac_full_scale, adc_full_scale : float or array (per channel)
-        Converter ranges +-V. ``adc_full_scale="auto"`` ranges each output channel so that
+        Converter ranges +-V, required with ``dac_bits``/``adc_bits`` (a lab's numbers have
+        no default here: they come from the caller's lab). ``adc_full_scale="auto"`` ranges each output channel so that
         +-full scale is +-``auto_range`` times its measured RMS (as a lab sets amplifier
         gains; with 4, a Gaussian signal clips in 6e-5 of the samples and a 12-bit
         converter's quantisation noise is 65 dB below the signal).
@@ -340,6 +370,10 @@ def run_experiment(plant: control.StateSpace, n_samples: int, excitation_kind: s
         raise DataError("the plant must be discrete-time (dt > 0); discretise it first")
     if snr_db is not None and sensor_noise_rms is not None:
         raise DataError("give either snr_db or sensor_noise_rms, not both")
+    for which, bits, full in (("dac", dac_bits, dac_full_scale), ("adc", adc_bits, adc_full_scale)):
+        if bits is not None and full is None:
+            raise DataError(f"{which}_bits={bits} needs {which}_full_scale, the converter's "
+                            "range +-V")
 
     require_stable(plant, "the plant", "a simulation of it diverges")
     fs = 1.0 / plant.dt

@@ -52,6 +52,21 @@ def frequency_response(sys: control.StateSpace, f) -> np.ndarray:
     n x n system per frequency (10 ms each for the 141-state testbed plant). When the
     eigenvectors are ill-conditioned (cond(V) > 1e8, e.g. a defective A) python-control's
     own evaluation is used instead.
+
+    Examples
+    --------
+    A mass-spring-damper, 10 Hz at 5 % damping: unit static gain, ``1 / (2 zeta)`` at resonance:
+
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import frequency_response
+    >>> w = 2 * np.pi * 10.0
+    >>> G = control.ss(control.tf([w**2], [1, 2 * 0.05 * w, w**2]))
+    >>> H = frequency_response(G, [0.0, 10.0])
+    >>> H.shape                                   # (frequencies, outputs, inputs)
+    (2, 1, 1)
+    >>> print(np.round(np.abs(H[:, 0, 0]), 4))
+    [ 1. 10.]
     """
     f = np.atleast_1d(np.asarray(f, dtype=float))
     x = np.exp(2j * np.pi * f * sys.dt) if control.isdtime(sys, strict=True) else 2j * np.pi * f
@@ -109,6 +124,26 @@ def h1(u, y, fs: float, nperseg: int = 1024, window="hann", noverlap=None) -> FR
     Notes
     -----
     H1 is unbiased by output noise (uncorrelated with u) and biased low by input noise.
+
+    Examples
+    --------
+    The H1 estimate of a two-mode plant from 2000 samples of white-noise response, against the
+    plant's own response at 10 Hz:
+
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import excitation, frequency_response, h1, simulate
+    >>> s = control.tf("s")
+    >>> G = sum(g * (2 * np.pi * f) ** 2 / (s**2 + 0.04 * 2 * np.pi * f * s + (2 * np.pi * f) ** 2)
+    ...         for f, g in ((50.0, 1.0), (120.0, 0.5)))
+    >>> plant = control.c2d(control.ss(G), 1e-3)
+    >>> u = excitation("white", 2000, fs=1000.0, seed=1)
+    >>> est = h1(u, simulate(plant, u), fs=1000.0, nperseg=500)
+    >>> est.H.shape, est.f[5]                     # 2 Hz resolution
+    ((251, 1, 1), 10.0)
+    >>> true = frequency_response(plant, [10.0])[0, 0, 0]
+    >>> print(f"|H1| {abs(est.H[5, 0, 0]):.2f}, true {abs(true):.2f}, error {100 * abs(est.H[5, 0, 0] / true - 1):.1f} %")
+    |H1| 1.55, true 1.54, error 0.3 %
     """
     f, Suu, Suy, Syy, n_avg = _spectra(u, y, fs, nperseg, window, noverlap)
     m = Suu.shape[1]

@@ -71,6 +71,18 @@ def modal_table(sys, physical_only: bool = False) -> ModeShapes:
     (``s = ln(z)/dt`` for a discrete model), the same conversion as :func:`control.damp`.
     A defective A (repeated poles without a full set of eigenvectors) gives shapes of poor
     accuracy; identified models practically never have one.
+
+    Examples
+    --------
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import modal_table
+    >>> s = control.tf("s")
+    >>> G = sum(g * (2 * np.pi * f) ** 2 / (s**2 + 0.04 * 2 * np.pi * f * s + (2 * np.pi * f) ** 2)
+    ...         for f, g in ((50.0, 1.0), (120.0, 0.5)))
+    >>> modes = modal_table(control.c2d(control.ss(G), 1e-3))
+    >>> modes.n_modes, np.round(modes.frequencies_hz, 3), np.round(modes.damping, 4)
+    (2, array([ 50., 120.]), array([0.02, 0.02]))
     """
     A = np.asarray(sys.A, dtype=float)
     B = np.asarray(sys.B, dtype=float)
@@ -140,6 +152,17 @@ def mac(phi_a, phi_b=None, zero_shape: str = "raise") -> np.ndarray:
     Returns
     -------
     ndarray, shape (n_a, n_b)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from trussid.plid import mac
+    >>> phi = np.array([[1.0, 1.0], [1.0, -1.0], [0.5, 0.0]])   # two shapes at three sensors
+    >>> print(np.round(mac(phi, phi * [2.0, -3.0]), 3))          # scaled shapes: MAC 1 on the diagonal
+    [[1. 0.]
+     [0. 1.]]
+    >>> print(np.round(mac(phi), 3)[0, 1])                        # shapes orthogonal in the sensors
+    0.0
     """
     a = np.asarray(getattr(phi_a, "shapes", phi_a))
     b = a if phi_b is None else np.asarray(getattr(phi_b, "shapes", phi_b))

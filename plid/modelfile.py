@@ -85,6 +85,17 @@ def save_model(path, sys: control.StateSpace, K=None, input_names=None, output_n
         A continuous model stored beside ``sys`` as ``c_A .. c_D`` (same channels).
     extra : dict of str -> array, optional
         More arrays to store (names must not clash with the reserved ones).
+
+    Examples
+    --------
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import load_model, save_model
+    >>> G = control.ss([[0.9, 0.1], [0.0, 0.8]], [[1.0], [0.5]], [[1.0, 0.0]], [[0.0]], 1e-3)
+    >>> path = save_model("model.npz", G, input_names=["force"], output_names=["acc"])
+    >>> again, meta = load_model(path)
+    >>> np.array_equal(again.A, G.A), again.dt, meta["input_names"], meta["output_names"]
+    (True, 0.001, ['force'], ['acc'])
     """
     path = Path(path)
     if path.suffix.lower() != ".npz":
@@ -167,6 +178,18 @@ def load_model(path, which: str = "auto"):
         ``format_version``, ``has_continuous``, ``extra`` (dict of other arrays) and
         ``stability`` (:class:`trussid.plid.stability.Stability` of the returned model;
         its ``message(...)`` is the one line to show a user, None when stable).
+
+    Examples
+    --------
+    See :func:`save_model`; a file that is not a model is named in the error:
+
+    >>> from pathlib import Path
+    >>> from trussid.plid import load_model
+    >>> _ = Path("notes.npz").write_bytes(b"not a model")
+    >>> load_model("notes.npz")
+    Traceback (most recent call last):
+    ...
+    trussid.plid.errors.DataError: notes.npz: not a model file (cannot read it as .npz: ...)
     """
     path = Path(path)
     source = str(path)

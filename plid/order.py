@@ -22,6 +22,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from trussid.plid.canonical import check_order
 from trussid.plid._validate import as_2d
@@ -33,7 +34,10 @@ from trussid.plid.metrics import (default_noise_covariances, one_step_predict, p
 from trussid.plid.multipass import identify
 from trussid.plid.subspace import subspace_prior
 
-__all__ = ["OrderRow", "order_table", "format_table"]
+__all__ = ["OrderRow", "order_table", "format_table", "order_warnings"]
+
+#: Validation prediction this far [dB] below the identification prediction is reported.
+OVERFIT_GAP_DB = 6.0
 
 
 @dataclass
@@ -47,6 +51,7 @@ class OrderRow:
     seconds: float
     model: object
     error: str = ""               # why this order gave no model (then prediction_db is nan)
+    identification_db: float = float("nan")  # one-step ratio on the identification part
 
 
 def _split(u, y, holdout):
@@ -102,8 +107,6 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
     lo, hi = band if band is not None else (0.01 * fs, 0.49 * fs)
     f = np.linspace(lo, hi, n_freq)
     rows, H_prev = [], None
-    from tqdm.auto import tqdm
-
     show = progress if progress is not None else len(orders) > 1
     for n in tqdm(orders, disable=not show, unit="order", desc="order table"):
         t0 = time.perf_counter()
@@ -138,14 +141,45 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
         else:
             skip = prediction_burn_in(model, K, u_val.shape[0])
             pr = prediction_ratio_db(model, u_val, y_val, K=K, skip=skip)["overall"]
+        with np.errstate(all="ignore"):
+            pid = prediction_ratio_db(model, u, y, K=K,
+                                      skip=prediction_burn_in(model, K, u.shape[0]))["overall"]
         H = frequency_response(model, f)
         change = None
         if H_prev is not None:
             change = float(np.sqrt(np.mean((20 * np.log10(np.abs(H) / np.abs(H_prev))) ** 2)))
         H_prev = H
         unstable = int(np.sum(np.abs(np.linalg.eigvals(np.asarray(model.A))) >= 1))
-        rows.append(OrderRow(n, float(pr), change, unstable, sec, model))
+        rows.append(OrderRow(n, float(pr), change, unstable, sec, model,
+                             identification_db=float(pid)))
     return rows
+
+
+def order_warnings(rows, gap_db: float = OVERFIT_GAP_DB) -> list[str]:
+    """What a user would be misled by in an :func:`order_table`, one sentence each.
+
+    - The best validation prediction at the top of the scanned range: the data may support
+      more states than were tried.
+    - At the best order, the validation prediction more than ``gap_db`` below the
+      identification prediction: the model fits the identification record's noise (or the
+      record is not stationary), and its in-sample figures overstate it.
+    """
+    ok = [r for r in rows if not r.error and np.isfinite(r.prediction_db)]
+    if not ok:
+        return []
+    best = max(ok, key=lambda r: r.prediction_db)
+    out = []
+    if len(ok) > 1 and best.order == max(r.order for r in ok):
+        out.append(f"the best validation prediction is at the top of the scanned range "
+                   f"(order {best.order}): the data may support more states; scan higher "
+                   "orders before choosing")
+    gap = best.identification_db - best.prediction_db
+    if np.isfinite(gap) and gap > gap_db:
+        out.append(f"at order {best.order} the validation prediction ({best.prediction_db:.1f} "
+                   f"dB) is {gap:.1f} dB below the identification prediction "
+                   f"({best.identification_db:.1f} dB): the model fits noise or the record is "
+                   "not stationary; trust the validation figure, not the in-sample one")
+    return out
 
 
 def format_table(rows) -> str:

@@ -106,6 +106,16 @@ def check_stability(sys, tol: float = 1e-9) -> Stability:
     Returns
     -------
     Stability
+
+    Examples
+    --------
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import check_stability
+    >>> G = control.ss(np.diag([1.02, 0.5]), [[1.0], [1.0]], [[1.0, 1.0]], 0, 1e-3)
+    >>> st = check_stability(G)
+    >>> st.stable, st.unstable, st.max_radius
+    (False, array([1.02+0.j]), 1.02)
     """
     A = np.asarray(sys.A, dtype=float)
     poles = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
@@ -206,6 +216,18 @@ def stabilise(sys: control.StateSpace, radius: float = 1.0) -> StabiliseResult:
     -------
     StabiliseResult
         ``applied`` says whether anything changed.
+
+    Examples
+    --------
+    The pole at 1.02 is reflected to 1 / 1.02 = 0.980; the magnitude response is kept:
+
+    >>> import control
+    >>> import numpy as np
+    >>> from trussid.plid import stabilise
+    >>> G = control.ss(np.diag([1.02, 0.5]), [[1.0], [1.0]], [[1.0, 1.0]], 0, 1e-3)
+    >>> r = stabilise(G)
+    >>> r.applied, np.round(np.sort(np.abs(np.linalg.eigvals(r.model.A))), 3), r.magnitude_exact
+    (True, array([0.5 , 0.98]), True)
     """
     if not isinstance(sys, control.StateSpace) or not control.isdtime(sys, strict=True):
         raise IdentificationError("stabilise needs a discrete-time control.StateSpace")

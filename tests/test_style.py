@@ -89,3 +89,25 @@ def test_broad_exception_handlers_say_why():
             if re.match(r"\s*except (Exception|BaseException)\b", line) and "#" not in line:
                 found.append(f"{path.relative_to(ROOT)}:{k}: {line.strip()}")
     assert found == []
+
+
+def stand_ins() -> list[str]:
+    """Objects posing as others: a ``types.SimpleNamespace`` or a class forwarding attributes
+    by ``__getattr__`` (a module-level ``__getattr__``, PEP 562's lazy exports, is not one)."""
+    found = []
+    for path in _files():
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            name = getattr(node, "id", None) or getattr(node, "attr", None) or \
+                (node.name if isinstance(node, ast.alias) else None)
+            if name == "SimpleNamespace":
+                found.append(f"{path.relative_to(ROOT)}:{node.lineno} SimpleNamespace")
+            if isinstance(node, ast.ClassDef):
+                for item in node.body:
+                    if isinstance(item, ast.FunctionDef) and item.name == "__getattr__":
+                        found.append(f"{path.relative_to(ROOT)}:{item.lineno} {node.name}.__getattr__")
+    return found
+
+
+def test_no_stand_ins_pose_as_models_or_results():
+    assert stand_ins() == []

@@ -9,15 +9,15 @@ recipe). CI runs the quick model (18 states, acceptance item 6: the nominal item
 import control
 import pytest
 
-from trussid.campaign.control import (PERTURBATIONS, THRESHOLDS, check, control_study,
-                                      report_section, truths)
+from trussid.campaign.control import (PERTURBATIONS, THRESHOLDS, LoopSettings, check,
+                                      control_study, report_section, truths)
 from trussid.campaign.demo import build_plant, demo_settings, identify_model, run_experiments
 
 
 @pytest.fixture(scope="module")
 def study(full):
     settings = demo_settings(quick=not full, simo_channels=())
-    tp = build_plant(settings)
+    tp = build_plant()
     rid, _ = run_experiments(tp, settings)["mimo"]
     d = rid.data
     fit = identify_model(d.u, d.y, settings.mimo_order, d.dt, block_rows=settings.block_rows)
@@ -25,7 +25,8 @@ def study(full):
     assert m.nstates == settings.mimo_order
     model = control.ss(m.A, m.B, m.C, m.D, m.dt, inputs=d.input_names, outputs=d.output_names)
     plants = truths() if full else truths()[:1]
-    return control_study(model, d.u, d.y, K=fit.K, plants=plants, baselines=False), full
+    return control_study(model, d.u, d.y, K=fit.K, plants=plants, baselines=False,
+                         settings=LoopSettings.for_lab(tp.lab)), full
 
 
 @pytest.mark.slow

@@ -31,7 +31,7 @@ def report(tmp_path_factory):
     """The tiny campaign (about a minute): the tests that read it are in the slow tier."""
     out = tmp_path_factory.mktemp("demo") / "report"
     lines = []
-    summary = run_demo(out, _tiny(), progress=lines.append)
+    summary = run_demo(out, _tiny(), progress=lines.append).to_dict()
     return out, summary, lines
 
 
@@ -71,7 +71,7 @@ def test_a_stabilised_winner_reports_the_poles_reflected_in_itself(monkeypatch):
     higher-order PLID pass instead of on the reduced model that was stabilised."""
     import trussid.plid.multipass as mp
     from trussid.campaign import demo
-    from trussid.plid.multipass import Identification
+    from trussid.plid.multipass import Identification, Provenance, Stabilised
 
     dt = 1 / 1600
     rng = np.random.default_rng(1)
@@ -86,17 +86,18 @@ def test_a_stabilised_winner_reports_the_poles_reflected_in_itself(monkeypatch):
         innovations = np.zeros((10, 1))
         form = "direct"
         finite = True
+        theta_cov = None
 
     Result.model = high
-    info = {"chosen": "via 4, reduced, stabilised", "passes": [],
-            "stabilised": {"applied": True, "reflected_poles": 1},
-            "predictor": {"chosen": "kalman Q/R ratio 1"}}
+    prov = Provenance(chosen="via 4, reduced, stabilised",
+                      stabilised=Stabilised(applied=True, reflected_poles=1),
+                      predictor={"chosen": "kalman Q/R ratio 1"})
     idn = Identification(Result, model, np.zeros((2, 1)), "subspace", None, np.ones(1), None,
-                         info)
+                         prov)
     monkeypatch.setattr(mp, "identify_reduced", lambda *a, **k: idn)
     u, y = rng.standard_normal((200, 1)), rng.standard_normal((200, 1))
     fit = demo.identify_model(u, y, 2, dt)
-    assert fit.info["stabilised"] == {"applied": True, "reflected_poles": 1}
+    assert fit.info["stabilised"] == Stabilised(applied=True, reflected_poles=1)
 
 
 # --------------------------------------------------------------------------- the report
@@ -124,6 +125,15 @@ def test_summary_lists_every_model_with_the_required_fields(report):
         assert matched, "no identified pole matched a true one"
         for p in m["poles"]:
             assert POLE_KEYS <= set(p)
+        # every matched pole: the MAC of the FE shape against the identified one at the
+        # sensors, and the identified mode's 95 % intervals around its estimate
+        assert len(m["mode_checks"]) == len(matched)
+        for c in m["mode_checks"]:
+            assert 0.0 <= c["mac"] <= 1.0 + 1e-12
+            if c.get("frequency_ci95_hz"):
+                lo, hi = c["frequency_ci95_hz"]
+                assert lo <= c["frequency_hz"] <= hi
+        assert max(c["mac"] for c in m["mode_checks"]) > 0.9
 
 
 @pytest.mark.slow
@@ -268,7 +278,7 @@ def test_demo_campaign_simo_models_and_the_thesis_prediction_ratio(tmp_path, ful
     all sensors together, as the thesis quotes it) on the separate validation record, with
     12-bit converters; the models are stable and simulate.
     """
-    summary = run_demo(tmp_path / "r", demo_settings(quick=not full), progress=None)
+    summary = run_demo(tmp_path / "r", demo_settings(quick=not full), progress=None).to_dict()
     simo = [m for m in summary["models"] if m["kind"] == "SIMO"]
     assert len(simo) == (3 if full else 1)
     assert any(m["kind"] == "MIMO" for m in summary["models"])

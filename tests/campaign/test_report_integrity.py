@@ -15,6 +15,7 @@ from trussid._util.errors import UserError
 from trussid._util.files import atomic_directory
 from trussid.campaign import demo as demo_mod
 from trussid.campaign.demo import mode_audit
+from trussid.geometry.lab import LabSpec
 from trussid.plid.metrics import PoleMatch
 
 
@@ -37,19 +38,19 @@ POLES = [
 
 def test_every_true_mode_in_band_is_found_or_missing_and_filters_are_not_modes():
     a = mode_audit(POLES, (50, 350), (0, 400))
-    assert (a["found"], a["total"]) == (2, 4)
-    assert a["missing"] == [50.4, 57.9]
-    assert a["filter_poles_in_band"] == 1
-    assert [r["found"] for r in a["true_modes_in_band"]] == [False, False, True, True]
+    assert (a.found, a.total) == (2, 4)
+    assert a.missing == [50.4, 57.9]
+    assert a.filter_poles_in_band == 1
+    assert [r.found for r in a.true_modes_in_band] == [False, False, True, True]
 
 
 def test_spurious_and_lightly_damped_poles_are_listed_anywhere():
     a = mode_audit(POLES, (50, 350), (0, 400))
-    assert [e["frequency_hz"] for e in a["spurious"]] == [71.0, 300.0, 441.5, 550.0]
-    light = {e["frequency_hz"]: e for e in a["lightly_damped"]}
+    assert [e.frequency_hz for e in a.spurious] == [71.0, 300.0, 441.5, 550.0]
+    light = {e.frequency_hz: e for e in a.lightly_damped}
     assert set(light) == {79.5, 166.2, 441.5, 550.0}  # damping under 1 %, found or not
-    assert light[441.5]["spurious"] and not light[441.5]["in_excited_band"]
-    assert not light[79.5]["spurious"] and light[79.5]["in_excited_band"]
+    assert light[441.5].spurious and not light[441.5].in_excited_band
+    assert not light[79.5].spurious and light[79.5].in_excited_band
 
 
 def _interrupt():
@@ -125,8 +126,9 @@ def test_run_demo_interrupted_at_a_stage_leaves_the_previous_report(tmp_path, mo
             discrete = type("D", (), {"dt": 1 / 1600, "nstates": 1, "ninputs": 3,
                                       "noutputs": 3})()
             modes = type("M", (), {"frequencies_hz": __import__("numpy").array([10.0, 50.0])})()
+            lab = LabSpec()
 
-        monkeypatch.setattr(demo_mod, "build_plant", lambda s: TP)
+        monkeypatch.setattr(demo_mod, "build_plant", lambda tb: TP)
         monkeypatch.setattr(demo_mod, "run_experiments", lambda *a, **k: {})
         monkeypatch.setattr(demo_mod, "identify_records", lambda *a: ({}, {}))
         monkeypatch.setattr(demo_mod, stage, stop)

@@ -1,11 +1,13 @@
 """``trussid control`` and ``trussid closed-loop``: files in, files out, one-line errors."""
 
+import json
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
+from trussid.geometry.lab import LabSpec, lab_record
 from trussid.plid.datafile import IOData, write_data
 from trussid.plid.modelfile import load_model, save_model
 
@@ -65,6 +67,19 @@ def test_control_writes_a_named_controller_and_closed_loop_reports_on_a_plant_fi
                  "bode_ch1.png"):
         assert (d / "rep" / name).stat().st_size > 1000, name
     assert "| model | yes |" in (d / "rep" / "report.md").read_text()
+    assert "model.npz records no lab" in res.stderr  # so the default testbed's, said
+    # a plant file that records its lab: the loop runs behind those converters
+    lab = LabSpec.from_dict({"daq": {"bits": 16, "full_scale": 5.0}})
+    plant, _ = load_model(d / "model.npz")
+    save_model(d / "plant16.npz", plant, extra=lab_record(lab))
+    res = run("closed-loop", d / "ctrl.npz", d / "plant16.npz", "--out", d / "rep16",
+              "--samples", 500)
+    assert res.returncode == 0, res.stderr
+    assert "records no lab" not in res.stderr
+    conv = json.loads((d / "rep16" / "summary.json").read_text())["rows"]["plant16"]["converters"]
+    assert conv["dac_lsb_v"] == [10.0 / 2**16] * 3 and conv["adc_lsb_v"] == [10.0 / 2**16] * 3
+    assert (conv["bits"], conv["full_scale_v"], conv["sample_rate_hz"]) == (16, 5.0, 1600.0)
+    assert "in a 16-bit closed-loop simulation" in (d / "rep16" / "report.md").read_text()
 
 
 @pytest.mark.parametrize("args, message", [

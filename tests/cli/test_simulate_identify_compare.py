@@ -117,6 +117,23 @@ def identified(work, simulated):
     return json.loads(res.stdout)
 
 
+def test_identify_json_lists_each_mode_with_its_95_percent_intervals(identified):
+    # one entry per complex pair, the interval around the estimate; the true values within
+    # twice the half-width (a single record: the 95 % coverage itself is measured over 210
+    # records by benchmarks/bench_uncertainty.py)
+    modes = identified["modes"]
+    assert len(modes) == len(MODES)
+    for mo, (f, z) in zip(modes, MODES):
+        assert set(mo) == {"frequency_hz", "frequency_ci95_hz", "damping_ratio",
+                           "damping_ratio_ci95"}
+        lo, hi = mo["frequency_ci95_hz"]
+        zl, zh = mo["damping_ratio_ci95"]
+        assert lo < mo["frequency_hz"] < hi and zl < mo["damping_ratio"] < zh
+        assert 0 < hi - lo < 0.01 * f
+        assert abs(mo["frequency_hz"] - f) < (hi - lo)
+        assert abs(mo["damping_ratio"] - z) < (zh - zl)
+
+
 def test_identify_finds_the_modes_and_reports_the_prediction_ratio(work, identified):
     model, meta = load_model(work / "model.npz")
     assert model.nstates == 4 and model.dt == pytest.approx(1 / FS)

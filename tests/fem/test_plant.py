@@ -13,6 +13,7 @@ import scipy.linalg as la
 from trussid.fem import ALUMINIUM, Model, ModelError, Section
 from trussid.fem.actuators import Wafer, strain_actuator_loads
 from trussid.fem.assembly import assemble
+from trussid.geometry.lab import LabSpec
 from trussid.testbed.chain import LabChain, lab_plant
 from trussid.fem.modal import solve_modes
 from trussid.fem.plant import modal_plant, residual_flexibility
@@ -178,7 +179,7 @@ def test_discrete_plant_poles_are_zoh_images_and_strictly_proper():
     sensors = [Sensor(s.node, s.direction, "acceleration", s.sensitivity, s.name) for s in sensors]
     modes = solve_modes(m, n_modes=4)
     structure = modal_plant(modes, F, sensors, damping=0.0025)
-    chain = LabChain(sample_rate=20 * modes.frequencies_hz[3])
+    chain = LabChain.from_lab(LabSpec(), sample_rate=20 * modes.frequencies_hz[3])
     cont, disc = lab_plant(structure, chain, max_mode_hz=modes.frequencies_hz[3])
     T = 1.0 / chain.sample_rate
     pc = np.linalg.eigvals(cont.A)
@@ -201,8 +202,8 @@ def test_without_filters_the_acceleration_feedthrough_arrives_one_sample_late():
     sensors = [Sensor(s.node, s.direction, "acceleration", s.sensitivity, s.name) for s in sensors]
     modes = solve_modes(m, n_modes=4)
     structure = modal_plant(modes, F, sensors)
-    chain = LabChain(smoothing_order=0, lowpass_order=0, amplifier_gain=1.0,
-                     sample_rate=20 * modes.frequencies_hz[3])
+    chain = LabChain(smoothing_order=0, smoothing_cutoff=1.0, lowpass_order=0, lowpass_cutoff=1.0,
+                     amplifier_gain=1.0, sample_rate=20 * modes.frequencies_hz[3])
     cont, disc = lab_plant(structure, chain)
     assert np.any(cont.D != 0)
     assert np.all(disc.D == 0)
@@ -227,7 +228,7 @@ def test_bad_inputs_name_the_offending_item():
         strain_actuator_loads(m, [777], WAFER, 0.01)
     structure = modal_plant(modes, F, sensors)
     with pytest.raises(ModelError, match="below twice the highest kept mode"):
-        lab_plant(structure, LabChain(sample_rate=1.5 * modes.frequencies_hz[3]),
+        lab_plant(structure, LabChain.from_lab(LabSpec(), sample_rate=1.5 * modes.frequencies_hz[3]),
                   max_mode_hz=modes.frequencies_hz[3])
     with pytest.raises(ModelError, match="one per kept mode"):
         modal_plant(modes, F, sensors, damping=[0.01, 0.02])

@@ -58,3 +58,31 @@ def test_orders_must_suit_the_outputs():
     y = np.ones((100, 2))
     with pytest.raises(IdentificationError, match="multiple"):
         order_table(u, y, [5], 1 / FS, method="subspace")
+
+
+def test_no_warning_when_the_table_brackets_the_true_order(rows):
+    from trussid.plid.order import order_warnings
+
+    # the true order 8 is inside the range 4..10 and the model does not overfit: nothing to say
+    assert [r.order for r in rows][-1] == 10
+    assert all(np.isfinite(r.identification_db) for r in rows)
+    assert order_warnings(rows) == []
+
+
+def test_warns_when_the_best_order_is_the_highest_scanned(rows):
+    from trussid.plid.order import order_warnings
+
+    short = [r for r in rows if r.order <= 8]          # stop the scan at the true order
+    notes = order_warnings(short)
+    assert len(notes) == 1 and "top of the scanned range (order 8)" in notes[0]
+
+
+def test_warns_when_validation_is_far_below_identification():
+    from trussid.plid.order import OrderRow, order_warnings
+
+    rows = [OrderRow(4, 20.0, None, 0, 0.1, None, identification_db=22.0),
+            OrderRow(6, 24.0, 1.0, 0, 0.1, None, identification_db=40.0),
+            OrderRow(8, 23.0, 0.5, 0, 0.1, None, identification_db=45.0)]
+    notes = order_warnings(rows)
+    assert len(notes) == 1
+    assert "order 6" in notes[0] and "16.0 dB below" in notes[0]

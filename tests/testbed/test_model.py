@@ -13,8 +13,9 @@ from trussid.fem.assembly import assemble, beam_matrices, mass_blocks
 from trussid.fem.constraints import rigid_body_modes
 from trussid.fem.errors import ModelError
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.model import (build_testbed, solve_testbed_modes, tube_properties, wall_basis, wall_matrices,
-                         wall_modes)
+from trussid.fem.modal import Modes
+from trussid.testbed.model import (build_testbed, design_at_walls, solve_testbed_modes, tube_properties,
+                                   wall_basis, wall_matrices, wall_modes)
 from trussid.geometry.layout import testbed_layout
 from trussid.geometry.solids import strut_solids, udf_rigid_body
 from trussid.geometry.spec import Testbed
@@ -178,6 +179,33 @@ def test_sweep_matrices_equal_a_rebuilt_model(tb):
     assert abs(M - ref.M.toarray()).max() <= 1e-13 * abs(M).max()
     f, X = wall_modes(basis, w, 30)
     np.testing.assert_allclose(X.T @ M @ X, np.eye(30), atol=1e-9)
+
+
+def test_the_design_at_other_walls_is_the_rebuilt_model_and_its_modes(tb):
+    """design_at_walls moves the strut sections of the built model (no rebuild); the model it
+    returns is a real fem.Model that assembles to the rebuilt testbed's K and M, and its
+    modes are mass-normalised Modes whose labels are the rebuilt model's."""
+    tbm = build_testbed(tb)
+    basis = wall_basis(tbm)
+    w = np.array(tb.struts.walls) * np.array([1.3, 0.7, 1.1, 0.9, 1.2, 0.8])
+    design, modes = design_at_walls(tbm, basis, w, 30)
+    rebuilt = build_testbed(tb.with_walls(tuple(w)))
+    assert design.testbed == rebuilt.testbed
+    for key in ("A", "Iy", "Iz", "J"):
+        np.testing.assert_allclose(getattr(design.model.beams, key), getattr(rebuilt.model.beams, key),
+                                   rtol=1e-14)
+    ours, ref = assemble(design.model), assemble(rebuilt.model)
+    assert abs(ours.K - ref.K).max() <= 1e-13 * abs(ref.K).max()
+    assert abs(ours.M - ref.M).max() <= 1e-13 * abs(ref.M).max()
+    assert isinstance(modes, Modes) and len(modes) == 30
+    K, M = ref.K.toarray(), ref.M.toarray()
+    np.testing.assert_allclose(modes.shapes.T @ M @ modes.shapes, np.eye(30), atol=1e-9)
+    lam = (2 * np.pi * modes.frequencies_hz) ** 2
+    np.testing.assert_allclose(K @ modes.shapes, M @ modes.shapes * lam, atol=1e-6 * lam.max() ** 0.5)
+    assert label_testbed_modes(design, modes).labels == \
+        label_testbed_modes(rebuilt, solve_testbed_modes(rebuilt, 30)).labels
+    # the reference model is not changed by making a design from it
+    np.testing.assert_array_equal(tbm.model.beams.A, build_testbed(tb).model.beams.A)
 
 
 def test_sweep_needs_euler_bernoulli_and_valid_walls(tb):

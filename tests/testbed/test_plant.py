@@ -121,7 +121,7 @@ def test_bad_plant_inputs_give_clear_errors(default_plant):
     with pytest.raises(ModelError, match="direction must be a non-zero"):
         Sensor(int(tbm.map.accelerometer_nodes[0]), (0, 0, 0), name="acc1")
     with pytest.raises(ModelError, match="below twice the highest kept mode"):
-        testbed_plant(tbm=tbm, n_modes=60, sample_rate=1000.0)
+        testbed_plant(tbm, n_modes=60, sample_rate=1000.0)
 
 
 def test_udf_wrench_to_udf_motion_dc_gain_equals_static_solution(clamped):
@@ -143,7 +143,7 @@ def test_udf_wrench_to_udf_motion_dc_gain_equals_static_solution(clamped):
 
 def test_extra_channels_leave_the_control_channels_unchanged(default_plant):
     tbm = default_plant.tbm
-    tp = testbed_plant(tbm=tbm, disturbances=udf_wrench(tbm, ("fz",)), performance=udf_motion(tbm))
+    tp = testbed_plant(tbm, disturbances=udf_wrench(tbm, ("fz",)), performance=udf_motion(tbm))
     d0, d = default_plant.discrete, tp.discrete
     assert list(d.input_labels) == ["ch1", "ch2", "ch3", "udf_fz"]
     assert list(d.output_labels)[:3] == list(d0.output_labels)
@@ -167,6 +167,6 @@ def test_bad_disturbance_and_performance_channels_are_named(default_plant):
     with pytest.raises(ModelError, match="axis"):
         node_load(tbm, tbm.map.udf_master, "fw")
     with pytest.raises(ModelError, match="'ch1'"):
-        testbed_plant(tbm=tbm, disturbances={"ch1": node_load(tbm, tbm.map.udf_master, "fz")})
+        testbed_plant(tbm, disturbances={"ch1": node_load(tbm, tbm.map.udf_master, "fz")})
     with pytest.raises(ModelError, match="'acc1'"):
-        testbed_plant(tbm=tbm, performance=[Sensor(int(tbm.map.udf_master), (0, 0, 1), name="acc1")])
+        testbed_plant(tbm, performance=[Sensor(int(tbm.map.udf_master), (0, 0, 1), name="acc1")])

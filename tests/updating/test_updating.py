@@ -167,6 +167,21 @@ def test_walls_recovered_from_exact_frequencies_within_1e_3(nominal):
     assert rep.info["swaps"]  # the exchange moves were needed
 
 
+def test_each_paired_mode_is_labelled_as_the_true_model_labels_it(nominal):
+    """The labels come from the design at the updated walls (testbed.design_at_walls): each
+    measured mode gets the label the rebuilt true model gives it."""
+    tb, tbm, _ = nominal
+    truth = perturbed(tb, 7, size=0.05)
+    true_tbm = build_testbed(tb.with_walls(tuple(truth)))
+    modes = solve_testbed_modes(true_tbm, 40)
+    lab = label_testbed_modes(true_tbm, modes)
+    keep = [j for j, (k, o) in enumerate(zip(lab.kind, lab.order))
+            if (k == "bending" and o == 1) or k == "udf"]
+    rep = update_walls(modes.frequencies_hz[keep], tb, tbm=tbm, n_starts=2, labels=True)
+    assert np.max(np.abs(rep.walls / truth - 1)) < 1e-3
+    assert rep.labels == [lab.labels[j] for j in keep]
+
+
 def test_bending_frequencies_alone_leave_the_arrangement_of_close_struts_open(nominal):
     """The struts are geometrically equivalent: with 0.01 Hz measurement sigma, the 12
     bending frequencies cannot say which of two struts with nearby walls is which, and the
@@ -199,11 +214,13 @@ def test_walls_from_a_plid_model_of_noisy_bending_test_data(nominal, full):
     tb, tbm, _ = nominal
     truth = perturbed(tb, 3)
     true_tbm = build_testbed(tb.with_walls(tuple(truth)))
-    tp = testbed_plant(tbm=true_tbm, arrangement="bending", sensors="struts")
+    tp = testbed_plant(true_tbm, arrangement="bending", sensors="struts")
     plant, modes = tp.discrete, tp.modes
     n = 16000 if full else 5000
+    daq = tp.lab.daq  # the testbed lab's converters, the D/A over its range
     exp = run_experiment(plant, n, "white", rms=1.0, band=(30.0, 90.0), seed=4, snr_db=40,
-                         dac_bits=12, adc_bits=12, adc_full_scale="auto")
+                         dac_bits=daq.bits, adc_bits=daq.bits, dac_full_scale=daq.full_scale,
+                         adc_full_scale="auto")
     band = first_bending_band(modes, true_tbm)
     ident, _ = modes_from_data(exp.data.u, exp.data.y, plant.dt, 18, band=band, n_modes=6)
     rep = update_walls(ident.frequencies_hz, tb, tbm=tbm, damping=ident.damping,

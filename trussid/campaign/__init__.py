@@ -2,7 +2,8 @@
 
 from trussid._util.lazy import lazy_exports
 
-_LAZY = {"DemoSettings": "demo", "run_demo": "demo"}
+_LAZY = {"DemoSettings": "demo", "run_demo": "demo", "DemoSummary": "summary",
+         "LoopSettings": "control"}
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)
 
 __all__ = list(_LAZY)

@@ -3,8 +3,8 @@
 Plain functions over plain data, in the order ``trussid demo`` runs them::
 
     settings = demo_settings(quick)
-    tp       = build_plant(settings)                     default testbed -> modes -> plant
-    exps     = run_experiments(tp.discrete, settings)    identification + validation records
+    tp       = build_plant(tb)                           testbed -> modes -> plant (its lab)
+    exps     = run_experiments(tp, settings)             identification + validation records
     fit      = identify_model(u, y, order, dt)           PLID (the one switchable call)
     metrics  = evaluate(fit, truth, validation, h1)      prediction, FRF, poles
     write_report(out, ...)                               report.md, PNGs, summary.json, files
@@ -18,14 +18,16 @@ Signal chain of every record (:func:`trussid.plid.experiment.run_experiment`):
 
 - excitation: Gaussian white noise band-limited to 0-400 Hz (the band holding the modes
   the thesis measured; "nothing significant 350-450 Hz"), 2.5 V RMS per driven channel at
-  the 12-bit +-10 V D/A, i.e. a crest factor of 4: a Gaussian sample exceeds 4 sigma with
+  the D/A (the thesis lab: 12-bit +-10 V), i.e. a crest factor of 4: a Gaussian sample exceeds 4 sigma with
   probability 6e-5, so the D/A clips rarely (the counts are reported);
 - the plant: D/A volts -> smoothing filter -> amplifier -> PZT -> structure ->
   accelerometer -> signal conditioner (``tb.accelerometers.conditioning_gain``) -> A/D
-  volts, discretised by ZOH at 1600 Hz (:func:`trussid.testbed.plant.testbed_plant`);
-- sensor noise: white, ``sensor_noise_g`` RMS referred to the accelerometer [g] over the
-  0-800 Hz band (default 10 ug, about 0.35 ug/sqrt(Hz): a low-noise piezoelectric
-  accelerometer with its charge amplifier). It is amplified with the signal by the
+  volts, discretised by ZOH at the lab's sample rate
+  (:func:`trussid.testbed.plant.testbed_plant`); every number of that chain and of the
+  converters is the testbed's lab (``tb.lab``, :class:`trussid.geometry.lab.LabSpec`);
+- sensor noise: white, ``tb.accelerometers.noise`` RMS referred to the accelerometer over
+  0 to half the sample rate (the thesis lab: 10 ug, about 0.35 ug/sqrt(Hz): a low-noise
+  piezoelectric accelerometer with its charge amplifier). It is amplified with the signal by the
   conditioner, so it is independent of the gain setting. In the MIMO record it lies
   59-64 dB under the signals, near the 12-bit quantisation noise (62-67 dB), as the
   thesis reports ("the 12-bit converters give about 60 dB"); in a SIMO record the two
@@ -40,7 +42,7 @@ Signal chain of every record (:func:`trussid.plid.experiment.run_experiment`):
   driven vertex see signals some 20 dB weaker; without this step they would be recorded
   with a few dozen LSB. Recorded outputs stay in the plant's units (volts at the nominal
   conditioning gain): only the A/D range seen by each channel changes.
-- 12-bit A/D quantisation with clipping counted.
+- A/D quantisation at the lab's resolution, with clipping counted.
 
 Identification data and validation data are separate records with different seeds.
 """
@@ -48,18 +50,40 @@ Identification data and validation data are separate records with different seed
 from __future__ import annotations
 
 import json
+import math
 import time
 import warnings
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from trussid._util.files import atomic_path
+from trussid import plots
+from trussid._util.errors import UserError
+from trussid._util.files import atomic_directory, atomic_path
 from trussid._util.jsonio import json_safe
+from trussid.campaign.control import LoopSettings, demo_section
+from trussid.campaign.report import report_markdown
+from trussid.campaign.structure import DEFAULT_SNR_DB
+from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
+                                      DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
+                                      PlantSummary, Provenance, ReportFiles)
+from trussid.geometry.lab import G0, lab_record
+from trussid.plid.datafile import with_channels, write_data
+from trussid.plid.estimator import PLID, PLIDWarning
+from trussid.plid.evaluate import compare
+from trussid.plid.experiment import excitation, run_experiment, simulate
+from trussid.plid.frf import frequency_response, h1
+from trussid.plid.metrics import choose_predictor, prediction_ratio_db
+from trussid.plid.modal import mac, modal_table
+from trussid.plid.modelfile import save_model
+from trussid.plid.multipass import Stabilised, default_via, fit_model
+from trussid.plid.stability import stabilise
+from trussid.plid.subspace import n4sid
+from trussid.plid.uncertainty import mode_intervals
+from trussid.plots import save_figure
+from trussid.testbed.plant import testbed_plant
 
-#: Standard gravity [m/s^2], to give sensor noise in g.
-G0 = 9.80665
 
 
 # --------------------------------------------------------------------------- settings
@@ -74,15 +98,13 @@ class DemoSettings:
     quick : bool
         The reduced run (``trussid demo --quick``).
     n_identification, n_validation : int
-        Samples of each identification and validation record (1600 Hz).
+        Samples of each identification and validation record (at the lab's sample rate).
     excitation : str
         Excitation kind (:func:`trussid.plid.experiment.excitation`).
     excitation_rms : float
         RMS of each driven D/A channel [V].
     excitation_band : (float, float)
         Excitation band [Hz].
-    sensor_noise_g : float
-        Sensor (accelerometer + conditioner) noise RMS referred to the accelerometer [g].
     range_target : float
         Each sensor's conditioner step is the largest 1-2-5 step (x0.5 or more) that keeps
         its RMS at most this fraction of the A/D full scale (a fifth: the lightly damped
@@ -107,6 +129,11 @@ class DemoSettings:
         Welch segment length of the H1 estimate (resolution fs / nperseg).
     seed : int
         Seed of everything random (each record derives its own).
+    direct : {False, True, "auto"}
+        Direct term D of the identified models (:func:`trussid.plid.multipass.
+        identify_reduced`): the testbed's sensors see the structure through the lab's
+        low-pass filters (no feed-through, False); accelerometers on a bare structure
+        respond at once to a force ("auto": the data decide).
     """
 
     quick: bool = False
@@ -115,7 +142,6 @@ class DemoSettings:
     excitation: str = "white"
     excitation_rms: float = 2.5
     excitation_band: tuple = (0.0, 400.0)
-    sensor_noise_g: float = 10e-6
     range_target: float = 0.2
     gain_steps: tuple = (1.0, 2.0, 5.0)
     simo_channels: tuple = (0, 1, 2)
@@ -126,6 +152,7 @@ class DemoSettings:
     plot_band: tuple = (10.0, 450.0)
     h1_nperseg: int = 1024
     seed: int = 1997
+    direct: object = False
 
 
 def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
@@ -143,20 +170,48 @@ def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
     return replace(s, **overrides)
 
 
+def derived_settings(cp, quick: bool = False, **overrides):
+    """The experiment for a deck's plant (:class:`trussid.campaign.structure.CampaignPlant`),
+    from its modes and sample rate (overridable):
+
+    - excitation white 0 to 0.4 of the sample rate, a quarter of the D/A range RMS per
+      driven channel (a crest factor of 4, as on the testbed);
+    - FRF band from half the first mode to the top of the excitation; Bode plots to 0.95
+      of Nyquist;
+    - records of 6000 + 4000 samples (quick) or 16000 + 8000, at least 100 periods of
+      the first mode;
+    - MIMO order twice the number of the plant's modes below Nyquist (at least 2), rounded
+      up to a multiple of the outputs (PLID's observer form), capped at 48 (quick: 36): the
+      model must hold every mode the records see, those just above the excitation band
+      too; SIMO models of every channel (quick: the first) at the same order; the direct
+      term estimated when the data show one (accelerometers).
+    """
+    fs = 1.0 / cp.discrete.dt
+    f = np.asarray(cp.modes.frequencies_hz, dtype=float)
+    f = f[f > 1e-6]
+    top = 0.4 * fs
+    p = cp.discrete.noutputs
+    order = int(min(p * math.ceil(max(2 * f.size, 2) / p), p * ((36 if quick else 48) // p)))
+    base = demo_settings(quick)
+    n_min = int(math.ceil(100 * fs / f[0])) if f.size else 0
+    lo = 0.5 * f[0] if f.size else 0.0
+    kw = dict(direct="auto", excitation_band=(0.0, top),
+              excitation_rms=0.25 * cp.lab.daq.full_scale, frf_band=(lo, top),
+              plot_band=(lo, 0.95 * 0.5 * fs), n_identification=max(base.n_identification, n_min),
+              n_validation=max(base.n_validation, n_min // 2), mimo_order=order,
+              simo_order=order,
+              simo_channels=(0,) if quick else tuple(range(cp.discrete.ninputs)))
+    kw.update(overrides)
+    return demo_settings(quick, **kw)
+
+
 # --------------------------------------------------------------------------- plant
 
 
-def build_plant(settings: DemoSettings, tb=None):
-    """The default testbed's plant at 1600 Hz (:class:`trussid.testbed.plant.TestbedPlant`)."""
-    from trussid.testbed.plant import testbed_plant
-
+def build_plant(tb=None):
+    """The plant of testbed ``tb`` (default: the default testbed) at its lab's sample rate,
+    with its lab chain (:class:`trussid.testbed.plant.TestbedPlant`)."""
     return testbed_plant(tb)
-
-
-def sensor_noise_volts(tb, settings: DemoSettings) -> float:
-    """Sensor noise RMS in plant output units (volts at the nominal conditioning gain)."""
-    acc = tb.accelerometers
-    return settings.sensor_noise_g * G0 * acc.sensitivity * acc.conditioning_gain
 
 
 # --------------------------------------------------------------------------- experiments
@@ -197,8 +252,6 @@ def conditioner_steps(y_rms, full_scale: float, target: float, steps=(1.0, 2.0, 
 
 def drive(settings: DemoSettings, plant, n: int, channels, seed: int) -> np.ndarray:
     """The excitation of the driven ``channels`` (others zero), at the plant's own rate."""
-    from trussid.plid.experiment import excitation
-
     u = np.zeros((n, plant.ninputs))
     u[:, list(channels)] = excitation(settings.excitation, n, len(channels), 1.0 / plant.dt,
                                       settings.excitation_rms, settings.excitation_band, seed)
@@ -206,21 +259,19 @@ def drive(settings: DemoSettings, plant, n: int, channels, seed: int) -> np.ndar
 
 
 def range_conditioners(plant, settings: DemoSettings, channels, seed: int, n_samples: int,
-                       noise_v: float, full_scale: float = 10.0) -> list:
-    """Conditioner steps from a noise-free trial run of the experiment (its own seed)."""
-    from trussid.plid.experiment import simulate
-
+                       noise_v: float, full_scale: float) -> list:
+    """Conditioner steps from a noise-free trial run of the experiment (its own seed), for an
+    A/D range of +-``full_scale`` [V]."""
     trial = drive(settings, plant, n_samples, channels, seed)
     rms = np.sqrt(np.mean(simulate(plant, trial) ** 2, axis=0) + noise_v**2)
     return conditioner_steps(rms, full_scale, settings.range_target, settings.gain_steps)
 
 
 def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels, seed: int,
-                n_samples: int, noise_v: float, steps, full_scale: float = 10.0,
-                bits: int = 12) -> Record:
-    """One record with the conditioners at ``steps`` (see the module docstring)."""
-    from trussid.plid.experiment import run_experiment
-
+                n_samples: int, noise_v: float, steps, lab) -> Record:
+    """One record with the conditioners at ``steps`` (see the module docstring), through the
+    converters of ``lab`` (:class:`trussid.geometry.lab.LabSpec`)."""
+    full_scale, bits = lab.daq.full_scale, lab.daq.bits
     adc_fs = [full_scale / g for g in steps]
     u = drive(settings, plant, n_samples, channels, seed)
     exp = run_experiment(plant, n_samples, u=u, seed=seed + 1, sensor_noise_rms=noise_v,
@@ -231,14 +282,25 @@ def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels
     return Record(name, purpose, tuple(channels), exp, steps, adc_fs, seed)
 
 
+def sensor_noise(tp, settings: DemoSettings):
+    """Sensor noise RMS in plant output units: the testbed lab's accelerometer noise at the
+    nominal conditioning gain, or for a deck :data:`trussid.campaign.structure.
+    DEFAULT_SNR_DB` under each output in a noise-free trial of the all-channel record."""
+    if hasattr(tp, "tbm"):
+        return tp.lab.accelerometers.noise_volts
+    trial = drive(settings, tp.discrete, settings.n_identification,
+                  range(tp.discrete.ninputs), settings.seed + 99)
+    rms = np.sqrt(np.mean(simulate(tp.discrete, trial) ** 2, axis=0))
+    return rms * 10 ** (-DEFAULT_SNR_DB / 20)
+
+
 def run_experiments(tp, settings: DemoSettings, progress=None) -> dict:
     """All records of the campaign: ``{model name: (identification, validation)}``.
 
     Model names are ``simo_ch<k>`` (k = 1..3) and ``mimo``.
     """
-    plant = tp.discrete
-    tb = tp.tbm.testbed
-    noise_v = sensor_noise_volts(tb, settings)
+    plant, lab = tp.discrete, tp.lab
+    noise_v = sensor_noise(tp, settings)
     plan = [(f"simo_ch{c + 1}", (c,)) for c in settings.simo_channels]
     if settings.mimo_order:
         plan.append(("mimo", tuple(range(plant.ninputs))))
@@ -246,13 +308,11 @@ def run_experiments(tp, settings: DemoSettings, progress=None) -> dict:
     for k, (name, channels) in enumerate(plan):
         base = settings.seed + 1000 * k
         steps = range_conditioners(plant, settings, channels, base + 250,
-                                   settings.n_identification, noise_v, tb.daq.full_scale)
+                                   settings.n_identification, noise_v, lab.daq.full_scale)
         rid = take_record(plant, settings, name, "identification", channels, base,
-                          settings.n_identification, noise_v, steps, tb.daq.full_scale,
-                          tb.daq.bits)
+                          settings.n_identification, noise_v, steps, lab)
         rval = take_record(plant, settings, name, "validation", channels, base + 500,
-                           settings.n_validation, noise_v, steps, tb.daq.full_scale,
-                           tb.daq.bits)
+                           settings.n_validation, noise_v, steps, lab)
         out[name] = (rid, rval)
         if progress:
             progress(f"recorded {name}: {rid.data.n_samples} + {rval.data.n_samples} samples")
@@ -275,10 +335,11 @@ class Identified:
     theta_history: np.ndarray          # (k, q)
     history_index: np.ndarray          # (k,)
     info: dict = field(default_factory=dict)
+    modes: list = field(default_factory=list)  # plid.uncertainty.ModeInterval per mode
 
 
 def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
-                   progress: bool = False, log=None) -> Identified:
+                   progress: bool = False, log=None, direct=False) -> Identified:
     """Identify an order-``order`` model from one record: the one switchable call.
 
     Runs the project's identification recipe for under-modelled structures,
@@ -291,10 +352,6 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     ``benchmarks/results/plid_thesis.md``. The parameter history of the winning PLID pass is
     kept for the convergence plot.
     """
-    from trussid.plid.estimator import PLIDWarning
-    from trussid.plid.metrics import choose_predictor
-    from trussid.plid.multipass import Stabilised, default_via, fit_model
-
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         # The candidates' PLID passes warn when a pass loses positive definiteness; the
@@ -303,7 +360,8 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         p = np.asarray(y).reshape(len(y), -1).shape[1]
         idn = fit_model(u, y, order, dt, start="subspace",
                         via=default_via(order, p) if via is None else via, progress=progress,
-                        log=log, block_rows=None if block_rows is None else list(block_rows))
+                        log=log, block_rows=None if block_rows is None else list(block_rows),
+                        direct=direct)
     res = idn.result
     model = idn.model
     prov = idn.provenance
@@ -313,7 +371,6 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         # No stable candidate (none was measured on the testbed): reflect the poles outside
         # the unit circle in (plid.stability keeps the magnitude response) so that the model
         # can be simulated, and choose its predictor afresh.
-        from trussid.plid.stability import stabilise
 
         st = stabilise(model)
         model = st.model
@@ -322,6 +379,24 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     else:
         K, kinfo = idn.K, prov.predictor or {}
         K_source = kinfo.get("chosen", "")
+    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
+    alt_info = {}
+    if direct is not False:
+        # The recipe's N4SID prior is strictly proper (D = 0); on a plant with a large
+        # feed-through (accelerometers on a bare structure) PLID can stay far from the
+        # subspace fit with D. That fit is a candidate too, judged as the recipe judges
+        # its own: by the one-step prediction on the identification record.
+        alt = _subspace_with_d(u, y, order, dt, block_rows or (40, 80))
+        if alt is not None:
+            ours = prediction_ratio_db(model, u, y, K=K, skip=alt[3])["overall"]
+            if alt[2] > ours:
+                alt_info = {"subspace_with_d_db": alt[2], "plid_db": ours}
+                model, K = alt[0], alt[1]
+                K_source = "kalman (N4SID with D, chosen on the identification record)"
+                method = (f"N4SID with D (block rows {alt[4]}): {alt[2]:.1f} dB one-step on "
+                          f"the identification record against {ours:.1f} dB for PLID's "
+                          f"{chosen}")
+                chosen = f"subspace with D, {alt[4]} block rows"
     hist, hidx = res.theta_history, res.history_index
     if hist.shape[0] < 2 and idn.prior is not None:
         # The recipe ran without a parameter history: repeat the winner's last PLID pass
@@ -332,14 +407,34 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
             "R": np.asarray(idn.R).tolist(), "predictor": kinfo,
             **{k: v for k, v in prov.as_dict().items() if k not in ("passes", "predictor")},
             "passes": prov.passes}
-    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
+    info["chosen"] = chosen
+    if alt_info:
+        info["candidate_with_d"] = alt_info
+    modes = mode_intervals(model, res.model, res.theta_cov)
     return Identified(model, K, K_source, time.perf_counter() - t0, method,
-                      res.innovations, hist, hidx, info)
+                      res.innovations, hist, hidx, info, modes)
+
+
+def _subspace_with_d(u, y, order: int, dt: float, block_rows):
+    """The best N4SID model with a direct term over ``block_rows`` by one-step prediction on
+    ``(u, y)``: ``(model, K, dB, skip, block rows)``, or None if none is stable."""
+    best = None
+    for br in block_rows:
+        try:
+            m = n4sid(u, y, order, int(br), dt).with_d
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        if np.max(np.abs(np.linalg.eigvals(np.asarray(m.A)))) >= 1:
+            continue
+        K, _, kinfo = choose_predictor(m, u, y)
+        skip = int(kinfo.get("skip", 0))
+        r = prediction_ratio_db(m, u, y, K=K, skip=skip)["overall"]
+        if best is None or r > best[2]:
+            best = (m, K, float(r), skip, int(br))
+    return best
 
 
 def _history_of_last_pass(idn, u, y, order, dt):
-    from trussid.plid.estimator import PLID, PLIDWarning
-
     last = (idn.provenance.passes or [{}])[-1]
     est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
                Q_theta=last.get("Q_theta", 0.0), prior=idn.prior,
@@ -355,12 +450,10 @@ def _history_of_last_pass(idn, u, y, order, dt):
 
 
 def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings: DemoSettings,
-             name: str, kind: str) -> dict:
+             name: str, kind: str) -> ModelSummary:
     """All metrics of one model, by :func:`trussid.plid.evaluate.compare` (as ``trussid
     compare``): validation prediction and simulation, FRF errors against the true plant and
     the H1 estimate, matched poles."""
-    from trussid.plid.evaluate import compare
-
     model = fit.model
     val = rval.data
     cols = list(rid.channels)
@@ -383,33 +476,55 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
         "mean_above_excited_band": (h1_est.coherence[above].mean(axis=0).tolist()
                                     if above.any() else None),
     }
-    return {
-        "name": name, "kind": kind, "states": c.states, "inputs": c.inputs, "outputs": c.outputs,
-        "input_names": [val.input_names[c_] for c_ in cols], "output_names": list(val.output_names),
-        "signal_to_prediction_error_db": p.overall,
-        "signal_to_prediction_error_db_per_output": p.per_output,
-        "signal_to_prediction_error_db_mean_normalised": p.mean_normalised,
-        "prediction_skip_samples": p.skip,
-        "predictor_gain": p.gain,
-        "frf_max_error_db": e.max_db, "frf_rms_error_db": e.rms_db,
-        "frf_max_error_deg": e.max_deg, "frf_rms_error_deg": e.rms_deg,
-        "frf_error_per_channel": e.per_channel,
-        "frf_band_hz": list(settings.frf_band),
-        "frf_error_vs_h1": {"max_db": eh.max_db, "rms_db": eh.rms_db, "max_deg": eh.max_deg,
-                            "rms_deg": eh.rms_deg},
-        "h1_error_vs_true": h1_true,
-        "simulation_fit_db": s.overall,
-        "simulation_fit_db_per_output": s.per_output,
-        "seconds": fit.seconds, "method": fit.method, "unstable_poles": c.unstable_poles,
-        "stabilised": fit.info.get("stabilised", {}),
-        "poles": c.poles,
-        "poles_in_band_matched": sum(r.frequency_hz is not None for r in in_band),
-        "poles_in_band_true": len(in_band),
-        "validation_output_rms_v": y_rms.tolist(),
-        "h1_coherence": coherence,
-        "modes_check": mode_audit(c.poles, settings.frf_band, settings.excitation_band),
-        "identification": json_safe(fit.info),
-    }
+    return ModelSummary(
+        name=name, kind=kind, states=c.states, inputs=c.inputs, outputs=c.outputs,
+        input_names=[val.input_names[c_] for c_ in cols], output_names=list(val.output_names),
+        signal_to_prediction_error_db=p.overall,
+        signal_to_prediction_error_db_per_output=p.per_output,
+        signal_to_prediction_error_db_mean_normalised=p.mean_normalised,
+        prediction_skip_samples=p.skip,
+        predictor_gain=p.gain,
+        frf_max_error_db=e.max_db, frf_rms_error_db=e.rms_db,
+        frf_max_error_deg=e.max_deg, frf_rms_error_deg=e.rms_deg,
+        frf_error_per_channel=e.per_channel,
+        frf_band_hz=list(settings.frf_band),
+        frf_error_vs_h1={"max_db": eh.max_db, "rms_db": eh.rms_db, "max_deg": eh.max_deg,
+                         "rms_deg": eh.rms_deg},
+        h1_error_vs_true=h1_true,
+        simulation_fit_db=s.overall,
+        simulation_fit_db_per_output=s.per_output,
+        seconds=fit.seconds, method=fit.method, unstable_poles=c.unstable_poles,
+        stabilised=fit.info.get("stabilised") or Stabilised(),
+        poles=c.poles,
+        poles_in_band_matched=sum(r.frequency_hz is not None for r in in_band),
+        poles_in_band_true=len(in_band),
+        validation_output_rms_v=y_rms.tolist(),
+        h1_coherence=coherence,
+        modes_check=mode_audit(c.poles, settings.frf_band, settings.excitation_band),
+        mode_checks=_mode_checks(c.poles, fit.modes, model, tcols),
+        identification=json_safe(fit.info),
+    )
+
+
+def _mode_checks(poles, modes, model, truth) -> list[ModeCheck]:
+    """Per matched pole pair: the identified mode's 95 % intervals
+    (:mod:`trussid.plid.uncertainty`) and the MAC of the true (FE) mode shape against the
+    identified one at the sensors (:func:`trussid.plid.modal.mac`)."""
+    ident, true = modal_table(model), modal_table(truth)
+    rows = []
+    for r in poles:
+        if not r.matched:
+            continue
+        i = int(np.argmin(np.abs(ident.frequencies_hz - r.frequency_hz)))
+        j = int(np.argmin(np.abs(true.frequencies_hz - r.true_frequency_hz)))
+        m = min(modes, key=lambda q: abs(q.frequency_hz - r.frequency_hz)) if modes else None
+        ci = (m.as_dict() if m is not None
+              and abs(m.frequency_hz - r.frequency_hz) < 1e-6 * r.frequency_hz else {})
+        rows.append(ModeCheck(
+            r.true_frequency_hz, r.frequency_hz,
+            float(mac(ident.shapes[:, [i]], true.shapes[:, [j]], zero_shape="zero")[0, 0]),
+            ci.get("frequency_ci95_hz"), ci.get("damping_ratio_ci95")))
+    return rows
 
 
 #: A true or identified pole with a damping ratio above this is not a structural mode (the
@@ -422,7 +537,7 @@ FOUND_TOLERANCE = 0.05
 LIGHT_DAMPING = 0.01
 
 
-def mode_audit(poles: list, band, excited) -> dict:
+def mode_audit(poles: list, band, excited) -> ModeAudit:
     """What a model lacks and what it adds, from matched poles (:func:`plid.metrics.compare_poles`).
 
     Parameters
@@ -436,7 +551,7 @@ def mode_audit(poles: list, band, excited) -> dict:
 
     Returns
     -------
-    dict
+    ModeAudit
         ``true_modes_in_band``: every true structural mode (damping <= MODE_DAMPING_MAX) in
         ``band`` with ``found`` (matched within FOUND_TOLERANCE in frequency) and the
         identified frequency and damping; ``missing``: the frequencies not found;
@@ -461,9 +576,9 @@ def mode_audit(poles: list, band, excited) -> dict:
         fi = r.frequency_hz
         found = (fi is not None and r.damping <= MODE_DAMPING_MAX
                  and abs(fi - ft) <= FOUND_TOLERANCE * ft)
-        rows.append({"true_frequency_hz": ft, "true_damping": r.true_damping,
-                     "found": bool(found), "frequency_hz": fi if found else None,
-                     "damping": r.damping if found else None})
+        rows.append(AuditedTrueMode(true_frequency_hz=ft, true_damping=r.true_damping,
+                                    found=bool(found), frequency_hz=fi if found else None,
+                                    damping=r.damping if found else None))
 
     def nearest(f):
         if not f_true.size:
@@ -477,26 +592,26 @@ def mode_audit(poles: list, band, excited) -> dict:
         if fi is None or r.damping > MODE_DAMPING_MAX:
             continue
         near, rel = nearest(fi)
-        entry = {"frequency_hz": fi, "damping": r.damping, "nearest_true_hz": near,
-                 "spurious": bool(near is None or rel > FOUND_TOLERANCE),
-                 "in_excited_band": bool(excited[0] <= fi <= excited[1])}
+        entry = AuditedIdentifiedMode(frequency_hz=fi, damping=r.damping, nearest_true_hz=near,
+                                      spurious=bool(near is None or rel > FOUND_TOLERANCE),
+                                      in_excited_band=bool(excited[0] <= fi <= excited[1]))
         identified.append(entry)
-        if entry["spurious"]:
+        if entry.spurious:
             spurious.append(entry)
         if r.damping < LIGHT_DAMPING:
             light.append(entry)
-    key = lambda e: e["frequency_hz"]  # noqa: E731
-    return {"band_hz": [lo, hi], "excited_band_hz": list(excited),
-            "true_modes_in_band": rows,
-            "found": sum(r["found"] for r in rows), "total": len(rows),
-            "missing": [r["true_frequency_hz"] for r in rows if not r["found"]],
-            "filter_poles_in_band": filters,
-            "spurious": sorted(spurious, key=key), "lightly_damped": sorted(light, key=key),
-            "rules": {"structural_damping_max": MODE_DAMPING_MAX,
-                      "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING}}
+    key = lambda e: e.frequency_hz  # noqa: E731
+    return ModeAudit(band_hz=[lo, hi], excited_band_hz=list(excited),
+                     true_modes_in_band=rows,
+                     found=sum(r.found for r in rows), total=len(rows),
+                     missing=[r.true_frequency_hz for r in rows if not r.found],
+                     filter_poles_in_band=filters,
+                     spurious=sorted(spurious, key=key), lightly_damped=sorted(light, key=key),
+                     rules={"structural_damping_max": MODE_DAMPING_MAX,
+                            "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING})
 
 
-def provenance(settings: "DemoSettings", command: str | None = None) -> dict:
+def provenance(settings: "DemoSettings", command: str | None = None) -> Provenance:
     """Who made the report, how and where: trussid version, source commit (when the package
     runs from a git checkout), seed, command line, machine, load and date (UTC)."""
     import os
@@ -526,17 +641,15 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> dict:
         load = list(os.getloadavg())
     except OSError:
         load = None
-    return {"trussid_version": trussid_version, "commit": commit, "seed": settings.seed,
-            "command": command, "machine": platform.node(), "platform": platform.platform(),
-            "cpus": os.cpu_count(), "python": platform.python_version(),
-            "load_average_start": load,
-            "date_utc": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}
+    return Provenance(trussid_version=trussid_version, commit=commit, seed=settings.seed,
+                      command=command, machine=platform.node(), platform=platform.platform(),
+                      cpus=os.cpu_count(), python=platform.python_version(),
+                      load_average_start=load,
+                      date_utc=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()))
 
 
 def _h1_error(h1_est, truth, keep) -> dict:
     """Magnitude/phase error of the H1 estimate against the true plant at its own frequencies."""
-    from trussid.plid.frf import frequency_response
-
     H, H_ref = h1_est.H[keep], frequency_response(truth, h1_est.f[keep])
     with np.errstate(divide="ignore", invalid="ignore"):
         mag = 20 * np.log10(np.abs(H)) - 20 * np.log10(np.abs(H_ref))
@@ -547,8 +660,6 @@ def _h1_error(h1_est, truth, keep) -> dict:
 
 def h1_estimate(record: Record, nperseg: int):
     """H1 estimate from an identification record (driven channels only)."""
-    from trussid.plid.frf import h1
-
     d = record.data
     return h1(d.u[:, list(record.channels)], d.y, d.fs, nperseg=nperseg)
 
@@ -566,43 +677,40 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
         say(f"      {name}: {order} states, {len(cols)} in x {d.n_outputs} out; candidates:")
         fits[name] = identify_model(d.u[:, cols], d.y, order, d.dt,
                                     block_rows=settings.block_rows,
-                                    log=lambda msg: say(f"        {msg}"))
+                                    log=lambda msg: say(f"        {msg}"),
+                                    direct=settings.direct)
         h1s[name] = h1_estimate(rid, settings.h1_nperseg)
         say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
             f"({fits[name].seconds:.1f} s)")
     return fits, h1s
 
 
-def write_files(out: Path, records: dict, fits: dict, truth) -> dict:
-    """The records (driven channels only) and the models as data and model files."""
-    from trussid.plid.datafile import with_channels, write_data
-    from trussid.plid.modelfile import save_model
-
-    files = {"data": [], "models": []}
+def write_files(out: Path, records: dict, fits: dict, truth, lab) -> ReportFiles:
+    """The records (driven channels only) and the models as data and model files; the true
+    plant's file records its ``lab`` (:func:`trussid.geometry.lab.lab_record`)."""
+    files = ReportFiles()
     for name, (rid, rval) in records.items():
         for rec in (rid, rval):
             fname = f"data_{name}_{rec.purpose[:3]}.npz"
             # Only the driven channels: the others are zero and a data file refuses them.
             write_data(with_channels(rec.data, inputs=[rec.data.input_names[c] for c in
                                                        rec.channels]), out / fname)
-            files["data"].append(fname)
+            files.data.append(fname)
         fname = f"model_{name}.npz"
         cols = list(rid.channels)
         save_model(out / fname, fits[name].model, K=fits[name].K,
                    input_names=[rid.data.input_names[c] for c in cols],
                    output_names=rid.data.output_names)
-        files["models"].append(fname)
+        files.models.append(fname)
     save_model(out / "plant_true.npz", truth, input_names=list(truth.input_labels),
-               output_names=list(truth.output_labels))
-    files["models"].append("plant_true.npz")
+               output_names=list(truth.output_labels), extra=lab_record(lab))
+    files.models.append("plant_true.npz")
     return files
 
 
 def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
                   settings: DemoSettings) -> list:
     """Bode overlays, pole maps, traces and the convergence plot; their file names."""
-    from trussid import plots
-
     written = []
 
     def save(fig, fname):
@@ -631,7 +739,8 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
 
 
 def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
-             force: bool = False, command: str | None = None) -> dict:
+             force: bool = False, command: str | None = None, testbed=None,
+             plant=None) -> dict:
     """Run the whole campaign and write the report directory ``out``.
 
     Parameters
@@ -649,15 +758,18 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
         (before any computation).
     command : str, optional
         The command line that asked for the report (recorded in its provenance).
+    testbed : trussid.geometry.spec.Testbed, optional
+        The testbed and its lab (``testbed.lab``: sample rate, converters, chain, sensor
+        noise); default the default testbed in the thesis lab.
+    plant : trussid.campaign.structure.CampaignPlant, optional
+        Any other structure (a deck with its IO file and lab) instead of a testbed; its
+        experiment comes from :func:`derived_settings`.
 
     Returns
     -------
-    dict
-        The summary (also written as ``summary.json``).
+    DemoSummary
+        The summary (written as ``summary.json`` and ``report.md``).
     """
-    from trussid._util.errors import UserError
-    from trussid._util.files import atomic_directory
-
     settings = settings or demo_settings()
     say = progress or (lambda msg: None)
     out = Path(out)
@@ -674,8 +786,12 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     timings = {}
 
     t0 = time.perf_counter()
-    say("[1/5] testbed -> modes -> plant ...")
-    tp = build_plant(settings)
+    if plant is None:
+        say("[1/5] testbed -> modes -> plant ...")
+        tp = build_plant(testbed)
+    else:
+        say(f"[1/5] {plant.description}: modes -> plant ...")
+        tp = plant
     truth = tp.discrete
     fs = 1.0 / truth.dt
     timings["plant"] = time.perf_counter() - t0
@@ -685,7 +801,7 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
         f"{truth.noutputs}, {fs:g} Hz ({timings['plant']:.1f} s)")
 
     t0 = time.perf_counter()
-    say("[2/5] simulated experiments (12-bit D/A and A/D, sensor noise) ...")
+    say(f"[2/5] simulated experiments ({tp.lab.daq.bits}-bit D/A and A/D, sensor noise) ...")
     records = run_experiments(tp, settings, progress=lambda m: say("      " + m))
     timings["experiments"] = time.perf_counter() - t0
 
@@ -704,12 +820,17 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
     control = None
     if "mimo" in records:  # close the loop on the MIMO model (issue 14)
-        from trussid.campaign.control import demo_section
 
         t0 = time.perf_counter()
         say("      closing the loop: LQG from the MIMO model, on the FE truths ...")
+        # the plant's own lab and the demo's excitation at the D/A
+        loop = LoopSettings.for_lab(tp.lab, excitation_rms=settings.excitation_rms,
+                                    excitation_band_hz=settings.excitation_band[1])
         control = demo_section(fits["mimo"].model, fits["mimo"].K, records["mimo"][0].data,
-                               truth, settings.quick, progress=lambda m: say("      " + m))
+                               truth, settings.quick, loop,
+                               tp.tbm.testbed if hasattr(tp, "tbm") else None,
+                               progress=lambda m: say("      " + m), lab=tp.lab,
+                               excitation_rms=settings.excitation_rms)
         timings["control"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -722,58 +843,61 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
 
 def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings, prov, t0,
-                  t_start, control=None) -> dict:
+                  t_start, control=None) -> DemoSummary:
     """Every file of the report into ``out`` (the temporary directory); the summary.
     ``control``: the closed-loop section ``(markdown, figures, summary)`` or None."""
-    files = write_files(out, records, fits, truth)
-    files["figures"] = write_figures(out, records, fits, h1s, truth, settings)
+    files = write_files(out, records, fits, truth, tp.lab)
+    files.figures = write_figures(out, records, fits, h1s, truth, settings)
     if control is not None:
-        from trussid.plots import save_figure
-
         for fname, fig in control[1].items():
             save_figure(fig, out / fname)
-        files["figures"] += list(control[1])
-    summary = {
-        "format_version": 1,
-        "provenance": prov,
-        "settings": asdict(settings),
-        "plant": plant_section(tp, settings),
-        "experiments": experiment_summary(records, settings),
-        "models": models,
-        "files": files,
-        "timings_s": timings,
-    }
-    if control is not None:
-        summary["control"] = control[2]
+        files.figures += list(control[1])
+    summary = DemoSummary(
+        format_version=1, provenance=prov, settings=settings, plant=plant_section(tp),
+        experiments=experiment_summary(records, settings), models=models, files=files,
+        timings_s=timings,
+        control=None if control is None else ClosedLoopSection(control[0], control[2]))
     timings["report"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
-    summary = json_safe(summary)
     with atomic_path(out / "summary.json") as tmp:
-        tmp.write_text(json.dumps(summary, indent=2) + "\n")
+        tmp.write_text(json.dumps(summary.to_dict(), indent=2) + "\n")
     with atomic_path(out / "report.md") as tmp:
-        tmp.write_text(report_markdown(summary) + ("\n" + control[0] if control else ""))
+        tmp.write_text(report_markdown(summary))
     return summary
 
 
-def plant_section(tp, settings: DemoSettings) -> dict:
+def plant_section(tp) -> PlantSummary:
     """The summary's plant: size, rate, modes, transducers, converters and noise."""
-    tb = tp.tbm.testbed
+    lab = tp.lab
     f = tp.modes.frequencies_hz
-    acc = tb.accelerometers
-    return {
-        "states": int(tp.discrete.nstates), "inputs": list(tp.discrete.input_labels),
-        "outputs": list(tp.discrete.output_labels), "sample_rate_hz": 1.0 / tp.discrete.dt,
-        "modes": int(f.size), "mode_frequencies_hz": f.tolist(),
-        "modal_damping": tb.damping.modal_ratio,
-        "accelerometer_sensitivity_v_per_g": acc.sensitivity * G0,
-        "conditioning_gain": acc.conditioning_gain,
-        "converter_bits": tb.daq.bits, "converter_full_scale_v": tb.daq.full_scale,
-        "sensor_noise_g_rms": settings.sensor_noise_g,
-        "sensor_noise_v_rms": sensor_noise_volts(tb, settings),
-    }
+    acc = lab.accelerometers
+    if not hasattr(tp, "tbm"):  # a deck's plant: outputs in its own units, no conditioner
+        nan = float("nan")
+        return PlantSummary(
+            states=int(tp.discrete.nstates), inputs=list(tp.discrete.input_labels),
+            outputs=list(tp.discrete.output_labels), sample_rate_hz=1.0 / tp.discrete.dt,
+            modes=int(f.size), mode_frequencies_hz=f.tolist(), modal_damping=tp.damping,
+            accelerometer_sensitivity_v_per_g=nan, conditioning_gain=1.0,
+            converter_bits=lab.daq.bits, converter_full_scale_v=lab.daq.full_scale,
+            sensor_noise_g_rms=nan, sensor_noise_v_rms=nan, lab=lab,
+            structure=tp.description, lab_source=tp.lab_source)
+    tb = tp.tbm.testbed
+    return PlantSummary(
+        states=int(tp.discrete.nstates), inputs=list(tp.discrete.input_labels),
+        outputs=list(tp.discrete.output_labels), sample_rate_hz=1.0 / tp.discrete.dt,
+        modes=int(f.size), mode_frequencies_hz=f.tolist(),
+        modal_damping=tb.damping.modal_ratio,
+        accelerometer_sensitivity_v_per_g=acc.sensitivity * G0,
+        conditioning_gain=acc.conditioning_gain,
+        converter_bits=lab.daq.bits, converter_full_scale_v=lab.daq.full_scale,
+        sensor_noise_g_rms=acc.noise / G0,
+        sensor_noise_v_rms=acc.noise_volts,
+        lab=lab,
+    )
 
 
-def experiment_summary(records: dict, settings: DemoSettings) -> list:
+def experiment_summary(records: dict, settings: DemoSettings) -> list[ExperimentRow]:
+    """One row per record: its size, rate, drive, converters, ranges and signal-to-noise."""
     rows = []
     for name, pair in records.items():
         for rec in pair:
@@ -782,210 +906,27 @@ def experiment_summary(records: dict, settings: DemoSettings) -> list:
             y_rms = np.sqrt(np.mean(e.y_clean**2, axis=0))
             noise = np.asarray(e.sensor_noise_rms)
             lsb = np.asarray(e.lsb["adc"], dtype=float)
-            rows.append({
-                "model": name, "purpose": rec.purpose, "samples": d.n_samples,
-                "driven_channels": [d.input_names[c] for c in rec.channels], "seed": rec.seed,
-                "excitation": settings.excitation, "excitation_rms_v": settings.excitation_rms,
-                "excitation_band_hz": list(settings.excitation_band),
-                "dac_clipped": e.clipping["dac"], "adc_clipped": e.clipping["adc"],
-                "conditioner_steps": rec.gain_steps,
-                "adc_full_scale_v": rec.adc_full_scale,
+            rows.append(ExperimentRow(
+                model=name, purpose=rec.purpose, samples=d.n_samples,
+                sample_rate_hz=d.fs,
+                driven_channels=[d.input_names[c] for c in rec.channels], seed=rec.seed,
+                excitation=settings.excitation, excitation_rms_v=settings.excitation_rms,
+                excitation_band_hz=list(settings.excitation_band),
+                dac_clipped=e.clipping["dac"], adc_clipped=e.clipping["adc"],
+                conditioner_steps=rec.gain_steps,
+                adc_full_scale_v=rec.adc_full_scale,
+                # the converters' LSB as the experiment applied them [V]
+                dac_lsb_v=np.atleast_1d(np.asarray(e.lsb["dac"], dtype=float)).tolist(),
+                adc_lsb_v=np.atleast_1d(lsb).tolist(),
                 # converter resolution from the LSB the experiment used: 2 FS / 2^bits
-                "adc_bits": [int(round(np.log2(2 * fs / q)))
-                             for fs, q in zip(rec.adc_full_scale, np.atleast_1d(lsb))],
-                "output_rms_v": y_rms.tolist(),
-                "output_rms_fraction_of_range": (y_rms / np.asarray(rec.adc_full_scale)).tolist(),
-                "sensor_snr_db": (20 * np.log10(y_rms / noise)).tolist(),
-                "quantisation_snr_db": (20 * np.log10(y_rms / (lsb / np.sqrt(12)))).tolist(),
-            })
+                adc_bits=[int(round(np.log2(2 * fs / q)))
+                          for fs, q in zip(rec.adc_full_scale, np.atleast_1d(lsb))],
+                output_rms_v=y_rms.tolist(),
+                output_rms_fraction_of_range=(y_rms / np.asarray(rec.adc_full_scale)).tolist(),
+                sensor_snr_db=(20 * np.log10(y_rms / noise)).tolist(),
+                quantisation_snr_db=(20 * np.log10(y_rms / (lsb / np.sqrt(12)))).tolist(),
+            ))
     return rows
-
-
-def _f(x, fmt=".2f"):
-    return "-" if x is None else format(x, fmt)
-
-
-def report_markdown(s: dict) -> str:
-    """The human-readable report (Markdown) from the summary."""
-    # Long: a report template, read best top to bottom in the order of the report.
-    st, pl = s["settings"], s["plant"]
-    L = ["# trussid demo: PLID on the simulated testbed", ""]
-    L += provenance_lines(s.get("provenance") or {})
-    L += [f"Run: {'quick' if st['quick'] else 'full'}; total {s['timings_s']['total']:.1f} s "
-          f"(plant {s['timings_s']['plant']:.1f} s, experiments "
-          f"{s['timings_s']['experiments']:.1f} s, identification "
-          f"{s['timings_s']['identification']:.1f} s, evaluation "
-          f"{s['timings_s']['evaluation']:.1f} s).", ""]
-    L += ["## Plant", "",
-          f"Default testbed, {pl['modes']} modes below Nyquist, modal damping "
-          f"{100 * pl['modal_damping']:.2f} %; discrete plant of {pl['states']} states, "
-          f"{len(pl['inputs'])} D/A channels ({', '.join(pl['inputs'])}) to "
-          f"{len(pl['outputs'])} accelerometers ({', '.join(pl['outputs'])}) at "
-          f"{pl['sample_rate_hz']:g} Hz, with the smoothing filter, amplifier and 120 Hz "
-          f"low-pass. Accelerometers {1000 * pl['accelerometer_sensitivity_v_per_g']:.0f} mV/g, "
-          f"signal conditioner gain {pl['conditioning_gain']:g} V/V; "
-          f"{pl['converter_bits']}-bit converters, +-{pl['converter_full_scale_v']:g} V; "
-          f"sensor noise {1e6 * pl['sensor_noise_g_rms']:.0f} ug RMS "
-          f"({1e3 * pl['sensor_noise_v_rms']:.2f} mV at the nominal gain).", ""]
-    L += ["## Experiments", "",
-          f"Excitation: {st['excitation']} noise, {st['excitation_band'][0]:g}-"
-          f"{st['excitation_band'][1]:g} Hz, {st['excitation_rms']:g} V RMS per driven "
-          "channel. Conditioners ranged in 1-2-5 steps to about "
-          f"{st['range_target']:.2f} of full scale at most.", "",
-          "| record | samples | driven | D/A clipped | A/D clipped | gain steps | "
-          "RMS / range | sensor SNR [dB] | quantisation SNR [dB] |",
-          "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for r in s["experiments"]:
-        L.append(f"| {r['model']} {r['purpose']} | {r['samples']} | "
-                 f"{', '.join(r['driven_channels'])} | {sum(r['dac_clipped'])} | "
-                 f"{', '.join(map(str, r['adc_clipped']))} | "
-                 f"{', '.join(f'{g:g}' for g in r['conditioner_steps'])} | "
-                 f"{', '.join(f'{v:.2f}' for v in r['output_rms_fraction_of_range'])} | "
-                 f"{', '.join(f'{v:.1f}' for v in r['sensor_snr_db'])} | "
-                 f"{', '.join(f'{v:.1f}' for v in r['quantisation_snr_db'])} |")
-    L += ["", "## Identified models", "",
-          "One-step signal-to-prediction-error ratio (SPE) on the validation record, as the "
-          "thesis defines it: the RMS of the sensor signals over the RMS of the one-step "
-          "prediction error, over all sensors and samples (`10 log10(sum y^2 / sum e^2)`, "
-          "volts at the A/D; `plid.metrics`). Beside it, per output, and the mean of the "
-          "normalised error powers (`-10 log10(mean_j MS(e_j)/MS(y_j))`, dominated by the "
-          "weakest output: in a SIMO record the two accelerometers away from the driven "
-          "vertex are limited by sensor noise to 38-50 dB). FRF errors are against the "
-          f"true plant over {st['frf_band'][0]:g}-{st['frf_band'][1]:g} Hz.", "",
-          "Every score in this table is on the **validation** record (a separate record "
-          "with its own seed), never on the record the model was fitted to; the simulation "
-          "fit runs the model from the inputs alone (no measured outputs fed back), "
-          "against the noise-free outputs. Phase errors are against the true plant, "
-          "magnitude and phase separately. \"Modes found\" counts the true structural "
-          "modes in the FRF band (the filter poles excluded) matched within "
-          "5 % in frequency; the next section lists the rest.", "",
-          "| model | kind | states | in x out | SPE, validation [dB] | SPE per output [dB] | "
-          "SPE mean-normalised [dB] | simulation fit, validation [dB] | FRF max / RMS [dB] | "
-          "phase max / RMS [deg] | H1 vs true RMS [dB] | modes found (in band) | seconds |",
-          "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for m in s["models"]:
-        mc = m.get("modes_check") or {}
-        L.append(f"| {m['name']} | {m['kind']} | {m['states']} | {m['inputs']} x "
-                 f"{m['outputs']} | {_f(m['signal_to_prediction_error_db'])} | "
-                 f"{', '.join(_f(v, '.1f') for v in m['signal_to_prediction_error_db_per_output'])}"
-                 f" | {_f(m['signal_to_prediction_error_db_mean_normalised'])} | "
-                 f"{_f(m.get('simulation_fit_db'))} | "
-                 f"{_f(m['frf_max_error_db'])} / {_f(m['frf_rms_error_db'])} | "
-                 f"{_f(m.get('frf_max_error_deg'), '.1f')} / {_f(m.get('frf_rms_error_deg'), '.1f')} | "
-                 f"{_f(m['h1_error_vs_true']['rms_db'])} | "
-                 f"{mc.get('found', '-')} / {mc.get('total', '-')} | "
-                 f"{m['seconds']:.1f} |")
-    L += lacks_lines(s)
-    L += ["", "## How each model was identified", "",
-          "`plid.multipass.identify_reduced`: PLID at the model's order and at higher "
-          "orders reduced to it (input-weighted balanced truncation, then one PLID pass); "
-          "the candidate with the best one-step ratio on the *identification* record is "
-          "kept (marked). Candidates with poles outside the unit circle compete with those "
-          "poles reflected in (`stabilised`).", ""]
-    for m in s["models"]:
-        ident = m.get("identification") or {}
-        rows = ident.get("candidates") or []
-        L += [f"**{m['name']}**: {m.get('method', '')}", "",
-              "| candidate | one-step, identification record (in-sample) [dB] | seconds |",
-              "| --- | --- | --- |"]
-        for r in rows:
-            mark = " (kept)" if r.get("label") == ident.get("chosen") else ""
-            score = r.get("identification_ratio_db")
-            txt = _f(score) if score is not None else (r.get("error") or "unstable")
-            L.append(f"| {r.get('label', '')}{mark} | {txt} | {r.get('seconds', 0):.1f} |")
-        L.append("")
-    L += ["", "## Figures", ""]
-    for m in s["models"]:
-        n = m["name"]
-        bodes = [f for f in s["files"]["figures"] if f.startswith(f"bode_{n}")]
-        L += [f"### {n}", ""]
-        L += [f"![Bode overlay]({b})" for b in bodes]
-        L += ["", f"![poles and zeros](poles_{n}.png)", "",
-              f"![measured vs predicted](trace_{n}.png)", "",
-              "Poles in the FRF band (true -> identified):", "",
-              "| true f [Hz] | true damping | identified f [Hz] | identified damping |",
-              "| --- | --- | --- | --- |"]
-        lo, hi = st["frf_band"]
-        for r in m["poles"]:
-            if r["true_frequency_hz"] is not None and lo <= r["true_frequency_hz"] <= hi:
-                L.append(f"| {r['true_frequency_hz']:.2f} | {r['true_damping']:.5f} | "
-                         f"{_f(r['frequency_hz'])} | {_f(r['damping'], '.5f')} |")
-        L.append("")
-    L += ["### Convergence", "", "![convergence](convergence.png)", "",
-          "The top panel is the *mean-normalised* one-step ratio of each model's last PLID "
-          "pass on its identification record (in-sample), not the headline SPE of the table "
-          "above.", ""]
-    L += ["## Files", "", "Data: " + ", ".join(s["files"]["data"]), "",
-          "Models: " + ", ".join(s["files"]["models"]), "",
-          "All metrics: `summary.json`.", ""]
-    return "\n".join(L)
-
-
-def provenance_lines(pv: dict) -> list:
-    """The report's provenance paragraph."""
-    if not pv:
-        return []
-    load = pv.get("load_average_start")
-    return ["## Provenance", "",
-            f"trussid {pv.get('trussid_version')}, commit {pv.get('commit') or 'unknown'}; "
-            f"seed {pv.get('seed')}; command `{pv.get('command') or '(from Python)'}`; "
-            f"machine {pv.get('machine')} ({pv.get('platform')}, {pv.get('cpus')} CPUs, Python "
-            f"{pv.get('python')}), load average "
-            f"{'-' if not load else ', '.join(f'{v:.2f}' for v in load)} at the start; "
-            f"{pv.get('date_utc')}. The seconds below depend on that load.", ""]
-
-
-def lacks_lines(s: dict) -> list:
-    """What each model lacks (true modes missing) and adds (spurious or lightly damped
-    poles anywhere, reflected poles), and the H1 coherence."""
-    # Long: one report section, read top to bottom.
-    L = ["", "## What the models lack, and what they add", ""]
-    for m in s["models"]:
-        mc = m.get("modes_check")
-        if not mc:
-            continue
-        lo, hi = mc["band_hz"]
-        xlo, xhi = mc["excited_band_hz"]
-        L += [f"**{m['name']}**: found {mc['found']} of the {mc['total']} true structural "
-              f"modes in {lo:g}-{hi:g} Hz ({mc['filter_poles_in_band']} filter/amplifier "
-              "poles in the band are not counted)."]
-        if mc["missing"]:
-            L += [f"Missing ({len(mc['missing'])}): "
-                  + ", ".join(f"{f:.2f} Hz" for f in mc["missing"]) + "."]
-        else:
-            L += ["Missing: none."]
-        st = m.get("stabilised") or {}
-        if st.get("applied"):
-            L += [f"Stabilised: {st.get('reflected_poles', 0)} unstable pole(s) reflected into "
-                  "the unit circle (magnitude kept, phase changed)."]
-        if m.get("unstable_poles"):
-            L += [f"**Unstable**: {m['unstable_poles']} pole(s) on or outside the unit circle."]
-        rows = {(e["frequency_hz"], e["damping"]): e for e in mc["spurious"] + mc["lightly_damped"]}
-        L += [""]
-        if rows:
-            L += ["Spurious modes (no true mode within 5 %) and lightly damped modes "
-                  f"(damping under {100 * mc['rules']['light_damping_below']:g} %), anywhere "
-                  f"up to Nyquist (excited band {xlo:g}-{xhi:g} Hz):", "",
-                  "| identified f [Hz] | damping [%] | nearest true mode [Hz] | spurious | "
-                  "in excited band |", "| --- | --- | --- | --- | --- |"]
-            for (f, z), e in sorted(rows.items()):
-                near = "-" if e["nearest_true_hz"] is None else f"{e['nearest_true_hz']:.2f}"
-                L.append(f"| {f:.2f} | {100 * z:.3f} | {near} | "
-                         f"{'yes' if e['spurious'] else 'no'} | "
-                         f"{'yes' if e['in_excited_band'] else '**no**'} |")
-        else:
-            L += ["No spurious or lightly damped identified modes."]
-        coh = m.get("h1_coherence")
-        if coh:
-            above = coh.get("mean_above_excited_band")
-            L += ["", f"H1 multiple coherence, mean per output: "
-                  + ", ".join(f"{v:.3f}" for v in coh["mean_in_excited_band"])
-                  + f" in the excited band {xlo:g}-{xhi:g} Hz"
-                  + ("; " + ", ".join(f"{v:.3f}" for v in above)
-                     + " above it, where the H1 estimate is noise (shaded band in the Bode "
-                       "plots)" if above else "") + "."]
-        L += [""]
-    return L
 
 
 __all__ = ["DemoSettings", "demo_settings", "build_plant", "run_experiments", "take_record",

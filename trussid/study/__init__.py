@@ -10,7 +10,8 @@ saves them as a partitioned Parquet dataset (:mod:`trussid.study.store`), resuma
 
 from trussid.study.engine import StudyRun, evaluate_chunk, plan, run_study
 from trussid.study.report import write_report
-from trussid.study.spec import Axis, StudyError, StudySpec, load_spec, sample_points, spec_from_dict, spec_hash
+from trussid.study.errors import StudyError
+from trussid.study.spec import Axis, StudySpec, load_spec, sample_points, spec_from_dict, spec_hash
 from trussid.study.store import read_study
 
 __all__ = ["StudySpec", "Axis", "StudyError", "load_spec", "spec_from_dict", "spec_hash", "sample_points",

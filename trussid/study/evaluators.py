@@ -4,7 +4,7 @@ Each evaluator is a plain object with
 
 - ``parameters``: the parameters it takes, each with a check of one value;
 - ``options``: its options and their defaults;
-- ``check(spec, where)``: a :class:`~trussid.study.spec.StudyError` naming the first bad
+- ``check(spec, where)``: a :class:`~trussid.study.errors.StudyError` naming the first bad
   parameter, value or option;
 - ``columns(options)``: its output columns and their Arrow types (fixed per study, so that
   every chunk of the result dataset has the same schema, failed rows included);
@@ -23,13 +23,25 @@ import functools
 import json
 import math
 import warnings
-from types import SimpleNamespace
+from dataclasses import dataclass
 
 import numpy as np
 import pyarrow as pa
 
+from trussid.geometry.params_toml import testbed_from_dict
+from trussid.geometry.spec import Testbed
+from trussid.plid.estimator import PLIDWarning
+from trussid.plid.evaluate import compare
 from trussid.plid.frf import frequency_response
-from trussid.study.spec import StudyError
+from trussid.plid.multipass import identify, identify_reduced
+from trussid.plid.subspace import n4sid
+from trussid.study.deck import DeckModesEvaluator
+from trussid.study.errors import StudyError
+from trussid.study.plants import PLANTS, record
+from trussid.testbed.labels import label_testbed_modes
+from trussid.testbed.model import build_testbed, design_at_walls, wall_basis, wall_modes
+from trussid.testbed.plant import testbed_plant
+from trussid.testbed.sensitivity import wall_sensitivities
 
 WALLS = tuple(f"wall{i}" for i in range(6))
 
@@ -113,9 +125,6 @@ def _context(name: str, options_json: str):
 
 # ----------------------------------------------------------------------------- testbed
 def _testbed_of(options):
-    from trussid.geometry.params_toml import testbed_from_dict
-    from trussid.geometry.spec import Testbed
-
     tb = options.get("testbed")
     return Testbed() if not tb else testbed_from_dict(tb, source="[evaluate] testbed")
 
@@ -134,24 +143,29 @@ def _walls(ctx, params):
     return w
 
 
-class _WalledModel:
-    """A testbed model seen at other walls: its beams' tube properties moved, all else shared.
+@dataclass(frozen=True)
+class WallContext:
+    """What every point of a wall study shares: the testbed model at the reference walls
+    and its wall basis (:func:`trussid.testbed.model.wall_basis`)."""
 
-    Every strut element's ``A``, ``Iy``, ``Iz``, ``J`` is the tube's share plus a constant
-    (adapter block, wafers; :mod:`trussid.testbed.model`), so moving the tube's ``A_t``,
-    ``I_t`` (``J_t = 2 I_t``) by ``dA``, ``dI`` gives the model built at the new walls
-    without rebuilding it (0.8 s) — what labelling each design needs.
-    """
+    tbm: object
+    basis: object
 
-    def __init__(self, model, beams):
-        self._model, self._beams = model, beams
 
-    @property
-    def beams(self):
-        return self._beams
+@dataclass(frozen=True)
+class TestbedContext:
+    """What every point of a plant study shares: the testbed parameters."""
 
-    def __getattr__(self, key):
-        return getattr(self._model, key)
+    __test__ = False
+
+    tb: object
+
+
+@dataclass(frozen=True)
+class CaseContext:
+    """What every point of a fit study shares: the benchmark plant case."""
+
+    case: object
 
 
 class ModesEvaluator(Evaluator):
@@ -187,41 +201,23 @@ class ModesEvaluator(Evaluator):
         return cols
 
     def build_context(self, options):
-        from trussid.testbed.model import build_testbed, wall_basis
-
         tbm = build_testbed(_testbed_of(options))
-        basis = wall_basis(tbm)
-        b = tbm.model.beams
-        strut = tbm.map.strut_of_element(b.ids)
-        return SimpleNamespace(tbm=tbm, basis=basis, beams=b, strut=strut)
+        return WallContext(tbm=tbm, basis=wall_basis(tbm))
 
     def modes(self, ctx, walls, n):
-        from trussid.testbed.model import wall_modes
-
         return wall_modes(ctx.basis, walls, n)
 
     def point(self, ctx, params, options):
-        from trussid.testbed.labels import label_testbed_modes
-        from trussid.testbed.model import tube_properties
-
         opts = self.resolved(options)
         w = ctx.basis.check_walls(_walls(ctx, params))
-        f, X = self.modes(ctx, w, opts["n_modes"])
-        out = {f"f{k + 1}": float(v) for k, v in enumerate(f)}
-        if opts["labels"]:
-            A0, I0 = tube_properties(ctx.basis.r_out, ctx.basis.walls_ref)
-            A1, I1 = tube_properties(ctx.basis.r_out, w)
-            b, s = ctx.beams, ctx.strut
-            on = s >= 0
-            dA, dI = np.zeros(len(s)), np.zeros(len(s))
-            dA[on], dI[on] = (A1 - A0)[s[on]], (I1 - I0)[s[on]]
-            import dataclasses
-
-            beams = dataclasses.replace(b, A=b.A + dA, Iy=b.Iy + dI, Iz=b.Iz + dI, J=b.J + 2 * dI)
-            tbm = dataclasses.replace(ctx.tbm, model=_WalledModel(ctx.tbm.model, beams))
-            modes = SimpleNamespace(frequencies_hz=f, shapes_full=ctx.basis.system.T @ X)
-            labels = label_testbed_modes(tbm, modes).labels
-            out.update({f"label{k + 1}": lab for k, lab in enumerate(labels)})
+        if not opts["labels"]:
+            f, _ = self.modes(ctx, w, opts["n_modes"])
+            return {f"f{k + 1}": float(v) for k, v in enumerate(f)}
+        # the design at these walls (a real model and its modes) for the labels
+        design, modes = design_at_walls(ctx.tbm, ctx.basis, w, opts["n_modes"])
+        out = {f"f{k + 1}": float(v) for k, v in enumerate(modes.frequencies_hz)}
+        labels = label_testbed_modes(design, modes).labels
+        out.update({f"label{k + 1}": lab for k, lab in enumerate(labels)})
         return out
 
 
@@ -242,8 +238,6 @@ class SensitivitiesEvaluator(ModesEvaluator):
                 + [(f"dfdt{k + 1}_{i}", pa.float64()) for k in range(n) for i in range(6)])
 
     def point(self, ctx, params, options):
-        from trussid.testbed.sensitivity import wall_sensitivities
-
         n = self.resolved(options)["n_modes"]
         with warnings.catch_warnings():
             # a repeated pair is a property of the design, reported by its values
@@ -280,12 +274,10 @@ class PlantEvaluator(Evaluator):
         return [(f"{k}_ch{c}", pa.float64()) for c in (1, 2, 3) for k in ("peak_gain", "peak_hz", "h2")]
 
     def build_context(self, options):
-        return SimpleNamespace(tb=_testbed_of(options))
+        return TestbedContext(tb=_testbed_of(options))
 
     def point(self, ctx, params, options):
         import scipy.linalg as la
-
-        from trussid.testbed.plant import testbed_plant
 
         opts = self.resolved(options)
         walls = np.array(ctx.tb.struts.walls, float)
@@ -371,8 +363,6 @@ class IdentifyEvaluator(Evaluator):
     default_chunk = 1
 
     def check_options(self, options, where):
-        from trussid.study.plants import PLANTS
-
         if options["plant"] not in PLANTS:
             raise StudyError(f"{where}: [evaluate] plant {options['plant']!r} is unknown "
                              f"(expected one of {', '.join(PLANTS)})")
@@ -393,17 +383,10 @@ class IdentifyEvaluator(Evaluator):
             ("stable", pa.bool_()), ("block_rows", pa.int64())]
 
     def build_context(self, options):
-        from trussid.study.plants import PLANTS
-
-        return SimpleNamespace(case=PLANTS[options["plant"]]())
+        return CaseContext(case=PLANTS[options["plant"]]())
 
     def point(self, ctx, params, options):
         import time
-
-        from trussid.plid.estimator import PLIDWarning
-        from trussid.plid.multipass import identify, identify_reduced
-        from trussid.plid.subspace import n4sid
-        from trussid.study.plants import record
 
         p = {**{k: v for k, v in self.resolved(options).items() if k in self.parameters}, **params}
         opts = self.resolved(options)
@@ -435,15 +418,14 @@ class IdentifyEvaluator(Evaluator):
             else:
                 ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1], progress=False)
         out = _score(ident.model, case, val, time.perf_counter() - t0, opts, K=ident.K)
-        out["block_rows"] = (ident.provenance.subspace or {}).get("block_rows") or -1
+        sub = ident.provenance.subspace
+        out["block_rows"] = sub.block_rows if sub is not None else -1
         return out
 
 
 def _score(model, case, val, seconds, opts, K=None) -> dict:
     """The row of one fit, from :func:`trussid.plid.evaluate.compare` (the evaluator of
     ``trussid compare``, the demo and the benchmarks) on the validation record."""
-    from trussid.plid.evaluate import compare
-
     c = compare(model, case.plant, u=val.data.u, y=val.data.y, y_clean=val.y_clean, K=K,
                 band=tuple(opts["band"]))
     lo, hi = opts["mode_band"]
@@ -463,7 +445,7 @@ def _score(model, case, val, seconds, opts, K=None) -> dict:
 
 
 EVALUATORS = {e.name: e for e in (ModesEvaluator(), SensitivitiesEvaluator(), PlantEvaluator(),
-                                  IdentifyEvaluator())}
+                                  IdentifyEvaluator(), DeckModesEvaluator())}
 
 
 def get_evaluator(name: str, where: str = "spec") -> Evaluator:

@@ -5,7 +5,7 @@ Built directly in numpy/control; :data:`PLANTS` names them for study specs
 
 Every plant is a set of lightly damped modes ``q'' + 2 zeta w q' + w^2 q = b^T u`` with
 acceleration outputs ``y_r = sum_i phi_ri q_i''``, discretised by zero-order hold at
-``fs`` (default 1600 Hz, the testbed's rate). Mode shapes and participations are seeded
+``fs`` (default :data:`FS`, the thesis lab's rate, :class:`trussid.geometry.lab.LabSpec`). Mode shapes and participations are seeded
 random numbers; each output row is scaled so that a unit-RMS white input gives a unit-RMS
 output (so one converter range suits all channels).
 
@@ -28,9 +28,14 @@ import control
 import numpy as np
 import scipy.signal
 
+from trussid.geometry.lab import LabSpec
 from trussid.plid.experiment import run_experiment
 
-FS = 1600.0
+#: The thesis lab (the cases are PLID at thesis scale): its rate, smoothing filter and
+#: converter resolution, from the one source of the lab's numbers.
+_LAB = LabSpec()
+#: Sample rate of the cases [Hz].
+FS = _LAB.daq.sample_rate
 
 
 @dataclass
@@ -105,9 +110,11 @@ def case_a(seed: int = 1, fs: float = FS) -> Case:
     return Case("a: 1x3, 12 modes, 24 states", _unit_rms_outputs(sysd), (24,), f, 0.0025)
 
 
-def butterworth_inputs(m: int, f_hz: float = 1300.0):
-    """m independent 2-pole Butterworth low-pass filters (unit DC gain), continuous."""
-    bf, af = scipy.signal.butter(2, 2 * np.pi * f_hz, analog=True)
+def butterworth_inputs(m: int, f_hz: float = _LAB.filters.smoothing_cutoff,
+                       order: int = _LAB.filters.smoothing_order):
+    """m independent Butterworth low-pass filters (unit DC gain), continuous; default the
+    thesis lab's smoothing filter (2 poles at 1300 Hz)."""
+    bf, af = scipy.signal.butter(order, 2 * np.pi * f_hz, analog=True)
     one = control.tf2ss(control.tf(bf, af))
     return control.append(*([one] * m)) if m > 1 else one
 
@@ -144,12 +151,14 @@ def case_testbed_like(seed: int = 3, fs: float = FS) -> Case:
 def record(case: Case, n_samples: int, noise: str, seed: int):
     """Identification record on ``case``: white unit-RMS input, and ``noise`` one of
     ``"60dB"``, ``"30dB"`` (white sensor noise that far below each output's RMS) or
-    ``"12bit"`` (12-bit D/A and A/D over +-5 units: about 5 x output RMS, no other noise)."""
+    ``"12bit"`` (the thesis lab's 12-bit D/A and A/D over +-5 units: about 5 x output RMS,
+    no other noise)."""
     kw = {}
     if noise.endswith("dB"):
         kw["snr_db"] = float(noise[:-2])
     elif noise == "12bit":
-        kw.update(dac_bits=12, adc_bits=12, dac_full_scale=5.0, adc_full_scale=5.0)
+        bits = _LAB.daq.bits
+        kw.update(dac_bits=bits, adc_bits=bits, dac_full_scale=5.0, adc_full_scale=5.0)
     elif noise != "none":
         raise ValueError(f"unknown noise {noise!r}")
     return run_experiment(case.plant, n_samples, "white", rms=1.0, seed=seed, **kw)

@@ -4,7 +4,7 @@ A study is plain data (:class:`StudySpec`), written in TOML or built in Python::
 
     [study]
     name = "wall-study"
-    evaluate = "modes"          # modes | sensitivities | plant | identify
+    evaluate = "modes"          # modes | sensitivities | plant | identify | deck (any deck)
     chunk = 20                  # points per task (engine granularity; no effect on results)
 
     [evaluate]                  # options of the evaluator (evaluators.EVALUATORS)
@@ -39,13 +39,10 @@ from pathlib import Path
 
 import numpy as np
 
-from trussid._util.errors import UserError
+from trussid.study.errors import StudyError
+from trussid.study.evaluators import get_evaluator
 
 SAMPLERS = ("grid", "lhs", "random", "list")
-
-
-class StudyError(UserError):
-    """A mistake in a study specification or its output directory; names the item."""
 
 
 @dataclass(frozen=True)
@@ -177,8 +174,6 @@ def _axis(name: str, raw, where: str) -> Axis:
 
 def spec_from_dict(d: dict, where: str = "spec") -> StudySpec:
     """Build and validate a :class:`StudySpec` from the TOML layout (module docstring)."""
-    from trussid.study.evaluators import get_evaluator
-
     if not isinstance(d, dict):
         raise StudyError(f"{where}: a study must be a table")
     unknown = set(d) - {"study", "evaluate", "sample", "parameters"}
@@ -190,7 +185,8 @@ def spec_from_dict(d: dict, where: str = "spec") -> StudySpec:
     if bad:
         raise StudyError(f"{where}: [study]: unknown key {sorted(bad)[0]!r} (expected name, evaluate, chunk)")
     if "evaluate" not in st:
-        raise StudyError(f"{where}: [study] needs evaluate = one of modes, sensitivities, plant, identify")
+        raise StudyError(f"{where}: [study] needs evaluate = one of modes, sensitivities, plant, identify, "
+                         "deck")
     chunk = st.get("chunk")
     if chunk is not None and (not isinstance(chunk, int) or isinstance(chunk, bool) or chunk < 1):
         raise StudyError(f"{where}: [study] chunk must be a positive integer, got {chunk!r}")

@@ -17,11 +17,15 @@ import numpy as np
 from scipy import signal
 
 from trussid.fem.errors import ModelError
+from trussid.geometry.lab import LabSpec
 
 
 @dataclass(frozen=True)
 class LabChain:
-    """Electronics and converters of one actuator channel (identical on every channel).
+    """Electronics and sample rate of one actuator channel (identical on every channel).
+
+    No field has a default: a chain comes from a lab (:meth:`from_lab`, the one source of
+    the lab's numbers) or is given in full.
 
     Parameters
     ----------
@@ -39,12 +43,12 @@ class LabChain:
         A/D and D/A rate [Hz]; the plant is discretised by zero-order hold.
     """
 
-    smoothing_order: int = 2
-    smoothing_cutoff: float = 1300.0
-    amplifier_gain: float = 10.0
-    lowpass_order: int = 1
-    lowpass_cutoff: float = 120.0
-    sample_rate: float = 1600.0
+    smoothing_order: int
+    smoothing_cutoff: float
+    amplifier_gain: float
+    lowpass_order: int
+    lowpass_cutoff: float
+    sample_rate: float
 
     def __post_init__(self):
         for key in ("smoothing_cutoff", "lowpass_cutoff", "sample_rate"):
@@ -56,6 +60,15 @@ class LabChain:
                 raise ModelError(f"lab chain: {key} must be >= 0, got {getattr(self, key)!r}")
         if not math.isfinite(self.amplifier_gain) or self.amplifier_gain == 0:
             raise ModelError(f"lab chain: amplifier_gain must be finite and non-zero, got {self.amplifier_gain!r}")
+
+    @classmethod
+    def from_lab(cls, lab: LabSpec, sample_rate: float | None = None) -> "LabChain":
+        """The chain of ``lab`` (at ``sample_rate`` [Hz] instead of the lab's, if given)."""
+        f = lab.filters
+        return cls(smoothing_order=f.smoothing_order, smoothing_cutoff=f.smoothing_cutoff,
+                   amplifier_gain=lab.electrics.amplifier_gain, lowpass_order=f.lowpass_order,
+                   lowpass_cutoff=f.lowpass_cutoff,
+                   sample_rate=lab.daq.sample_rate if sample_rate is None else sample_rate)
 
 
 def butterworth(order: int, cutoff_hz: float) -> control.StateSpace:
@@ -81,7 +94,7 @@ def channel_electronics(chain: LabChain) -> control.StateSpace:
     return sys
 
 
-def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
+def lab_plant(structure: control.StateSpace, chain: LabChain, *,
               check_nyquist: bool = True, max_mode_hz: float | None = None,
               n_commands: int | None = None) -> tuple[control.StateSpace, control.StateSpace]:
     """Compose the electronics with a structural plant and discretise.
@@ -91,6 +104,7 @@ def lab_plant(structure: control.StateSpace, chain: LabChain = LabChain(), *,
     structure : control.StateSpace
         PZT volts in, sensor volts out (continuous).
     chain : LabChain
+        The electronics and sample rate (:meth:`LabChain.from_lab`).
     check_nyquist : bool
         Refuse a sample rate below twice ``max_mode_hz``.
     max_mode_hz : float, optional

@@ -68,7 +68,7 @@ rigid-body work per design.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as la
@@ -77,8 +77,12 @@ import scipy.sparse as sp
 from trussid.fem.assembly import System, assemble
 from trussid.fem.elements import frame_matrices, local_axes
 from trussid.fem.errors import ModelError
+from trussid.fem.modal import Modes, solve_modes
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
+from trussid.geometry.layout import testbed_layout
+from trussid.geometry.solids import base_rigid_body, udf_rigid_body
+from trussid.geometry.spec import Testbed
 
 #: Default number of frame elements on each bare tube segment (base-adapter, adapter-top).
 #: Chosen by a mesh study (tests/fem/test_testbed.py): doubling it moves no frequency below
@@ -310,10 +314,6 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
     """
     # Long: the testbed is built in the order it is assembled in the lab (struts, adapters,
     # flexures, UDF, base, bungees, sensors), each step adding to the same model and map.
-    from trussid.geometry.layout import testbed_layout
-    from trussid.geometry.solids import base_rigid_body, udf_rigid_body
-    from trussid.geometry.spec import Testbed
-
     tb = Testbed() if tb is None else tb
     lay = testbed_layout(tb)
     s, kinds = strut_stations(tb, elements_per_segment)
@@ -491,6 +491,35 @@ class WallBasis:
         out[self.rows, self.cols] = data
         return out
 
+    def projected(self, V: np.ndarray) -> "WallBasis":
+        """The basis Ritz-projected onto the columns of ``V`` (n, r): every matrix ``B``
+        becomes ``V^T B V``, stored densely (the pattern is all ``(r, c)``).
+
+        The result is still affine in the tube properties, so it is exact in how the walls
+        enter and :func:`wall_modes` and the wall sensitivities work on it unchanged; its
+        only error is the Ritz error of the fixed subspace. Its shapes are amplitudes of
+        ``V``'s columns: ``V q`` expands them to this basis's DOFs (``system`` stays the
+        full model's).
+
+        Raises
+        ------
+        ModelError
+            If ``V`` is not (n, r) with 1 <= r <= n.
+        """
+        V = np.asarray(V, float)
+        if V.ndim != 2 or V.shape[0] != self.n or not 1 <= V.shape[1] <= self.n:
+            raise ModelError(f"a Ritz basis for {self.n} DOFs must be ({self.n}, r) with "
+                             f"1 <= r <= {self.n}, got shape {V.shape}")
+        r = V.shape[1]
+
+        def proj(data):
+            return (V.T @ (self.sparse(data) @ V)).ravel()
+
+        rr, cc = np.divmod(np.arange(r * r), r)
+        return replace(self, n=r, rows=rr, cols=cc, K_ref=proj(self.K_ref), M_ref=proj(self.M_ref),
+                       KA=np.array([proj(d) for d in self.KA]), KI=np.array([proj(d) for d in self.KI]),
+                       MA=np.array([proj(d) for d in self.MA]), MI=np.array([proj(d) for d in self.MI]))
+
 
 def _reduced_data(T: sp.csr_matrix, Tt: sp.csr_matrix, blocks: np.ndarray, dofs: np.ndarray, n_full: int):
     """``T^T B T`` of element blocks summed into full DOFs, as a COO-ish (rows, cols, data)."""
@@ -574,10 +603,6 @@ DENSE_MAX_DOF = 600
 def _sparse_modes(system: System, n_modes: int, max_frequency_hz: float | None):
     """:func:`trussid.fem.modal.solve_modes` for a count, or for every mode below a
     frequency by doubling the count until one lies above it."""
-    from dataclasses import replace
-
-    from trussid.fem.modal import solve_modes
-
     if max_frequency_hz is None:
         return solve_modes(system, n_modes)
     k = max(int(n_modes), 1)
@@ -616,10 +641,25 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
     frequencies_hz : (n_modes,) float
     shapes : (n, n_modes) float
         ``shapes.T @ M @ shapes = I`` on the reduced DOFs (``basis.system.T`` expands them).
+
+    Examples
+    --------
+    The strut modes of the default testbed at its nominal walls, and with every wall 50 %
+    thicker (stiffer struts, higher frequencies), without rebuilding the model:
+
+    >>> import numpy as np
+    >>> from trussid.testbed.model import build_testbed, wall_basis, wall_modes
+    >>> tbm = build_testbed()
+    >>> basis = wall_basis(tbm)
+    >>> walls = np.array(tbm.testbed.struts.walls)
+    >>> print(np.round(1e3 * walls, 4))                     # [mm]
+    [0.7112 0.889  1.0668 1.2446 1.4732 1.651 ]
+    >>> print(np.round(wall_modes(basis, walls, 10)[0][6:9], 2))
+    [50.43 50.49 53.02]
+    >>> print(np.round(wall_modes(basis, 1.5 * walls, 10)[0][6:9], 2))
+    [54.89 54.96 56.65]
     """
     if basis.n > DENSE_MAX_DOF:
-        from dataclasses import replace
-
         k_data, m_data = basis.data(walls)
         system = replace(basis.system, K=basis.sparse(k_data), M=basis.sparse(m_data))
         modes = _sparse_modes(system, n_modes, None)
@@ -635,6 +675,49 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
     return np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi), X
 
 
+def design_at_walls(tbm: TestbedModel, basis: WallBasis, walls, n_modes: int = 30
+                    ) -> tuple[TestbedModel, Modes]:
+    """The testbed at other strut walls, without rebuilding it: its FE model and its modes.
+
+    Parameters
+    ----------
+    tbm : TestbedModel
+        The testbed at the reference walls.
+    basis : WallBasis
+        Its wall basis (:func:`wall_basis` of ``tbm``).
+    walls : (6,) float
+        Wall thicknesses [m], each in ``(0, r_out)``.
+    n_modes : int
+        Lowest modes wanted.
+
+    Returns
+    -------
+    design : TestbedModel
+        ``tbm`` at ``walls``: a real :class:`trussid.fem.Model` whose strut elements have the
+        tube's ``A_t``, ``I_t`` (``J_t = 2 I_t``) moved by :meth:`WallBasis.coefficients`
+        (the one rule of how a wall changes a section), and ``testbed.struts.walls`` set.
+    modes : fem.modal.Modes
+        Its lowest modes from the wall basis (:func:`wall_modes`), mass-normalised.
+    """
+    w = basis.check_walls(walls)
+    dA, dI = basis.coefficients(w)
+    b = tbm.model.beams
+    strut = tbm.map.strut_of_element(b.ids)
+    on = strut >= 0
+    da, di = np.zeros(len(strut)), np.zeros(len(strut))
+    da[on], di[on] = dA[strut[on]], dI[strut[on]]
+    model = tbm.model.with_beam_sections(b.A + da, b.Iy + di, b.Iz + di, b.J + 2 * di)
+    f, X = wall_modes(basis, w, n_modes)
+    system = basis.system
+    modes = Modes(frequencies_hz=f, omega=2 * np.pi * f, shapes=X, shapes_full=system.T @ X,
+                  node_ids=system.node_ids, xyz=system.xyz, n_dof=basis.n,
+                  method="dense" if basis.n <= DENSE_MAX_DOF else "shift-invert")
+    design = TestbedModel(model=model, map=tbm.map,
+                          testbed=tbm.testbed.with_walls(tuple(float(v) for v in w)),
+                          elements_per_segment=tbm.elements_per_segment)
+    return design, modes
+
+
 def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | None = None,
                         max_frequency_hz: float | None = None):
     """Lowest modes of a testbed model as :class:`trussid.fem.modal.Modes`, by dense subset
@@ -648,8 +731,6 @@ def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | N
     modes below a frequency by value, which the plant uses. The testbed has no
     zero-frequency mode (clamped, or hung on bungees).
     """
-    from trussid.fem.modal import Modes
-
     system = assemble(tbm.model) if system is None else system
     if system.n_dof > DENSE_MAX_DOF:
         return _sparse_modes(system, n_modes, max_frequency_hz)
@@ -685,4 +766,4 @@ def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | N
 
 __all__ = ["TestbedMap", "solve_testbed_modes", "TestbedModel", "build_testbed", "strut_stations", "tube_properties",
            "tube_property_derivatives", "adapter_constant_properties", "WallBasis", "wall_basis",
-           "wall_matrices", "wall_modes", "ELEMENTS_PER_SEGMENT", "DENSE_MAX_DOF"]
+           "wall_matrices", "wall_modes", "design_at_walls", "ELEMENTS_PER_SEGMENT", "DENSE_MAX_DOF"]

@@ -18,6 +18,8 @@ from trussid.fem.assembly import assemble
 from trussid.fem.errors import ModelError
 from trussid.fem.plant import modal_plant, residual_flexibility
 from trussid.fem.sensors import Sensor
+from trussid.geometry.lab import LabSpec
+from trussid.geometry.spec import Testbed
 from trussid.testbed.chain import LabChain, lab_plant
 from trussid.testbed.model import TestbedModel, build_testbed, solve_testbed_modes
 
@@ -39,7 +41,10 @@ class TestbedPlant:
     capacitance : float
         Capacitance of one actuator from the wafer data [F] (wafers in parallel).
     chain : LabChain
-    tbm : fem.testbed.TestbedModel
+    tbm : TestbedModel
+    lab : LabSpec
+        The lab the plant was made with, at the plant's sample rate: the converters of its
+        records and closed loops (:func:`trussid.campaign.control.LoopSettings.for_lab`).
     """
 
     continuous: control.StateSpace
@@ -50,6 +55,7 @@ class TestbedPlant:
     capacitance: float
     chain: LabChain
     tbm: TestbedModel
+    lab: LabSpec
 
 
 def wafer_of(tb) -> Wafer:
@@ -60,12 +66,8 @@ def wafer_of(tb) -> Wafer:
 
 
 def lab_chain_of(tb, sample_rate: float | None = None) -> LabChain:
-    """The electronics and converters described by the testbed parameters."""
-    f = tb.filters
-    return LabChain(smoothing_order=f.smoothing_order, smoothing_cutoff=f.smoothing_cutoff,
-                    amplifier_gain=tb.electrics.amplifier_gain, lowpass_order=f.lowpass_order,
-                    lowpass_cutoff=f.lowpass_cutoff,
-                    sample_rate=tb.daq.sample_rate if sample_rate is None else sample_rate)
+    """The electronics described by the testbed's lab (:attr:`Testbed.lab`)."""
+    return LabChain.from_lab(tb.lab, sample_rate)
 
 
 def channel_loads(tbm: TestbedModel, channels=None, arrangement: str = "extension") -> np.ndarray:
@@ -162,9 +164,10 @@ def strut_sensors(tbm: TestbedModel, quantity: str = "acceleration",
                    name=f"strut{i}") for i in range(mp.strut_nodes.shape[0])]
 
 
-def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_rate: float | None = None,
+def testbed_plant(design: Testbed | TestbedModel | None = None, *, n_modes: int | None = None,
+                  damping=None, sample_rate: float | None = None,
                   quantity: str = "acceleration", chain: LabChain | None = None,
-                  static_correction: bool = False, tbm: TestbedModel | None = None,
+                  static_correction: bool = False,
                   arrangement: str = "extension", sensors: str = "udf",
                   disturbances: dict | None = None, performance: list[Sensor] | None = None
                   ) -> TestbedPlant:
@@ -172,8 +175,10 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
 
     Parameters
     ----------
-    tb : geometry.testbed.Testbed, optional
-        Default: the default testbed.
+    design : Testbed or TestbedModel, optional
+        The testbed's parameters, or its FE model already built
+        (:func:`trussid.testbed.model.build_testbed`); default: the default testbed. The
+        lab chain comes from its lab (``design.lab``, or ``design.testbed.lab``).
     n_modes : int, optional
         Modes kept; default all below the Nyquist frequency.
     damping : float or sequence, optional
@@ -186,8 +191,6 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
         Electronics; default from ``tb``.
     static_correction : bool
         Add the truncated modes' static displacement (displacement outputs; clamped base).
-    tbm : TestbedModel, optional
-        A model already built from ``tb``.
     arrangement : {"extension", "bending"}
         ``"extension"``: the lab's three channels, each driving the two struts that share a
         top vertex in extension (inputs ``ch1..ch3``). ``"bending"``: the experiment used
@@ -206,13 +209,32 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
     Returns
     -------
     TestbedPlant
+
+    Examples
+    --------
+    The default testbed at the lab's 1600 Hz: three actuator channels to three accelerometers,
+    the six suspension modes below 1 Hz, then the first strut modes near 50 Hz:
+
+    >>> import numpy as np
+    >>> from trussid.testbed.plant import testbed_plant
+    >>> plant = testbed_plant()
+    >>> G = plant.discrete
+    >>> G.input_labels, G.output_labels, G.dt
+    (['ch1', 'ch2', 'ch3'], ['acc1', 'acc2', 'acc3'], 0.000625)
+    >>> print(np.round(plant.modes.frequencies_hz[6:9], 1))
+    [50.4 50.5 53. ]
     """
     if arrangement not in ("extension", "bending"):
         raise ModelError(f"arrangement must be 'extension' or 'bending', got {arrangement!r}")
     if sensors not in ("udf", "struts"):
         raise ModelError(f"sensors must be 'udf' or 'struts', got {sensors!r}")
-    if tbm is None:
-        tbm = build_testbed(tb)
+    if isinstance(design, TestbedModel):
+        tbm = design
+    elif design is None or isinstance(design, Testbed):
+        tbm = build_testbed(design)
+    else:
+        raise ModelError(f"testbed_plant needs a Testbed or a TestbedModel, got "
+                         f"{type(design).__name__}")
     tb = tbm.testbed
     chain = chain or lab_chain_of(tb, sample_rate)
     system = assemble(tbm.model)
@@ -246,7 +268,8 @@ def testbed_plant(tb=None, *, n_modes: int | None = None, damping=None, sample_r
     wafer = wafer_of(tb)
     return TestbedPlant(continuous=cont, discrete=disc, structure=structure,
                         modes=modes, loads=F,
-                        capacitance=tb.pzt.wafers_per_strut * wafer.capacitance, chain=chain, tbm=tbm)
+                        capacitance=tb.pzt.wafers_per_strut * wafer.capacitance, chain=chain, tbm=tbm,
+                        lab=tb.lab.at_rate(chain.sample_rate))
 
 
 def plant_summary(plant: TestbedPlant) -> dict:

@@ -66,7 +66,8 @@ def add_parser(subparsers):
                    "'t [ms]'; # comments), .npz, .mat or .uff/.unv (UFF 58 time histories)")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--order", type=int, metavar="N",
-                      help="model order (number of states; a multiple of the number of outputs)")
+                      help="model order (number of states): any order; one that is not a multiple of the "
+                      "outputs is identified at the next multiple and reduced to it")
     what.add_argument("--orders", metavar="LO:HI:STEP",
                       help="order selection instead of one model: identify at each order "
                       "LO, LO+STEP, ... HI (multiples of the number of outputs) on the first "
@@ -123,8 +124,8 @@ def add_parser(subparsers):
     p.add_argument("--direct", choices=("auto", "yes", "no"), default=None,
                    help="direct term D (feed-through): auto (default for --start subspace or "
                    "scratch) decides on the data by a held-out output-error test, and the "
-                   "report says what it chose; yes / no force it. --via defaults to no "
-                   "(strictly proper candidates); --start plain has none")
+                   "report says what it chose; yes / no force it (with --via: for every "
+                   "candidate); --start plain has none")
     p.add_argument("--json", action="store_true",
                    help="print poles and the prediction ratio as JSON")
     p.set_defaults(func=run)
@@ -163,7 +164,7 @@ def run_orders(args, data) -> int:
     from pathlib import Path
 
     from trussid.plid.datafile import check_enough_samples
-    from trussid.plid.order import format_table, order_table
+    from trussid.plid.order import format_table, order_table, order_warnings
     from trussid.plots import order_figure, save_figure
     from trussid._util.files import atomic_path
 
@@ -186,6 +187,8 @@ def run_orders(args, data) -> int:
         lines.append(f"{r.order},{r.prediction_db:.6g},{ch},{r.unstable_poles},{r.seconds:.3f},"
                      f"{err}")
     ok = [r for r in rows if not r.error]
+    for note in order_warnings(rows):
+        print(f"trussid identify: warning: {note}", file=sys.stderr)
     if not ok:
         raise UserError("no order could be identified: " + "; ".join(
             f"order {r.order}: {r.error}" for r in rows))
@@ -215,6 +218,7 @@ def run(args) -> int:
     from trussid.plid.modelfile import save_model
     from trussid.plid.multipass import fit_model
     from trussid.plid.stability import UnstableModelWarning, check_stability
+    from trussid.plid.uncertainty import mode_intervals
 
     out = str(args.out)
     if getattr(args, "orders", None) is not None:
@@ -272,6 +276,10 @@ def run(args) -> int:
         "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
         "prediction_skip_samples": skip, "unstable_poles": unstable,
         "poles": [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(freq, damp)],
+        # complex pairs with 95 % intervals (plid.uncertainty: first-order propagation of
+        # the PLID pass's posterior parameter covariance)
+        "modes": [mi.as_dict() for mi in mode_intervals(model, ident.result.model,
+                                                         ident.result.theta_cov)],
         "warnings": prov.warnings + ([stability_note] if stability_note else []),
         "stable": stability.stable, "stability": stability_note,
     }
@@ -314,6 +322,17 @@ def _print_summary(s: dict, via: bool) -> None:
     print(f"one-step signal-to-prediction-error ratio on the identification data (in-sample): "
           f"{s['signal_to_prediction_error_db']:.2f} dB ({per}; first "
           f"{s['prediction_skip_samples']} samples left out)")
+    if s["modes"]:
+        print("modes with 95 % intervals (first-order propagation of the parameter "
+              "covariance; '-' where none):")
+        print(f"  {'frequency [Hz]':>14s}  {'95 % interval [Hz]':>27s}  {'damping':>9s}  "
+              f"{'95 % interval':>21s}")
+        for mo in s["modes"]:
+            fi, zi = mo["frequency_ci95_hz"], mo["damping_ratio_ci95"]
+            fci = f"[{fi[0]:.4f}, {fi[1]:.4f}]" if fi else "-"
+            zci = f"[{zi[0]:.5f}, {zi[1]:.5f}]" if zi else "-"
+            print(f"  {mo['frequency_hz']:14.4f}  {fci:>27s}  {mo['damping_ratio']:9.5f}  "
+                  f"{zci:>21s}")
     print("poles (frequency [Hz], damping):")
     for row in s["poles"]:
         print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")

@@ -4,7 +4,9 @@ NASTRAN deck with ``--io IO.toml`` (actuators and sensors, :mod:`trussid.fem.ios
 The plant runs from the D/A command volts of each actuator channel, through the smoothing
 filter, the power amplifier and the PZT actuators, to the accelerometer volts, discretised
 by zero-order hold at the sample rate. PLANT.npz holds the discrete plant (``A, B, C, D, dt``
-and names, as every model file) and the continuous one beside it (``c_A`` ...).
+and names, as every model file), the continuous one beside it (``c_A`` ...) and the lab it
+was made with (``lab_json``: converters, chain, sample rate), which ``trussid closed-loop``
+and ``trussid simulate`` use for its converters.
 """
 
 from __future__ import annotations
@@ -18,7 +20,8 @@ from trussid._util.jsonio import dumps
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        "plant", help="build the testbed's state-space plant (PZT volts in, accelerometer volts out)",
+        "plant", help="build a state-space plant: the testbed's (PZT volts in, accelerometer volts "
+        "out) or a deck's with --io",
         description="Build the control-ready plant of a testbed: modes by finite elements, PZT "
         "strain actuators (3 channels, each driving the two struts that share a top vertex), "
         "accelerometers at the UDF corners, the lab's smoothing filter, amplifier and converters, "
@@ -33,7 +36,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--io", metavar="IO.toml", default=None,
                    help="actuators and sensors of a NASTRAN deck (required for a deck)")
     p.add_argument("--out", required=True, metavar="PLANT.npz", help="output model file (.npz)")
-    p.add_argument("--fs", type=float, default=None, metavar="HZ", help="sample rate (default: the testbed's, 1600 Hz)")
+    p.add_argument("--fs", type=float, default=None, metavar="HZ", help="sample rate (default: the testbed lab's, [daq] sample_rate)")
     p.add_argument("--modes", type=int, default=None, metavar="N", help="modes kept (default: all below the Nyquist frequency)")
     p.add_argument("--damping", type=float, default=None, metavar="Z",
                    help="modal damping ratio (default: the testbed's, 0.0025; with --io the "
@@ -49,6 +52,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from trussid._util.files import check_parent
     from trussid.cli.loaders import testbed_spec
+    from trussid.geometry.lab import lab_record
     from trussid.plid.modelfile import save_model
     from trussid.testbed.plant import plant_summary, testbed_plant
 
@@ -89,8 +93,9 @@ def run(args) -> int:
               f"{' and '.join(above)} lie{'' if many else 's'} above the Nyquist frequency "
               f"({0.5 * ch.sample_rate:g} Hz): the discrete plant cannot show "
               f"{'it' if len(above) == 1 else 'them'}", file=sys.stderr)
+    # the plant's lab goes with it: trussid closed-loop runs its converters, not defaults
     save_model(out, plant.discrete, continuous=plant.continuous,
-               extra={"mode_frequencies_hz": plant.modes.frequencies_hz})
+               extra={"mode_frequencies_hz": plant.modes.frequencies_hz, **lab_record(plant.lab)})
     if args.plot:
         from trussid.plots import plant_bode_figure, save_figure
 

@@ -63,8 +63,9 @@ def add_parser(subparsers):
                    "(default 0)")
     p.add_argument("--bits", type=int, metavar="B",
                    help="D/A and A/D resolution (default: no quantisation)")
-    p.add_argument("--full-scale", type=float, default=10.0, metavar="V",
-                   help="converter range +-V, D/A and A/D (default 10)")
+    p.add_argument("--full-scale", type=float, default=None, metavar="V",
+                   help="converter range +-V, D/A and A/D (default: that of the lab PLANT "
+                   "records, as trussid plant writes it; else the default testbed lab's)")
     p.add_argument("--adc-full-scale", metavar="V|auto",
                    help="A/D range +-V instead of --full-scale; 'auto' ranges each output to "
                    "+-4 times its RMS, as a lab sets its amplifier gains")
@@ -85,19 +86,13 @@ def run(args) -> int:
     if not str(out).lower().endswith(SUFFIXES):
         raise DataError(f"--out {out}: the data file type must be one of {', '.join(SUFFIXES)}")
     check_parent(out, "--out")
-    adc_fs = args.full_scale
-    if args.adc_full_scale is not None:
-        if args.adc_full_scale == "auto":
-            adc_fs = "auto"
-        else:
-            try:
-                adc_fs = float(args.adc_full_scale)
-            except ValueError:
-                raise DataError(f"--adc-full-scale must be volts or 'auto', got "
-                                f"'{args.adc_full_scale}'") from None
+    adc_fs = _adc_full_scale(args.adc_full_scale)  # None: --full-scale's, once known
     if args.samples < 2:
         raise DataError(f"--samples must be at least 2, got {args.samples}")
     plant, meta = load_model(args.plant, which="discrete")
+    if args.full_scale is None:
+        args.full_scale = _lab_full_scale(meta, args.plant)
+    adc_fs = args.full_scale if adc_fs is None else adc_fs
     require_stable(plant, f"the plant {args.plant}", "a simulation of it diverges")
     check_memory(plant, args.samples)
     exp = run_experiment(plant, args.samples, args.excitation, rms=args.rms, band=args.band,
@@ -153,3 +148,24 @@ def run(args) -> int:
                   f"LSB ({q:.3g} V): the record is mostly quantisation; use "
                   "--adc-full-scale auto or a smaller range", file=sys.stderr)
     return 0
+
+
+def _lab_full_scale(meta: dict, path) -> float:
+    """The converter range of the lab the plant file records (``trussid plant`` writes it),
+    else the default testbed lab's [V]."""
+    from trussid.geometry.lab import recorded_lab
+    from trussid.geometry.spec import Testbed
+
+    return (recorded_lab(meta["extra"], path) or Testbed().lab).daq.full_scale
+
+
+def _adc_full_scale(text):
+    """``--adc-full-scale``: volts, ``"auto"``, or None when not given."""
+    from trussid.plid.errors import DataError
+
+    if text is None or text == "auto":
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise DataError(f"--adc-full-scale must be volts or 'auto', got '{text}'") from None

@@ -1,0 +1,159 @@
+"""The demo's summary is one typed object: ``summary.json`` and ``report.md`` both come from
+a :class:`DemoSummary`, so a renamed field fails here, not silently in a report (issue 22,
+acceptance item 4).
+
+The summary below is built by hand with a distinct value in every reported figure; the
+report must show each of them, and ``summary.json`` must hold exactly the dataclasses'
+fields.
+"""
+
+import dataclasses
+
+import pytest
+
+from trussid.campaign.demo import demo_settings
+from trussid.campaign.report import report_markdown
+from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
+                                      DemoSummary, ExperimentRow, ModeAudit, ModelSummary,
+                                      PlantSummary, Provenance, ReportFiles)
+from trussid.geometry.lab import LabSpec
+from trussid.plid.metrics import PoleMatch
+from trussid.plid.multipass import Stabilised
+
+
+def _audit():
+    return ModeAudit(
+        band_hz=[50.0, 350.0], excited_band_hz=[0.0, 400.0],
+        true_modes_in_band=[AuditedTrueMode(166.0, 0.0025, True, 166.2, 0.0024),
+                            AuditedTrueMode(57.9, 0.0025, False, None, None)],
+        found=1, total=2, missing=[57.9], filter_poles_in_band=1,
+        spurious=[AuditedIdentifiedMode(441.5, 0.00013, None, True, False)],
+        lightly_damped=[AuditedIdentifiedMode(166.2, 0.0024, 166.0, False, True)],
+        rules={"structural_damping_max": 0.5, "found_within": 0.05, "light_damping_below": 0.01})
+
+
+def _model(name="mimo", kind="MIMO"):
+    return ModelSummary(
+        name=name, kind=kind, states=18, inputs=3, outputs=3,
+        input_names=["ch1", "ch2", "ch3"], output_names=["acc1", "acc2", "acc3"],
+        signal_to_prediction_error_db=33.74, signal_to_prediction_error_db_per_output=[32.2, 34.4, 34.1],
+        signal_to_prediction_error_db_mean_normalised=30.13, prediction_skip_samples=40,
+        predictor_gain="kalman", frf_max_error_db=5.86, frf_rms_error_db=1.23,
+        frf_max_error_deg=47.5, frf_rms_error_deg=8.9, frf_error_per_channel=[],
+        frf_band_hz=[50.0, 350.0],
+        frf_error_vs_h1={"max_db": 1.0, "rms_db": 0.5, "max_deg": 3.0, "rms_deg": 1.0},
+        h1_error_vs_true={"max_db": 2.0, "rms_db": 0.77, "max_deg": 4.0, "rms_deg": 2.0},
+        simulation_fit_db=24.21, simulation_fit_db_per_output=[24.0, 25.0, 23.0], seconds=12.3,
+        method="PLID (direct form)", unstable_poles=0,
+        stabilised=Stabilised(applied=True, reflected_poles=2),
+        poles=[PoleMatch(true_frequency_hz=166.0, true_damping=0.0025, frequency_hz=166.2,
+                         damping=0.0024, frequency_error_percent=0.12)],
+        poles_in_band_matched=1, poles_in_band_true=1, validation_output_rms_v=[1.0, 1.1, 1.2],
+        h1_coherence={"excited_band_hz": [0.0, 400.0], "mean_in_excited_band": [0.987, 0.9, 0.9],
+                      "mean_above_excited_band": [0.123, 0.1, 0.1]},
+        modes_check=_audit(),
+        identification={"chosen": "direct 18", "candidates": [
+            {"label": "direct 18", "identification_ratio_db": 31.42, "seconds": 2.5}]})
+
+
+def _summary(model=None):
+    lab = LabSpec()
+    return DemoSummary(
+        format_version=1,
+        provenance=Provenance("0.1", "abc123", 1997, "trussid demo --quick", "host", "Linux", 2,
+                              "3.12", [0.5, 0.4, 0.3], "2026-01-01 00:00:00 UTC"),
+        settings=demo_settings(True),
+        plant=PlantSummary(states=400, inputs=["ch1", "ch2", "ch3"],
+                           outputs=["acc1", "acc2", "acc3"], sample_rate_hz=1600.0, modes=190,
+                           mode_frequencies_hz=[1.0, 2.0], modal_damping=0.0025,
+                           accelerometer_sensitivity_v_per_g=0.1, conditioning_gain=2000.0,
+                           converter_bits=12, converter_full_scale_v=10.0,
+                           sensor_noise_g_rms=1e-5, sensor_noise_v_rms=0.002, lab=lab),
+        experiments=[ExperimentRow(
+            model="mimo", purpose="identification", samples=6000, sample_rate_hz=1600.0,
+            driven_channels=["ch1", "ch2", "ch3"], seed=1997, excitation="white",
+            excitation_rms_v=2.5, excitation_band_hz=[0.0, 400.0], dac_clipped=[1, 2, 3],
+            adc_clipped=[7, 8, 9], conditioner_steps=[0.5, 1.0, 2.0],
+            adc_full_scale_v=[20.0, 10.0, 5.0], dac_lsb_v=[lab.lsb] * 3, adc_lsb_v=[lab.lsb] * 3,
+            adc_bits=[12, 12, 12], output_rms_v=[1.0, 1.0, 1.0],
+            output_rms_fraction_of_range=[0.17, 0.23, 0.29], sensor_snr_db=[61.5, 62.5, 63.5],
+            quantisation_snr_db=[64.1, 65.1, 66.1])],
+        models=[model or _model()],
+        files=ReportFiles(data=["data_mimo_ide.npz"], models=["model_mimo.npz"],
+                          figures=["bode_mimo_ch1.png"]),
+        timings_s={"plant": 1.0, "experiments": 2.0, "identification": 3.0, "evaluation": 4.0,
+                   "report": 5.0, "total": 15.0},
+        control=ClosedLoopSection("## Closed loop: active damping\n", {"nominal": "nominal"}))
+
+
+#: Figures the report shows, by field, as the report formats them.
+SHOWN = {
+    "plant": ["400 states", "1600 Hz", "120 Hz", "100 mV/g", "2000 V/V", "12-bit", "+-10 V",
+              "10 ug RMS", "2.00 mV"],
+    "experiments": ["6000", "| 6 |", "7, 8, 9", "0.5, 1, 2", "0.17, 0.23, 0.29",
+                    "61.5, 62.5, 63.5", "64.1, 65.1, 66.1"],
+    "models": ["33.74", "32.2, 34.4, 34.1", "30.13", "24.21", "5.86 / 1.23", "47.5 / 8.9",
+               "0.77", "1 / 2", "12.3", "PLID (direct form)", "31.42", "166.20", "0.00240",
+               "57.90 Hz", "441.50", "2 unstable pole(s) reflected", "0.987", "0.123"],
+    "provenance": ["abc123", "seed 1997", "trussid demo --quick", "0.50, 0.40, 0.30"],
+    "files": ["data_mimo_ide.npz", "model_mimo.npz", "bode_mimo_ch1.png"],
+    "control": ["## Closed loop: active damping"],
+}
+
+
+def test_the_report_shows_every_figure_of_the_summary():
+    md = report_markdown(_summary())
+    missing = [(part, text) for part, shown in SHOWN.items() for text in shown if text not in md]
+    assert missing == []
+
+
+def _fields(obj, path="") -> dict:
+    """``{json path: value}`` of every dataclass field, recursively (the JSON's schema)."""
+    out = {}
+    if dataclasses.is_dataclass(obj):
+        for f in dataclasses.fields(obj):
+            out[f"{path}/{f.name}"] = True
+            out.update(_fields(getattr(obj, f.name), f"{path}/{f.name}"))
+    elif isinstance(obj, list):
+        for k, v in enumerate(obj):
+            out.update(_fields(v, f"{path}/{k}"))
+    return out
+
+
+def _keys(obj, path="") -> dict:
+    out = {}
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            out[f"{path}/{k}"] = True
+            out.update(_keys(v, f"{path}/{k}"))
+    elif isinstance(obj, list):
+        for k, v in enumerate(obj):
+            out.update(_keys(v, f"{path}/{k}"))
+    return out
+
+
+def test_summary_json_holds_exactly_the_typed_fields():
+    s = _summary()
+    typed = set(_fields(s)) - {"/control"} - {k for k in _fields(s) if k.startswith("/control/")}
+    keys = {k for k in _keys(s.to_dict())
+            if not any(k.startswith(p + "/") for p in
+                       # plain dicts inside the typed object keep their own keys
+                       ("/timings_s", "/control", "/models/0/frf_error_vs_h1",
+                        "/models/0/h1_error_vs_true",
+                        "/models/0/h1_coherence", "/models/0/identification",
+                        "/models/0/modes_check/rules"))}
+    assert keys - {"/control"} == typed
+    assert s.to_dict()["control"] == {"nominal": "nominal"}
+    assert "control" not in dataclasses.replace(s, control=None).to_dict()
+
+
+def test_renaming_a_reported_field_fails_the_report():
+    fields = [(f.name if f.name != "frf_rms_error_db" else "frf_rms_db", f.type)
+              for f in dataclasses.fields(ModelSummary)]
+    Renamed = dataclasses.make_dataclass("ModelSummary", fields, frozen=True)
+    values = dataclasses.asdict(_model())
+    values["frf_rms_db"] = values.pop("frf_rms_error_db")
+    values["modes_check"] = _audit()
+    renamed = _summary(Renamed(**values))
+    with pytest.raises(AttributeError, match="frf_rms_error_db"):
+        report_markdown(renamed)

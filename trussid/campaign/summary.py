@@ -1,0 +1,219 @@
+"""The demo's summary as one typed object: ``summary.json`` and ``report.md`` are both made
+from a :class:`DemoSummary`.
+
+``summary.json`` is :meth:`DemoSummary.to_dict` (the dataclasses' own fields, by
+:func:`trussid._util.jsonio.json_safe`), and the report renderer
+(:mod:`trussid.campaign.report`) reads the same object by attribute: a renamed field either
+renames the JSON key or breaks the renderer at once (``tests/campaign/test_summary.py``), it
+cannot silently drop a figure from the report.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from trussid._util.jsonio import json_safe
+from trussid.geometry.lab import LabSpec
+from trussid.plid.multipass import Stabilised
+
+__all__ = ["Provenance", "PlantSummary", "ExperimentRow", "AuditedTrueMode",
+           "AuditedIdentifiedMode", "ModeAudit", "ModelSummary", "ReportFiles",
+           "ClosedLoopSection", "DemoSummary"]
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Who made the report, how and where."""
+
+    trussid_version: str | None
+    commit: str | None            # source commit, "(with uncommitted changes)" when dirty
+    seed: int
+    command: str | None           # the command line, None from Python
+    machine: str
+    platform: str
+    cpus: int | None
+    python: str
+    load_average_start: list | None
+    date_utc: str
+
+
+@dataclass(frozen=True)
+class PlantSummary:
+    """The true plant: size, rate, modes, transducers, converters and noise (SI units)."""
+
+    states: int
+    inputs: list
+    outputs: list
+    sample_rate_hz: float
+    modes: int
+    mode_frequencies_hz: list
+    modal_damping: float
+    accelerometer_sensitivity_v_per_g: float
+    conditioning_gain: float
+    converter_bits: int
+    converter_full_scale_v: float
+    sensor_noise_g_rms: float
+    sensor_noise_v_rms: float
+    lab: LabSpec                  # the lab the plant and its records were made in
+    structure: str = "the default testbed"  # or "deck X.bdf with io.toml"
+    lab_source: str = ""          # where a deck's lab came from
+
+
+@dataclass(frozen=True)
+class ExperimentRow:
+    """One record and how it was taken (per-output lists in the plant's output order)."""
+
+    model: str
+    purpose: str                  # "identification" or "validation"
+    samples: int
+    sample_rate_hz: float
+    driven_channels: list
+    seed: int
+    excitation: str
+    excitation_rms_v: float
+    excitation_band_hz: list
+    dac_clipped: list
+    adc_clipped: list
+    conditioner_steps: list
+    adc_full_scale_v: list
+    dac_lsb_v: list               # the converters' LSB as the experiment applied them [V]
+    adc_lsb_v: list
+    adc_bits: list                # resolution from the LSB used: log2(2 FS / LSB)
+    output_rms_v: list
+    output_rms_fraction_of_range: list
+    sensor_snr_db: list
+    quantisation_snr_db: list
+
+
+@dataclass(frozen=True)
+class AuditedTrueMode:
+    """A true structural mode in the band and whether the model found it."""
+
+    true_frequency_hz: float
+    true_damping: float
+    found: bool
+    frequency_hz: float | None    # the identified mode, when found
+    damping: float | None
+
+
+@dataclass(frozen=True)
+class AuditedIdentifiedMode:
+    """An identified structural mode and its nearest true mode."""
+
+    frequency_hz: float
+    damping: float
+    nearest_true_hz: float | None
+    spurious: bool                # no true structural mode within the tolerance
+    in_excited_band: bool
+
+
+@dataclass(frozen=True)
+class ModeAudit:
+    """What a model lacks and what it adds (:func:`trussid.campaign.demo.mode_audit`)."""
+
+    band_hz: list
+    excited_band_hz: list
+    true_modes_in_band: list      # of AuditedTrueMode
+    found: int
+    total: int
+    missing: list                 # true frequencies not found [Hz]
+    filter_poles_in_band: int
+    spurious: list                # of AuditedIdentifiedMode
+    lightly_damped: list          # of AuditedIdentifiedMode
+    rules: dict
+
+
+@dataclass(frozen=True)
+class ModelSummary:
+    """Every metric of one identified model (validation record, true plant, H1)."""
+
+    name: str
+    kind: str                     # "SIMO" or "MIMO"
+    states: int
+    inputs: int
+    outputs: int
+    input_names: list
+    output_names: list
+    signal_to_prediction_error_db: float
+    signal_to_prediction_error_db_per_output: list
+    signal_to_prediction_error_db_mean_normalised: float
+    prediction_skip_samples: int
+    predictor_gain: str
+    frf_max_error_db: float
+    frf_rms_error_db: float
+    frf_max_error_deg: float
+    frf_rms_error_deg: float
+    frf_error_per_channel: object
+    frf_band_hz: list
+    frf_error_vs_h1: dict
+    h1_error_vs_true: dict
+    simulation_fit_db: float | None
+    simulation_fit_db_per_output: list
+    seconds: float
+    method: str
+    unstable_poles: int
+    stabilised: Stabilised        # poles reflected into the unit circle, if any
+    poles: list                   # of trussid.plid.metrics.PoleMatch (plid.evaluate.compare)
+    poles_in_band_matched: int
+    poles_in_band_true: int
+    validation_output_rms_v: list
+    h1_coherence: dict
+    modes_check: ModeAudit
+    identification: dict          # the identification's provenance (JSON-safe)
+    mode_checks: list = field(default_factory=list)  # ModeCheck per matched pole
+
+
+@dataclass(frozen=True)
+class ModeCheck:
+    """A matched true (FE) and identified mode: the identified mode's 95 % intervals
+    (:mod:`trussid.plid.uncertainty`; None without one) and the MAC of the two mode shapes
+    at the sensors (:func:`trussid.plid.modal.mac`)."""
+
+    true_frequency_hz: float
+    frequency_hz: float
+    mac: float
+    frequency_ci95_hz: list | None = None
+    damping_ratio_ci95: list | None = None
+
+
+@dataclass
+class ReportFiles:
+    """The files of the report directory, by kind."""
+
+    data: list = field(default_factory=list)
+    models: list = field(default_factory=list)
+    figures: list = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class ClosedLoopSection:
+    """The closed-loop section: its Markdown and its summary (``summary.json``'s
+    ``control``), from :func:`trussid.campaign.control.demo_section`."""
+
+    markdown: str
+    summary: dict
+
+
+@dataclass
+class DemoSummary:
+    """Everything the demo reports; ``summary.json`` is :meth:`to_dict`."""
+
+    format_version: int
+    provenance: Provenance
+    settings: object              # trussid.campaign.demo.DemoSettings
+    plant: PlantSummary
+    experiments: list             # of ExperimentRow
+    models: list                  # of ModelSummary
+    files: ReportFiles
+    timings_s: dict
+    control: ClosedLoopSection | None = None
+
+    def to_dict(self) -> dict:
+        """The JSON form: every field by its name; ``control`` is the closed-loop summary
+        (left out when the loop was not closed)."""
+        out = json_safe(self)
+        if self.control is None:
+            del out["control"]
+        else:
+            out["control"] = json_safe(self.control.summary)
+        return out
