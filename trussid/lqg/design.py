@@ -41,12 +41,12 @@ from dataclasses import dataclass, field
 import control
 import numpy as np
 
+from trussid.plid.metrics import choose_predictor
 from trussid.plid.modal import assign_pairs
 
 from .errors import ControlError
 from .evaluate import damping_table
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
-from trussid.plid.metrics import choose_predictor
 
 FORMS = ("predictor", "filter")
 ESTIMATORS = ("record", "model")

@@ -73,7 +73,7 @@ def run(args) -> int:
     if args.io is not None:
         return run_io(args, out)
     if args.conventions is not None:
-        raise UserError("--conventions applies to a NASTRAN deck (with --io), not to a testbed")
+        raise UserError("--conventions applies to a NASTRAN deck given with --io IO.toml, not to a testbed")
     if args.model is not None and Path(args.model).suffix.lower() != ".toml":
         raise UserError(f"{args.model}: a plant needs actuators and sensors: give them with "
                         "--io IO.toml for a NASTRAN deck, or a testbed parameter file (.toml), "
