@@ -170,9 +170,9 @@ def fit_plid(u, y, n, dt, h=None):
             f"K: {(prov.predictor or {}).get('chosen')}"
             + (f"; {prov.structure}" if prov.structure is not None else ""))
     out = _mk(m.A, m.B, m.C, m.D, idn.K, note)
-    out["recursion_seconds"] = info.get("recursion_seconds")
-    out["recursion_cpu_seconds"] = info.get("recursion_cpu_seconds")
-    out["stabilised"] = info.get("stabilised")
+    out["recursion_seconds"] = prov.recursion_seconds
+    out["recursion_cpu_seconds"] = prov.recursion_cpu_seconds
+    out["stabilised"] = prov.stabilised
     return out
 
 
