@@ -12,11 +12,13 @@ timed). (A 1e5-element truss boom is 2.2 km long: its first bending eigenvalue i
 the stiffest element's and the modal solver's zero-eigenvalue test takes it for a mechanism.)
 Then, in this process:
 
-- *parse*: pyNastran reading the deck (:func:`trussid.fem.nastran._parse`: the BDF object);
+- *parse*: pyNastran reading the deck (:func:`trussid.fem.nastran.deck._parse`: the BDF object);
 - *read_bdf*: the whole :func:`trussid.fem.nastran.read_bdf` (parse + translation into a
   :class:`trussid.fem.Model`); *build* = read_bdf - parse, the part that is trussid's;
 - *assemble*: :func:`trussid.fem.assembly.assemble`;
-- *eigen*: :func:`trussid.fem.modal.solve_modes` for the lowest ``--modes`` modes.
+- *eigen*: :func:`trussid.fem.modal.solve_modes` for the lowest ``--modes`` modes
+  (``--modes 0`` skips it: half an hour on a loaded 2-core machine, and not what a reading
+  regression needs).
 
 Wall and CPU time (``time.perf_counter``, ``time.process_time``) per phase, best of
 ``--repeat``; the load average before and after, machine and commit go beside them in
@@ -61,6 +63,9 @@ def main(argv=None) -> int:
     ap.add_argument("--modes", type=int, default=20)
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--out", default=str(HERE / "results" / "nastran_parse"))
+    ap.add_argument("--baseline", default=None, metavar="CHECKOUT",
+                    help="also time read_bdf of another checkout of the project (e.g. a git worktree "
+                    "of an older commit) on the same deck, in a subprocess, in the same run")
     args = ap.parse_args(argv)
 
     n = 2
@@ -71,19 +76,23 @@ def main(argv=None) -> int:
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
         deck = Path(tmp) / "lattice.bdf"
-        nastran.write_bdf(model, deck, n_modes=args.modes, title="benchmark lattice")
+        nastran.write_bdf(model, deck, n_modes=args.modes or 20, title="benchmark lattice")
         size_mb = deck.stat().st_size / 1e6
         best = {}
         for _ in range(args.repeat):
-            _, w_parse, c_parse = timed(nastran._parse, deck)
+            _, w_parse, c_parse = timed(nastran.deck._parse, deck)
             (m2, info), w_read, c_read = timed(nastran.read_bdf, deck)
             system, w_asm, c_asm = timed(assemble, m2, autospc=info.autospc)
-            modes, w_eig, c_eig = timed(solve_modes, system, n_modes=args.modes)
+            if args.modes > 0:
+                modes, w_eig, c_eig = timed(solve_modes, system, n_modes=args.modes)
+            else:
+                modes, w_eig, c_eig = None, float("nan"), float("nan")
             run = {"parse": (w_parse, c_parse), "read_bdf": (w_read, c_read),
                    "build": (w_read - w_parse, c_read - c_parse), "assemble": (w_asm, c_asm),
                    "eigen": (w_eig, c_eig)}
             for k, v in run.items():
                 best[k] = min(best.get(k, v), v)
+        baseline = _baseline_read(Path(args.baseline), deck) if args.baseline else None
         prof = cProfile.Profile()
         prof.enable()
         nastran.read_bdf(deck)
@@ -95,18 +104,26 @@ def main(argv=None) -> int:
 
     info_m = machine_info()
     res = {"elements": int(len(model.beams)), "grids": int(len(model.node_ids)), "dof": int(system.n_dof),
-           "deck_mb": size_mb, "modes": args.modes, "lowest_hz": [float(f) for f in modes.frequencies_hz[:3]],
+           "deck_mb": size_mb, "modes": args.modes, "lowest_hz": [float(f) for f in modes.frequencies_hz[:3]] if modes is not None else [],
            "wall_s": {k: v[0] for k, v in best.items()}, "cpu_s": {k: v[1] for k, v in best.items()},
-           "load_before": load_before, "load_after": load_after, "machine": info_m,
-           "parse_build_below_eigen": best["read_bdf"][0] + best["assemble"][0] < best["eigen"][0]}
+           "baseline": baseline, "load_before": load_before, "load_after": load_after, "machine": info_m,
+           "parse_build_below_eigen": (best["read_bdf"][0] + best["assemble"][0] < best["eigen"][0]
+                                       if args.modes > 0 else None)}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".json").write_text(json.dumps(res, indent=2, default=float))
     w, c = res["wall_s"], res["cpu_s"]
     rows = "\n".join(f"| {k} | {w[k]:.2f} | {c[k]:.2f} |" for k in ("parse", "build", "read_bdf", "assemble", "eigen"))
-    md = f"""# NASTRAN deck: parse + build vs {args.modes} modes
+    if args.modes > 0:
+        versus = (f"Parse + build + assemble: {w['read_bdf'] + w['assemble']:.2f} s wall against {w['eigen']:.2f} s "
+                  f"for the\nlowest {args.modes} modes ({'below' if res['parse_build_below_eigen'] else 'ABOVE'} "
+                  f"the eigen time).")
+    else:
+        versus = (f"Parse + build + assemble: {w['read_bdf'] + w['assemble']:.2f} s wall, "
+                  f"{c['read_bdf'] + c['assemble']:.2f} s CPU (eigen not run: --modes 0).")
+    md = f"""# NASTRAN deck: parse + build{f' vs {args.modes} modes' if args.modes > 0 else ''}
 
-`python benchmarks/bench_nastran_parse.py --elements {args.elements}` (issue 13, acceptance 5).
+`python benchmarks/bench_nastran_parse.py --elements {args.elements} --modes {args.modes}` (issue 13, acceptance 5; issue 25, acceptance 4).
 
 Deck: cubic lattice frame ({n}^3 grids, base clamped) of {res['elements']} CBAR elements, {res['grids']} grids ({res['dof']} free DOF after
 the clamp), {size_mb:.1f} MB of large-field bulk data written by `write_bdf`; consistent mass.
@@ -115,8 +132,9 @@ the clamp), {size_mb:.1f} MB of large-field bulk data written by `write_bdf`; co
 | --- | --- | --- |
 {rows}
 
-Parse + build + assemble: {w['read_bdf'] + w['assemble']:.2f} s wall against {w['eigen']:.2f} s for the
-lowest {args.modes} modes ({'below' if res['parse_build_below_eigen'] else 'ABOVE'} the eigen time).
+{versus}
+{'' if baseline is None else f"Same deck, same run, read_bdf of the baseline checkout {baseline['commit']}: "
+    f"{baseline['wall_s']:.2f} s wall, {baseline['cpu_s']:.2f} s CPU."}
 *parse* is pyNastran's reader; *build* (trussid's translation into the model) is
 {w['build']:.2f} s of it.
 
@@ -134,6 +152,38 @@ Where read_bdf's time goes (cProfile, cumulative):
     out.with_suffix(".md").write_text(md)
     print(md)
     return 0
+
+
+_BASELINE_RUNNER = """
+import sys, time
+# The worktree's editable install would shadow the baseline: drop its import finders.
+sys.meta_path = [f for f in sys.meta_path if "editable" not in type(f).__name__.lower()]
+sys.path.insert(0, sys.argv[1])
+from trussid.fem import nastran
+assert nastran.__file__.startswith(sys.argv[1]), nastran.__file__
+w, c = time.perf_counter(), time.process_time()
+nastran.read_bdf(sys.argv[2])
+print(time.perf_counter() - w, time.process_time() - c)
+"""
+
+
+def _baseline_read(checkout: Path, deck: Path) -> dict:
+    """Wall and CPU time of read_bdf from ``checkout`` (its trussid/, fem/, plid/, geometry/
+    linked into one temporary package tree, as the project's installation maps them)."""
+    import subprocess
+
+    with tempfile.TemporaryDirectory() as tmp:
+        pkg = Path(tmp) / "trussid"
+        pkg.mkdir()
+        for item in (checkout / "trussid").iterdir():
+            (pkg / item.name).symlink_to(item)
+        for sub in ("fem", "plid", "geometry"):
+            (pkg / sub).symlink_to(checkout / sub)
+        out = subprocess.run([sys.executable, "-c", _BASELINE_RUNNER, tmp, str(deck)], capture_output=True,
+                             text=True, check=True).stdout.split()
+    commit = subprocess.run(["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    return {"commit": commit, "wall_s": float(out[0]), "cpu_s": float(out[1])}
 
 
 if __name__ == "__main__":

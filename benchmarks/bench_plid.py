@@ -170,7 +170,7 @@ def accuracy_case(name, m, n_samples, seed, plant_seed, log=print, block_rows=BL
             ident = identify(u, y, ORDER, dt, start=start)
         sec = time.perf_counter() - t0
         r = measure_all(ident.model, case, val, sec,
-                    {"prior_block_rows": (ident.provenance.subspace or {}).get("block_rows")})
+                    {"prior_block_rows": getattr(ident.provenance.subspace, "block_rows", None)})
         key = "PLID default (subspace prior)" if start == "subspace" else "PLID scratch"
         out["methods"][key] = r
         log(f"  {key}: max {r['max_db']:.4f} rms {r['rms_db']:.5f} sim {r['sim_db']} "

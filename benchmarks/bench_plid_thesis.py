@@ -112,7 +112,7 @@ def run_case(case, noise, orders, seed=11, methods=("n4sid", "subspace", "scratc
                 warnings.simplefilter("ignore", PLIDWarning)
                 ident = identify(u, y, n, dt, start=start)
             sec = time.perf_counter() - t0
-            extra = {"prior_block_rows": (ident.provenance.subspace or {}).get("block_rows")}
+            extra = {"prior_block_rows": getattr(ident.provenance.subspace, "block_rows", None)}
             mm = measure(ident.model, case, val, sec, extra, K=ident.K)
             res[f"PLID {start}"] = mm
             log(f"  n={n} PLID {start}: rms {mm['rms_db']:.4f} max {mm['max_db']:.3f} "
@@ -210,7 +210,7 @@ def run_testbed(seed=21, band=None, log=print):
                                           "one_step_db_val_per_channel": prv.per_output,
                                           "chosen": ident.provenance.chosen,
                                           "one_step_db_id": pr_id, "seconds": sec,
-                                          "prior_block_rows": (ident.provenance.subspace or {}).get("block_rows")}
+                                          "prior_block_rows": getattr(ident.provenance.subspace, "block_rows", None)}
         log(f"  PLID {start}: stable {stable}, one-step {pr:.2f} dB validation "
             f"{np.round(prv.per_output, 2).tolist()}, "
             f"{pr_id:.2f} dB identification data ({sec:.1f}s)")

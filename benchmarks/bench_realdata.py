@@ -165,7 +165,7 @@ def fit_plid(u, y, n, dt, h=None):
     idn = identify(u, y, order=n, dt=dt)
     m = idn.model
     prov = idn.provenance
-    note = (f"block rows {(prov.subspace or {}).get('block_rows')}; "
+    note = (f"block rows {getattr(prov.subspace, 'block_rows', None)}; "
             f"D {'estimated' if prov.direct.estimated else '= 0'}; "
             f"K: {(prov.predictor or {}).get('chosen')}"
             + (f"; {prov.structure}" if prov.structure is not None else ""))

@@ -68,6 +68,8 @@ BENCHMARKS = {
     "render": (["bench_render.py"], ["bench_render.py", "--quick", "--out", "{out}/render.md"]),
     "study": (["bench_study.py"], ["bench_study.py", "--quick", "--out", "{out}"]),
     "threads": (["bench_threads.py"], ["bench_threads.py", "--repeats", "1", "--out", "{out}/threads.md"]),
+    "uncertainty": (["bench_uncertainty.py"],
+                    ["bench_uncertainty.py", "--records", "2", "--out", "{out}/uncertainty"]),
     # Not a measurement: the README's tables from the results; the quick run checks that the
     # README shows what benchmarks/results holds.
     "readme_tables": (["readme_tables.py"], ["readme_tables.py", "--check"]),

@@ -166,7 +166,29 @@ def _copy_mathjax(app, exception):
             shutil.copyfile(src, dst)
 
 
+def _write_cli_reference(app):
+    """docs/cli.md from the parsers themselves: every subcommand's ``--help`` as the command
+    line prints it (generated at each build, so the page cannot drift from the code)."""
+    import argparse
+
+    from trussid.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    lines = ["# Command-line reference", "",
+             "Generated from the parsers at each build: what `trussid --help` and "
+             "`trussid COMMAND --help` print.", "", "```text", parser.format_help().rstrip(),
+             "```", ""]
+    for name, p in sub.choices.items():
+        lines += [f"## trussid {name}", "", "```text", p.format_help().rstrip(), "```", ""]
+    text = "\n".join(lines)
+    path = DOCS / "cli.md"
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+
+
 def setup(app):
+    app.connect("builder-inited", _write_cli_reference)
     app.connect("autodoc-skip-member", _skip_foreign)
     app.connect("builder-inited", _check_mathjax)
     app.connect("build-finished", _copy_mathjax)

@@ -100,14 +100,15 @@ if args.exact:
     report = updating.update_walls(measured, nominal_tb, tbm=nominal_tbm, seed=args.seed)
     title = "exact frequencies (12 bending + 6 UDF modes)"
 else:
-    plant = testbed.testbed_plant(true_tbm, arrangement="bending", sensors="struts").discrete
+    tp = testbed.testbed_plant(true_tbm, arrangement="bending", sensors="struts")
+    plant, daq = tp.discrete, tp.lab.daq  # the testbed lab's converters
     fb = true_modes.frequencies_hz[first_bending]
     band = (0.8 * fb.min(), 1.25 * fb.max())  # around the first strut bending modes
     exp = plid.run_experiment(plant, args.n_samples, "white", rms=1.0, band=(30.0, 90.0),
-                              seed=args.seed, snr_db=args.snr, dac_bits=12, adc_bits=12,
-                              adc_full_scale="auto")
+                              seed=args.seed, snr_db=args.snr, dac_bits=daq.bits, adc_bits=daq.bits,
+                              dac_full_scale=daq.full_scale, adc_full_scale="auto")
     print(f"simulated {args.n_samples} samples at {1 / plant.dt:g} Hz "
-          f"({args.n_samples * plant.dt:.1f} s), {args.snr:g} dB sensor SNR, 12-bit converters; "
+          f"({args.n_samples * plant.dt:.1f} s), {args.snr:g} dB sensor SNR, {daq.bits}-bit converters; "
           f"clipped {exp.clipped_total}")
     ident, info = updating.modes_from_data(exp.data.u, exp.data.y, plant.dt, args.order,
                                            band=band, n_modes=6)

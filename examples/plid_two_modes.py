@@ -41,10 +41,11 @@ continuous = sum(b * s / (s**2 + 2 * z * wn * s + wn**2)
 plant = control.c2d(control.ss(continuous), 1 / FS, method="zoh")
 
 # %%
-# The experiment: 20 s of white noise in 1-90 Hz, 12-bit converters (ranges set from the
-# signals), sensor noise 40 dB below the response.
+# The experiment: 20 s of white noise in 1-90 Hz, 12-bit converters (a +-10 V D/A, the
+# A/D range set from the signals), sensor noise 40 dB below the response.
 experiment = plid.run_experiment(plant, 4000, "white", rms=1.0, band=(1.0, 90.0), seed=7,
-                                 snr_db=40.0, dac_bits=12, adc_bits=12, adc_full_scale="auto")
+                                 snr_db=40.0, dac_bits=12, adc_bits=12, dac_full_scale=10.0,
+                                 adc_full_scale="auto")
 u, y = experiment.data.u, experiment.data.y
 
 # %%

@@ -128,6 +128,10 @@ def strain_actuator_loads(model, element_ids, wafer: Wafer, offset: float, *,
     if not np.all(found):
         raise ModelError(f"PZT actuator: element {element_ids[~found][0]} is not a beam of the model")
     sel = order[pos]
+    if arrangement == "bending" and np.any(beams.rod[sel]):
+        e = element_ids[np.asarray(beams.rod[sel], bool)][0]
+        raise ModelError(f"PZT actuator: element {e} is a rod (axial and torsion only): a "
+                         f"bending pair needs a beam with bending stiffness")
     idx = model.index_of(beams.nodes[sel], what=lambda p: f"element {element_ids[p // 2]}")
     xyz = model.xyz
     _, R = local_axes(xyz[idx[:, 0]], xyz[idx[:, 1]], beams.orient[sel], element_ids)

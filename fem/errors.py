@@ -2,8 +2,13 @@
 
 from trussid._util.errors import UserError
 
-__all__ = ["ModelError"]
+__all__ = ["ModelError", "UnitsWarning"]
 
 
 class ModelError(UserError):
     """The model as given cannot be built or solved (bad value, unknown node, mechanism)."""
+
+
+class UnitsWarning(UserWarning):
+    """The model's numbers look like a mix of unit systems (e.g. E in MPa with a density in
+    kg/m^3): its frequencies are probably wrong by orders of magnitude."""

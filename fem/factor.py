@@ -44,8 +44,8 @@ def cholmod_available() -> bool:
     (:func:`trussid.fem.modal.solve_modes` and :func:`trussid.fem.static.solve_static` do).
     """
     try:
-        import cvxopt.cholmod  # noqa: F401
-        import pymetis  # noqa: F401
+        import cvxopt.cholmod  # noqa: F401 (deferred: optional back end)
+        import pymetis  # noqa: F401 (deferred: optional back end)
     except ImportError:
         return False
 
@@ -71,7 +71,7 @@ def _grouped_order(g: np.ndarray, group_pos: np.ndarray) -> np.ndarray:
 
 def _metis_order(A: sp.csc_matrix, groups) -> np.ndarray | None:
     """METIS nested dissection of the node graph, expanded to DOFs (None: no groups)."""
-    import pymetis
+    import pymetis  # deferred: optional back end
 
     if groups is None:
         return None
@@ -137,7 +137,7 @@ class SPDFactor:
         pivot to the diagonal entry whatever the (hidden) permutation CHOLMOD settles on, so
         the singularity test :meth:`min_pivot_ratio` needs no second factorisation.
         """
-        import cvxopt
+        import cvxopt  # deferred: optional back end
 
         d = A.diagonal()
         self._scale = 1.0 / np.sqrt(np.where(d > 0, d, 1.0))
@@ -149,7 +149,7 @@ class SPDFactor:
         return M, None if perm is None else cvxopt.matrix(perm.astype(np.int64))
 
     def _cholmod(self, A: sp.csc_matrix, groups) -> None:
-        import cvxopt.cholmod as cholmod
+        import cvxopt.cholmod as cholmod  # deferred: optional back end
 
         M, p = self._cholmod_input(A, groups)
         # CHOLMOD's default (nmethods = 0) also tries AMD and keeps the better ordering; its
@@ -170,7 +170,7 @@ class SPDFactor:
         paths.
         """
         if self.backend == "cholmod":
-            import cvxopt.cholmod as cholmod
+            import cvxopt.cholmod as cholmod  # deferred: optional back end
 
             M, p = self._cholmod_input(self._A, self._groups)
             F = cholmod.symbolic(M) if p is None else cholmod.symbolic(M, p=p)
@@ -204,8 +204,8 @@ class SPDFactor:
         """``A^-1 b`` for b of shape (n,) or (n, k)."""
         b = np.asarray(b, dtype=float)
         if self.backend == "cholmod":
-            import cvxopt
-            import cvxopt.cholmod as cholmod
+            import cvxopt  # deferred: optional back end
+            import cvxopt.cholmod as cholmod  # deferred: optional back end
 
             s = self._scale.reshape((self.n,) + (1,) * (b.ndim - 1))
             B = cvxopt.matrix(np.asfortranarray((s * b).reshape(self.n, -1)))
@@ -221,7 +221,7 @@ class SPDFactor:
         """Smallest ratio of a pivot to its diagonal entry of ``A`` (1 for a diagonal matrix;
         tiny for a nearly singular one: NASTRAN's MAXRATIO test)."""
         if self.backend == "cholmod":
-            import cvxopt.cholmod as cholmod
+            import cvxopt.cholmod as cholmod  # deferred: optional back end
 
             return float(np.min(np.array(cholmod.diag(self._F)) ** 2)) if self.n else 1.0
         d = self._A.diagonal()

@@ -43,6 +43,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import control
 import numpy as np
 
 from trussid.fem.errors import ModelError
@@ -50,7 +51,7 @@ from trussid.fem.actuators import strain_actuator_loads, Wafer
 from trussid.fem.assembly import assemble
 from trussid.fem.modal import solve_modes
 from trussid.fem.plant import modal_plant
-from trussid.fem.sensors import Sensor
+from trussid.fem.sensors import Sensor, sensor_matrix
 
 __all__ = ["IOSpec", "PointLoad", "StrainActuator", "read_io", "io_loads", "io_plant"]
 
@@ -264,6 +265,38 @@ def io_loads(model, spec: IOSpec) -> np.ndarray:
     return F
 
 
+def _why_inert(model, node: int) -> str:
+    """Why a node's DOFs are not in the solved system (for the messages below)."""
+    i = int(model.index_of([node], what="node")[0])
+    if model.has_supports and model.fixed_mask()[i].all():
+        return f"node {node} is clamped (all six DOFs supported)"
+    if model.has_supports and model.fixed_mask()[i].any():
+        return f"node {node} is supported in that direction"
+    return f"node {node} has no element, mass or spring acting on it in that direction"
+
+
+def _check_channels_act(model, system, spec: IOSpec, loads: np.ndarray) -> None:
+    """Refuse an actuator that moves no free DOF, or a sensor that reads none: its channel
+    of the plant would be identically zero (a load on a clamped node, a sensor on a node
+    without elements), which is never what was meant."""
+    T = system.T
+    acting = np.abs(T.T @ loads).max(axis=0) if loads.size else np.zeros(0)
+    for j, a in enumerate(spec.actuators):
+        if not acting[j] > 0:
+            where = f"{spec.source}: actuator {j + 1} '{a.name}'"
+            why = (_why_inert(model, a.node) if isinstance(a, PointLoad) else
+                   f"its elements {list(a.elements)} have both ends supported")
+            raise ModelError(f"{where}: the input moves no free DOF ({why}): its channel "
+                             f"would be identically zero")
+    S = sensor_matrix(model.node_ids, list(spec.sensors))
+    reading = np.abs(T.T @ S.T).max(axis=0) if S.size else np.zeros(0)
+    for r, s in enumerate(spec.sensors):
+        if not reading[r] > 0:
+            raise ModelError(f"{spec.source}: sensor {r + 1} '{s.name}': it reads no free DOF "
+                             f"({_why_inert(model, s.node)}): its output would be "
+                             f"identically zero")
+
+
 def io_plant(model, spec: IOSpec, *, n_modes: int | None = None, damping: float | None = None,
              fs: float | None = None, autospc: bool = False):
     """Continuous plant (and its ZOH equivalent at ``fs``) of ``model`` with ``spec``'s
@@ -321,8 +354,6 @@ def io_plant(model, spec: IOSpec, *, n_modes: int | None = None, damping: float 
     >>> print(np.round(modes.frequencies_hz[:n_kept], 1))
     [  8.2  16.3  51.1 102.2 143.1 280.6 286.2 464.7]
     """
-    import control
-
     damping = spec.damping if damping is None else damping
     damping = 0.02 if damping is None else float(damping)
     if not 0 <= damping < 1:
@@ -335,6 +366,7 @@ def io_plant(model, spec: IOSpec, *, n_modes: int | None = None, damping: float 
         if int(s.node) not in known:
             raise ModelError(f"{spec.source}: sensor '{s.name}': unknown node {s.node}")
     loads = io_loads(model, spec)
+    _check_channels_act(model, system, spec, loads)
     n_solve = n_req or 20
     modes = solve_modes(system, n_modes=n_solve)
     f = np.asarray(modes.frequencies_hz)

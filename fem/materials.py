@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from trussid.fem.errors import ModelError
 
-__all__ = ["Material", "ALUMINIUM", "STEEL"]
+__all__ = ["Material", "ALUMINIUM", "STEEL", "wave_speed_problem"]
 
 
 @dataclass(frozen=True)
@@ -62,3 +62,40 @@ class Material:
 ALUMINIUM = Material.isotropic(68.9e9, 0.33, 2700.0, "aluminium 6061-T6")
 #: Structural steel, the upper delta frame.
 STEEL = Material.isotropic(200e9, 0.29, 7850.0, "steel")
+
+
+#: Bar wave speeds sqrt(E / rho) of structural solids [m/s]: from soft polymers (~300) to
+#: beryllium and ceramics (~1.3e4), with margin.
+SOLID_WAVE_SPEED = (250.0, 2.0e4)
+
+#: Length units of the consistent unit systems decks are written in (time in s): one
+#: length unit in metres.
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254, "ft": 0.3048}
+
+
+def wave_speed_problem(E: float, rho: float, wtmass: float = 1.0) -> str | None:
+    """Why ``E`` and ``rho`` (in one unknown consistent unit system, ``rho`` already times
+    ``wtmass``) cannot be a solid's, or None.
+
+    ``sqrt(E / rho)`` is a speed in the system's length unit per second; a solid's lies in
+    :data:`SOLID_WAVE_SPEED` m/s, i.e. in that range divided by the length unit in metres
+    for one of :data:`LENGTH_UNITS`. A value in none of them (a deck in mm and MPa with the
+    density left in kg/m^3 gives about 5) means the units are mixed. A deck that looks
+    like inch-pound units with a weight density and no WTMASS (E 1e6-5e7 psi, RHO
+    0.02-0.4 lbf/in^3) is named too: its masses are 386 times too large.
+    """
+    if not (E > 0 and rho > 0 and math.isfinite(E) and math.isfinite(rho)):
+        return None
+    c = math.sqrt(E / rho)
+    lo, hi = SOLID_WAVE_SPEED
+    ok = [u for u, metre in LENGTH_UNITS.items() if lo / metre <= c <= hi / metre]
+    if not ok:
+        ranges = ", ".join(f"{lo / m:.3g}-{hi / m:.3g} {u}/s" for u, m in LENGTH_UNITS.items())
+        return (f"sqrt(E/rho) = {c:.3g} length units per second is no solid's wave speed in "
+                f"any consistent unit system ({ranges}): E and the density are probably in "
+                f"different systems (e.g. MPa with kg/m^3, where mm, N, s need t/mm^3)")
+    if wtmass == 1.0 and 1e6 <= E <= 5e7 and 0.02 <= rho <= 0.4:
+        return (f"E = {E:.3g} and density {rho:.3g} look like inch-pound units with a weight "
+                f"density (lbf/in^3) and no PARAM,WTMASS: the masses are then 386 times too "
+                f"large (NASTRAN decks in these units set PARAM,WTMASS,0.00259)")
+    return None

@@ -117,7 +117,8 @@ def _dense(system: System, k: int, sigma: float | None):
     K = system.K.toarray()
     M = system.M.toarray()
     massless = _massless(system.M, system.dofs)
-    n_mass = int((~massless).sum())
+    # the modes with finite frequency: one per direction that carries mass
+    n_mass = _mass_basis(M, massless)[1].shape[1]
     k = min(k, n_mass)
     B = K - sigma * M
     k_low = k
@@ -143,23 +144,60 @@ def _dense(system: System, k: int, sigma: float | None):
     return lam, X, proven
 
 
+#: A direction of the diagonally scaled mass matrix (unit diagonal) whose mass is below
+#: this is massless: round-off of a zero direction is ~1e-16, and the smallest genuine
+#: rotary inertia of a thin tube relative to its own DOF's diagonal is far above 1e-10.
+MASSLESS_DIRECTION = 1e-10
+
+
+def _mass_basis(M, massless):
+    """Basis of the massive DOFs split by mass: ``(m, S1, S0, s1)`` with ``m`` the DOFs with
+    a mass diagonal, ``S1`` (len(m), r) spanning the directions that carry mass (``S1^T M
+    S1 = diag(s1)``) and ``S0`` the massless *directions* among them.
+
+    A CBAR's coupled mass has no torsional inertia: on an inclined bar the massless
+    direction is the rotation about the bar's axis, which is no single DOF, so whole-DOF
+    condensation (:func:`_massless`) leaves ``M`` singular on the remaining DOFs. Scaling
+    ``M`` to a unit diagonal first makes the test relative to each DOF's own inertia
+    (translations in kg, rotations in kg m^2).
+    """
+    m = np.flatnonzero(~massless)
+    Mm = M[np.ix_(m, m)]
+    d = 1.0 / np.sqrt(np.diag(Mm))
+    s, U = la.eigh(Mm * d[:, None] * d[None, :])
+    keep = s > MASSLESS_DIRECTION * s.max()
+    S1, S0 = d[:, None] * U[:, keep], d[:, None] * U[:, ~keep]
+    return m, S1, S0, s[keep]
+
+
 def _direct(K, M, massless, system):
-    """All eigenpairs of ``K x = lambda M x``, massless DOFs condensed statically."""
-    z, m = np.flatnonzero(massless), np.flatnonzero(~massless)
-    if not z.size:
+    """All eigenpairs of ``K x = lambda M x`` with mass, massless DOFs and massless
+    directions condensed statically (exact: they carry no inertia)."""
+    m, S1, S0, s1 = _mass_basis(M, massless)
+    z = np.flatnonzero(massless)
+    n = len(K)
+    # coordinates: x = P1 a + P0 b, a the directions with mass, b the massless ones (whole
+    # massless DOFs and massless directions among the others)
+    P1 = np.zeros((n, S1.shape[1]))
+    P1[m] = S1
+    P0 = np.zeros((n, len(z) + S0.shape[1]))
+    P0[z, np.arange(len(z))] = 1.0
+    P0[m, len(z):] = S0
+    if not P0.shape[1]:
         return la.eigh(K, M)
+    K00 = P0.T @ K @ P0
     try:
-        cf = la.cho_factor(K[np.ix_(z, z)])
+        cf = la.cho_factor(0.5 * (K00 + K00.T))
     except la.LinAlgError:
-        j = z[int(np.argmin(np.abs(np.diag(K)[z])))]
+        j = int(np.argmax(np.abs(P0 @ np.linalg.eigh(K00)[1][:, 0])))
         raise ModelError(f"mechanism: {system.dof_label(j)} has neither mass nor a stiffness "
                          f"that restrains it") from None
-    G = -la.cho_solve(cf, K[np.ix_(z, m)])
-    Kc = K[np.ix_(m, m)] + K[np.ix_(m, z)] @ G
-    lam, x = la.eigh(0.5 * (Kc + Kc.T), M[np.ix_(m, m)])
-    X = np.zeros((len(K), len(m)))
-    X[m], X[z] = x, G @ x
-    return lam, X
+    KP1 = K @ P1
+    G = -la.cho_solve(cf, P0.T @ KP1)
+    T = P1 + P0 @ G                      # x of each massive coordinate, condensed
+    Kc = T.T @ K @ T
+    lam, a = la.eigh(0.5 * (Kc + Kc.T), np.diag(s1))
+    return lam, T @ a
 
 
 def _shift_invert(system: System, k: int, sigma: float | None, tol: float):

@@ -244,6 +244,49 @@ class GeneralElements:
         return len(self.ids)
 
 
+def _ids(values, what: str) -> np.ndarray:
+    """Integer ids from ``values``; a non-whole or non-finite number is a ModelError naming
+    it (``np.asarray(.., dtype=int64)`` would store node 4.5 as 4 without a word)."""
+    a = np.asarray(values)
+    if a.dtype.kind in "iu":
+        return a.astype(np.int64)
+    if a.dtype.kind == "b" or a.dtype.kind not in "f":
+        try:
+            a = a.astype(float)
+        except (TypeError, ValueError):
+            raise ModelError(f"{what} must be whole numbers, got {values!r}") from None
+    bad = ~np.isfinite(a) | (a != np.round(a))
+    if bad.any():
+        raise ModelError(f"{what} must be whole numbers, got {a[bad].ravel()[0]!r}")
+    return a.astype(np.int64)
+
+
+def _inertia_tensors(inertia, n: int, nodes) -> np.ndarray:
+    """(n, 3, 3) inertia tensors from the forms :meth:`Model.add_point_masses` takes,
+    checked symmetric and positive semi-definite (a negative moment is no body's)."""
+    if inertia is None:
+        return np.zeros((n, 3, 3))
+    a = np.asarray(inertia, dtype=float)
+    if a.shape == (3,) or a.shape == (n, 3) and a.shape != (3, 3):
+        a = np.einsum("...i,ij->...ij", a, np.eye(3))
+    if a.shape not in ((3, 3), (n, 3, 3)):
+        raise ModelError(f"add_point_masses: inertia must be 3 principal moments, a (3, 3) "
+                         f"tensor or one per mass, got shape {a.shape}")
+    a = np.broadcast_to(a, (n, 3, 3)).copy()
+    scale = np.maximum(np.abs(a).max(axis=(1, 2)), 1e-300)
+    for k in range(n):
+        t = a[k]
+        if not np.all(np.isfinite(t)):
+            raise ModelError(f"point mass at node {nodes[k]}: inertia is not finite")
+        if np.abs(t - t.T).max() > 1e-12 * scale[k]:
+            raise ModelError(f"point mass at node {nodes[k]}: inertia tensor is not symmetric")
+        low = np.linalg.eigvalsh(t).min()
+        if low < -1e-12 * scale[k]:
+            raise ModelError(f"point mass at node {nodes[k]}: inertia tensor has a negative "
+                             f"principal moment ({low:.3g} kg m^2)")
+    return a
+
+
 class Model:
     """A 3-D frame model under construction.
 
@@ -297,7 +340,7 @@ class Model:
     # ------------------------------------------------------------------ nodes
     def add_nodes(self, ids, xyz) -> None:
         """Add nodes with integer ``ids`` (n,) at coordinates ``xyz`` (n, 3) [m]."""
-        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        ids = np.atleast_1d(_ids(ids, "add_nodes: node ids"))
         xyz = np.atleast_2d(np.asarray(xyz, dtype=float))
         if xyz.shape != (len(ids), 3):
             raise ModelError(f"add_nodes: xyz must have shape ({len(ids)}, 3), got {xyz.shape}")
@@ -414,10 +457,18 @@ class Model:
         label : str, optional
             Property label for messages (defaults to the section's name).
         """
-        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        ids = np.atleast_1d(_ids(ids, "add_beams: element ids"))
         n = len(ids)
-        nodes = np.asarray(nodes, dtype=np.int64).reshape(n, 2)
-        orient = np.broadcast_to(np.asarray(orient, dtype=float), (n, 3)).copy()
+        nodes = _ids(nodes, "add_beams: nodes")
+        if nodes.size != 2 * n:
+            raise ModelError(f"add_beams: nodes must be {n} pairs of node ids (shape ({n}, 2)), "
+                             f"got shape {nodes.shape}")
+        nodes = nodes.reshape(n, 2)
+        orient = np.asarray(orient, dtype=float)
+        if orient.shape not in ((3,), (n, 3)):
+            raise ModelError(f"add_beams: orient must be a 3-vector or ({n}, 3), got shape "
+                             f"{orient.shape}")
+        orient = np.broadcast_to(orient, (n, 3)).copy()
         sec = section if isinstance(section, dict) else {
             k: getattr(section, k) for k in ("A", "Iy", "Iz", "J", "Asy", "Asz")}
         mat = material if isinstance(material, dict) else {
@@ -473,19 +524,26 @@ class Model:
         nodes : (n,) int
         mass : float or (n,) float
             [kg], >= 0.
-        inertia : (3, 3) or (n, 3, 3) float, optional
-            About each mass's centre of gravity, global axes [kg m^2]; default zero.
+        inertia : (3,), (n, 3), (3, 3) or (n, 3, 3) float, optional
+            About each mass's centre of gravity, global axes [kg m^2]; default zero. Three
+            numbers are the principal moments about the global axes (a diagonal tensor).
+            Each tensor must be symmetric and positive semi-definite.
         offset : (3,) or (n, 3) float, optional
             Centre of gravity relative to the node [m]; default zero.
         """
-        nodes = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        nodes = np.atleast_1d(_ids(nodes, "add_point_masses: nodes"))
         n = len(nodes)
-        chunk = {
-            "nodes": nodes,
-            "mass": np.broadcast_to(np.asarray(mass, dtype=float), (n,)).copy(),
-            "inertia": np.broadcast_to(np.zeros((3, 3)) if inertia is None else np.asarray(inertia, float), (n, 3, 3)).copy(),
-            "offset": np.broadcast_to(np.zeros(3) if offset is None else np.asarray(offset, float), (n, 3)).copy(),
-        }
+        inertia = _inertia_tensors(inertia, n, nodes)
+        try:
+            chunk = {
+                "nodes": nodes,
+                "mass": np.broadcast_to(np.asarray(mass, dtype=float), (n,)).copy(),
+                "inertia": inertia,
+                "offset": np.broadcast_to(np.zeros(3) if offset is None else np.asarray(offset, float), (n, 3)).copy(),
+            }
+        except ValueError as exc:
+            raise ModelError(f"add_point_masses: mass must be one number or {n}, and offset a "
+                             f"3-vector or ({n}, 3) ({exc})") from None
         bad = (chunk["mass"] < 0) | ~np.isfinite(chunk["mass"])
         if bad.any():
             raise ModelError(f"point mass at node {nodes[bad][0]}: mass must be >= 0, got {chunk['mass'][bad][0]!r}")
@@ -510,9 +568,9 @@ class Model:
         frame : (3, 3) or (n, 3, 3) float, optional
             Rows are the spring axes in global coordinates; default global axes.
         """
-        ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))
+        ids = np.atleast_1d(_ids(ids, "add_springs: spring ids"))
         n = len(ids)
-        nodes = np.asarray(nodes, dtype=np.int64)
+        nodes = _ids(nodes, "add_springs: nodes")
         if nodes.ndim == 1:
             nodes = np.column_stack([nodes, np.full(n, -1)])
         nodes = nodes.reshape(n, 2)

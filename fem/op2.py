@@ -46,9 +46,9 @@ def write_op2(path: str | os.PathLike, modes, frames: np.ndarray | None = None,
     ModelError
         Node ids beyond 32 bits (the OP2 format's limit) or no modes.
     """
-    from cpylog import SimpleLogger
-    from pyNastran.op2.op2 import OP2
-    from pyNastran.op2.tables.oug.oug_eigenvectors import RealEigenvectorArray
+    from cpylog import SimpleLogger  # deferred: ~1.5 s to load, OP2 only
+    from pyNastran.op2.op2 import OP2  # deferred: ~1.5 s to load, OP2 only
+    from pyNastran.op2.tables.oug.oug_eigenvectors import RealEigenvectorArray  # deferred: as OP2
 
     n = len(modes.frequencies_hz)
     if n == 0:
@@ -90,8 +90,8 @@ def read_op2_modes(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray, np.
     vectors : (n, n_nodes, 6) float
         Per mode and grid: T1, T2, T3, R1, R2, R3 in the grid's displacement frame.
     """
-    from cpylog import SimpleLogger
-    from pyNastran.op2.op2 import OP2
+    from cpylog import SimpleLogger  # deferred: ~1.5 s to load, OP2 only
+    from pyNastran.op2.op2 import OP2  # deferred: ~1.5 s to load, OP2 only
 
     op2 = OP2(log=SimpleLogger(level="critical"))
     try:

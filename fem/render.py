@@ -36,9 +36,11 @@ import ctypes.util
 import math
 import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+from PIL import Image
 
 from trussid.fem.model import Model
 from trussid._util.errors import UserError
@@ -277,7 +279,7 @@ def _mode_title(modes, mode: int, label: str | None, labels: Sequence[str] | Non
 # --------------------------------------------------------------------------- geometry
 def _polylines(points: np.ndarray):
     """PolyData of ``n`` polylines from points (n, s, 3)."""
-    import pyvista as pv
+    import pyvista as pv  # deferred: VTK takes ~1 s to load; only drawing needs it
 
     n, s, _ = points.shape
     idx = np.arange(n * s).reshape(n, s)
@@ -310,7 +312,7 @@ def _with_normals(mesh):
 
 def _replicate(template, centres: np.ndarray, sizes: np.ndarray):
     """One copy of ``template`` (unit size, at the origin) per centre, scaled, merged."""
-    import pyvista as pv
+    import pyvista as pv  # deferred: VTK takes ~1 s to load; only drawing needs it
 
     tpl = template.triangulate()
     p = np.asarray(tpl.points)
@@ -433,7 +435,7 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
     """
     # Long: one scene assembled part by part (beams, springs, masses, rigid bodies,
     # decorations), each part a few lines over the same displacement field.
-    import pyvista as pv
+    import pyvista as pv  # deferred: VTK takes ~1 s to load; only drawing needs it
 
     if n_samples < 2:
         raise RenderError(f"n_samples must be at least 2, got {n_samples}")
@@ -590,7 +592,7 @@ def _groups(scene: ModeScene, meshes: dict[str, Any]) -> dict[tuple, Any]:
     A testbed has some twenty solids; one actor per drawing style instead of one per part
     saves most of pyvista's per-actor overhead.
     """
-    import pyvista as pv
+    import pyvista as pv  # deferred: VTK takes ~1 s to load; only drawing needs it
 
     by_key: dict[tuple, list] = {}
     for part in scene.parts:
@@ -607,7 +609,7 @@ def _add_scene(plotter, scene: ModeScene, factor: float, cmap, show_ghost: bool,
 
     Returns the datasets the actors draw, by group (:func:`_groups`), for animation.
     """
-    import pyvista as pv
+    import pyvista as pv  # deferred: VTK takes ~1 s to load; only drawing needs it
 
     if show_ghost:
         ghosts = list(scene.ghost_meshes().values())
@@ -653,7 +655,7 @@ def _frame_camera(plotter, scene: ModeScene, view) -> None:
 
 
 def _new_plotter(window_size, shape=(1, 1), antialias: bool = True):
-    import pyvista as pv
+    import pyvista as pv  # deferred: VTK takes ~1 s to load; only drawing needs it
 
     p = pv.Plotter(off_screen=True, window_size=list(window_size), shape=shape, border=False)
     # 4x multisampling smooths edges; in a software rasteriser it costs about 0.6 s per
@@ -664,8 +666,6 @@ def _new_plotter(window_size, shape=(1, 1), antialias: bool = True):
 
 
 def _write_png(image: np.ndarray, out) -> None:
-    from PIL import Image
-
     with atomic_path(out, suffix=".png") as tmp:
         Image.fromarray(image).save(tmp, format="PNG")
 
@@ -673,8 +673,6 @@ def _write_png(image: np.ndarray, out) -> None:
 def _check_out(out, suffix: str):
     if out is None:
         return None
-    from pathlib import Path
-
     out = Path(out)
     if out.suffix.lower() != suffix:
         raise RenderError(f"output file {str(out)!r}: expected a {suffix} file")
@@ -791,8 +789,6 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
 def _write_gif(images: np.ndarray, out, frame_seconds: float) -> None:
     # Pillow (already required by pyvista and matplotlib) writes the GIF; pyvista's own
     # open_gif needs imageio, which is not a dependency.
-    from PIL import Image
-
     # One palette for all frames (from a few frames spread over the period) so colours do
     # not flicker between frames; octree quantisation is ~20x faster than median cut.
     sample = Image.fromarray(np.concatenate(list(images[:: max(1, len(images) // 4)]), axis=0))
@@ -863,7 +859,7 @@ def _font_size(size) -> int:
 
 def default_cmap():
     """Turbo without its darkest tenth, so parts at rest read as blue, not black."""
-    import matplotlib
-    from matplotlib.colors import ListedColormap
+    import matplotlib  # deferred: ~0.6 s to load; only a drawing needs the colour map
+    from matplotlib.colors import ListedColormap  # (as above)
 
     return ListedColormap(matplotlib.colormaps["turbo"](np.linspace(0.1, 1.0, 256)), name="turbo_light")

@@ -52,6 +52,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import scipy.io
 
 from trussid._util.files import atomic_path
 from trussid.plid.data import (IOData, check_enough_samples, select_channels, unknown_name,
@@ -412,7 +413,6 @@ def _load_arrays(path: Path, source: str) -> dict:
         if path.suffix.lower() == ".npz":
             with np.load(path, allow_pickle=False) as z:
                 return {k: z[k] for k in z.files}
-        import scipy.io
 
         return {k: v for k, v in scipy.io.loadmat(path, squeeze_me=False).items()
                 if not k.startswith("__")}
@@ -734,7 +734,9 @@ def write_data(data: IOData, path) -> Path:
         table = np.column_stack([t, data.u, data.y])
         with atomic_path(path) as tmp:
             with open(tmp, "w", newline="") as fh:
-                fh.write(",".join(["t", *in_names, *out_names]) + "\n")
+                # csv quotes a name holding a comma, a quote or a line break, which the
+                # reader takes back (a bare comma would split the name into two columns)
+                csv.writer(fh, lineterminator="\n").writerow(["t", *in_names, *out_names])
                 # %s of a float64 is its shortest exact form (0.000625, not %.17g's
                 # 0.00062500000000000001); the channels keep 17 digits, exact on reading
                 np.savetxt(fh, table, delimiter=",",
@@ -750,8 +752,6 @@ def write_data(data: IOData, path) -> Path:
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **arrays)
             else:
-                import scipy.io
-
                 arrays["input_names"] = np.array(data.input_names, dtype=object)
                 arrays["output_names"] = np.array(data.output_names, dtype=object)
                 with open(tmp, "wb") as fh:

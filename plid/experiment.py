@@ -21,6 +21,7 @@ it is clipped to the end code and counted.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import os
 
 import control
 import numpy as np
@@ -291,8 +292,6 @@ def available_memory_bytes() -> int | None:
     except OSError:
         pass
     try:
-        import os
-
         return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
     except (ValueError, OSError, AttributeError):
         return None

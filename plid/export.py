@@ -21,6 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import scipy.io
 
 from trussid._util.files import atomic_path
 from trussid.plid.errors import DataError
@@ -56,8 +57,6 @@ def write_mat(path, sys, K=None, continuous=None, input_names=None, output_names
     input_names, output_names : sequence of str, optional
         Default: the system's labels.
     """
-    import scipy.io
-
     path = Path(path)
     if path.suffix.lower() != ".mat":
         raise DataError(f"{path}: a MATLAB file must end in .mat")

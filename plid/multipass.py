@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import control
 import numpy as np
+from tqdm.auto import tqdm
 
 from trussid.plid.bases import basis_for, data_frequencies, model_frequencies
 from trussid.plid.canonical import ObserverBasis
@@ -40,7 +41,8 @@ from trussid.plid.metrics import (best_predictor, choose_predictor, default_nois
 from trussid.plid.pem import refine_gain
 from trussid.plid.reduce import balanced_truncation
 from trussid.plid.stability import stabilise
-from trussid.plid.subspace import direct_term_test, output_error_fit, subspace_prior
+from trussid.plid.subspace import (SubspaceChoice, direct_term_test, output_error_fit,
+                                   subspace_prior)
 
 __all__ = ["Pass", "multipass", "identify", "identify_reduced", "fit_model", "default_via",
            "Identification", "Provenance", "Stabilised", "DirectTerm", "Candidate", "RECIPES",
@@ -151,7 +153,7 @@ class Provenance:
 
     Attributes
     ----------
-    subspace : dict or None
+    subspace : SubspaceChoice or None
         The N4SID prior's choice of block rows (:func:`trussid.plid.subspace.subspace_prior`).
     subspace_seconds, recursion_seconds, recursion_cpu_seconds, seconds : float or None
         Wall seconds of the prior, wall and CPU seconds of the PLID recursion alone (the
@@ -174,7 +176,7 @@ class Provenance:
         The estimator's warnings (:func:`fit_model`).
     """
 
-    subspace: dict | None = None
+    subspace: SubspaceChoice | None = None
     subspace_seconds: float | None = None
     passes: list = field(default_factory=list)
     recursion_seconds: float | None = None
@@ -619,8 +621,6 @@ def identify_reduced(u, y, order: int, dt: float, *, via=None, start: str = "sub
 
     # One bar over the candidates (the PLID passes inside show their own when slow): the
     # whole search took 77 s silent in the API on a 6000-sample record (newcomer audit).
-    from tqdm.auto import tqdm
-
     m = u.shape[1]
     show = (progress if progress is not None
             else u.shape[0] * float(max(via, default=order) * (m + p)) ** 2 > PLID.PROGRESS_WORK)

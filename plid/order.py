@@ -22,6 +22,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from trussid.plid.canonical import check_order
 from trussid.plid._validate import as_2d
@@ -106,8 +107,6 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
     lo, hi = band if band is not None else (0.01 * fs, 0.49 * fs)
     f = np.linspace(lo, hi, n_freq)
     rows, H_prev = [], None
-    from tqdm.auto import tqdm
-
     show = progress if progress is not None else len(orders) > 1
     for n in tqdm(orders, disable=not show, unit="order", desc="order table"):
         t0 = time.perf_counter()

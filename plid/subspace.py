@@ -30,8 +30,23 @@ from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.experiment import simulate
 from trussid.plid.stability import stabilise
 
-__all__ = ["SubspaceFit", "n4sid", "po_moesp", "block_hankel", "refit_input_matrix",
+__all__ = ["SubspaceChoice", "SubspaceFit", "n4sid", "po_moesp", "block_hankel", "refit_input_matrix",
            "output_error_fit", "direct_term_test", "subspace_prior"]
+
+
+@dataclass
+class SubspaceChoice:
+    """Which block-row count :func:`subspace_prior` kept, and how each candidate scored.
+
+    Attributes
+    ----------
+    block_rows : int
+    candidates : dict of int to float
+        Output-error ratio [dB] of the prior with each block-row count tried (data alone).
+    """
+
+    block_rows: int
+    candidates: dict
 
 
 @dataclass
@@ -273,8 +288,8 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
     Returns
     -------
     model : control.StateSpace
-    info : dict
-        ``{"block_rows": chosen, "candidates": {block_rows: output-error dB}}``.
+    choice : SubspaceChoice
+        The block rows kept and every candidate's output-error ratio [dB].
     """
 
     u = as_2d(u, "u")
@@ -293,7 +308,7 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
             raise IdentificationError(
                 f"{u.shape[0]} samples are too few for a subspace estimate of order {n} "
                 f"(at least {2 * lo * (m + p + 1)} needed); identify from scratch instead")
-    best, info, worse = None, {"candidates": {}}, 0
+    best, scores, worse = None, {}, 0
     for i in np.atleast_1d(block_rows):
         if not given and patience is not None and worse >= patience:
             break
@@ -307,10 +322,9 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
             ysim = simulate(model, u)
         e = y - ysim
         score = float(-10 * np.log10(np.mean(np.mean(e ** 2, 0) / np.mean(y ** 2, 0))))
-        info["candidates"][int(i)] = score
+        scores[int(i)] = score
         if best is None or score > best[0]:
             best, worse = (score, model, int(i)), 0
         else:
             worse += 1
-    info["block_rows"] = best[2]
-    return best[1], info
+    return best[1], SubspaceChoice(block_rows=best[2], candidates=scores)

@@ -68,7 +68,7 @@ def site(tmp_path_factory):
 def test_site_builds_with_warnings_as_errors_and_has_every_page(site):
     for page in ("index", "api", "architecture", "auto_examples/index",
                  "guide/install", "guide/demo", "guide/frame", "guide/nastran",
-                 "guide/identification", "guide/testbed"):
+                 "guide/identification", "guide/testbed", "guide/own_structure", "cli"):
         assert (site / f"{page}.html").is_file(), page
     # The API reference: one page per subpackage, one per public name of its __all__.
     import trussid.fem
@@ -114,3 +114,14 @@ def test_formulas_render_offline_from_the_site_itself(site):
     for part in ("MathJax.js", "config/TeX-AMS_SVG.js", "jax/input/TeX/jax.js", "jax/output/SVG/jax.js",
                  "jax/output/SVG/fonts/TeX/fontdata.js", "extensions/TeX/AMSmath.js"):
         assert (mathjax / part).is_file(), part
+
+
+@pytest.mark.slow
+def test_cli_reference_page_is_every_commands_help(site):
+    """docs/cli.md is generated from the parsers at each build: every subcommand is on it."""
+    from trussid.cli import build_parser
+
+    text = (site / "cli.html").read_text()
+    help_text = build_parser().format_help()
+    for cmd in ("plant", "demo", "control", "closed-loop", "study", "export", "identify"):
+        assert f"trussid {cmd}" in text and cmd in help_text

@@ -15,8 +15,8 @@ from trussid._util.errors import UserError
 from trussid._util.files import atomic_directory
 from trussid.campaign import demo as demo_mod
 from trussid.campaign.demo import mode_audit
-from trussid.plid.metrics import PoleMatch
 from trussid.geometry.lab import LabSpec
+from trussid.plid.metrics import PoleMatch
 
 
 def row(ft, zt, fi, zi):

@@ -47,7 +47,7 @@ def _model(name="mimo", kind="MIMO"):
         method="PLID (direct form)", unstable_poles=0,
         stabilised=Stabilised(applied=True, reflected_poles=2),
         poles=[PoleMatch(true_frequency_hz=166.0, true_damping=0.0025, frequency_hz=166.2,
-                         damping=0.0024)],
+                         damping=0.0024, frequency_error_percent=0.12)],
         poles_in_band_matched=1, poles_in_band_true=1, validation_output_rms_v=[1.0, 1.1, 1.2],
         h1_coherence={"excited_band_hz": [0.0, 400.0], "mean_in_excited_band": [0.987, 0.9, 0.9],
                       "mean_above_excited_band": [0.123, 0.1, 0.1]},

@@ -273,3 +273,51 @@ def test_a_spring_may_not_reuse_a_beam_id():
     with pytest.raises(ModelError, match=r"element 12 is defined more than once \(beam and "
                                          r"spring\)"):
         assemble(m)
+
+
+# ------------------------------------------------ newcomer audit 2 (issue 24): API input
+@pytest.mark.parametrize("ids", [[4.5], [np.nan], ["x"]])
+def test_a_node_id_that_is_not_a_whole_number_is_refused(ids):
+    """P02: node 4.5 was stored as node 4, and a beam to node 4 then worked."""
+    m = Model()
+    with pytest.raises(ModelError, match="add_nodes: node ids must be whole numbers"):
+        m.add_nodes(ids, [[0.0, 0.0, 0.0]])
+    m.add_nodes([4.0], [[0.0, 0.0, 0.0]])  # a whole number written as a float is fine
+    assert m.node_ids.tolist() == [4]
+
+
+def test_element_nodes_that_are_not_whole_numbers_are_refused():
+    m = Model()
+    m.add_nodes([1, 2], [[0, 0, 0], [1, 0, 0]])
+    with pytest.raises(ModelError, match="add_beams: nodes must be whole numbers, got 1.5"):
+        m.add_beams([1], [[1.5, 2]], TUBE, ALUMINIUM, orient=[0, 0, 1])
+
+
+@pytest.mark.parametrize("inertia, match", [
+    ([-1.0, 1.0, 1.0], "negative principal moment"),                    # P08
+    ([[1, 0.5, 0], [0, 1, 0], [0, 0, 1]], "not symmetric"),
+    ([[1, 2, 0], [2, 1, 0], [0, 0, 1]], "negative principal moment"),  # symmetric, indefinite
+    ([1.0, 2.0], "inertia must be 3 principal moments"),                # P07
+])
+def test_an_inertia_no_body_can_have_is_refused(inertia, match):
+    m = Model()
+    m.add_nodes([1], [[0, 0, 0]])
+    with pytest.raises(ModelError, match=match):
+        m.add_point_masses([1], 1.0, inertia=inertia)
+
+
+def test_three_inertia_numbers_are_the_principal_moments():
+    """They used to be broadcast to a (3, 3) matrix of equal rows: a rank-one 'tensor'."""
+    m = Model()
+    m.add_nodes([1, 2], [[0, 0, 0], [1, 0, 0]])
+    m.add_point_masses([1, 2], 1.0, inertia=[1e-3, 2e-3, 3e-3])
+    np.testing.assert_array_equal(m.point_masses.inertia[1], np.diag([1e-3, 2e-3, 3e-3]))
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"nodes": [[2, 3, 1]]}, r"nodes must be 1 pairs of node ids"),      # P04
+    ({"orient": [0, 1]}, r"orient must be a 3-vector or \(1, 3\)"),      # P05
+])
+def test_wrong_shapes_of_beam_arguments_are_named(kw, match):
+    with pytest.raises(ModelError, match=match):
+        two_beams(**kw)

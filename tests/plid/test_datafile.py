@@ -329,3 +329,13 @@ def test_csv_time_column_is_written_without_noise_digits(tmp_path, data):
     path = write_data(data, tmp_path / "d.csv")
     second = path.read_text().splitlines()[2].split(",")[0]
     assert second == "0.000625"
+
+
+def test_csv_channel_names_with_commas_and_quotes_round_trip(tmp_path, rng):
+    """Audit 2, I22: a sensor named "acc tip,z" made simulate write a CSV header of 7 names
+    over 6 values, which identify could not read."""
+    d = IOData(rng.normal(size=(200, 1)), rng.normal(size=(200, 2)), 100.0, ["shaker"],
+               ["acc tip,z", 'say "x"'])
+    back = read_data(write_data(d, tmp_path / "d.csv"))
+    assert back.output_names == ["y_acc tip,z", 'y_say "x"']
+    np.testing.assert_array_equal(back.y, d.y)

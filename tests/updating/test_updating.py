@@ -217,8 +217,10 @@ def test_walls_from_a_plid_model_of_noisy_bending_test_data(nominal, full):
     tp = testbed_plant(true_tbm, arrangement="bending", sensors="struts")
     plant, modes = tp.discrete, tp.modes
     n = 16000 if full else 5000
+    daq = tp.lab.daq  # the testbed lab's converters, the D/A over its range
     exp = run_experiment(plant, n, "white", rms=1.0, band=(30.0, 90.0), seed=4, snr_db=40,
-                         dac_bits=12, adc_bits=12, adc_full_scale="auto")
+                         dac_bits=daq.bits, adc_bits=daq.bits, dac_full_scale=daq.full_scale,
+                         adc_full_scale="auto")
     band = first_bending_band(modes, true_tbm)
     ident, _ = modes_from_data(exp.data.u, exp.data.y, plant.dt, 18, band=band, n_modes=6)
     rep = update_walls(ident.frequencies_hz, tb, tbm=tbm, damping=ident.damping,

@@ -50,6 +50,7 @@ Identification data and validation data are separate records with different seed
 from __future__ import annotations
 
 import json
+import math
 import time
 import warnings
 from dataclasses import dataclass, field, replace
@@ -57,13 +58,31 @@ from pathlib import Path
 
 import numpy as np
 
-from trussid._util.files import atomic_path
+from trussid import plots
+from trussid._util.errors import UserError
+from trussid._util.files import atomic_directory, atomic_path
 from trussid._util.jsonio import json_safe
+from trussid.campaign.control import LoopSettings, demo_section
 from trussid.campaign.report import report_markdown
+from trussid.campaign.structure import DEFAULT_SNR_DB
 from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
                                       DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
                                       PlantSummary, Provenance, ReportFiles)
 from trussid.geometry.lab import G0, lab_record
+from trussid.plid.datafile import with_channels, write_data
+from trussid.plid.estimator import PLID, PLIDWarning
+from trussid.plid.evaluate import compare
+from trussid.plid.experiment import excitation, run_experiment, simulate
+from trussid.plid.frf import frequency_response, h1
+from trussid.plid.metrics import choose_predictor, prediction_ratio_db
+from trussid.plid.modal import mac, modal_table
+from trussid.plid.modelfile import save_model
+from trussid.plid.multipass import Stabilised, default_via, fit_model
+from trussid.plid.stability import stabilise
+from trussid.plid.subspace import n4sid
+from trussid.plid.uncertainty import mode_intervals
+from trussid.plots import save_figure
+from trussid.testbed.plant import testbed_plant
 
 
 
@@ -110,6 +129,11 @@ class DemoSettings:
         Welch segment length of the H1 estimate (resolution fs / nperseg).
     seed : int
         Seed of everything random (each record derives its own).
+    direct : {False, True, "auto"}
+        Direct term D of the identified models (:func:`trussid.plid.multipass.
+        identify_reduced`): the testbed's sensors see the structure through the lab's
+        low-pass filters (no feed-through, False); accelerometers on a bare structure
+        respond at once to a force ("auto": the data decide).
     """
 
     quick: bool = False
@@ -128,6 +152,7 @@ class DemoSettings:
     plot_band: tuple = (10.0, 450.0)
     h1_nperseg: int = 1024
     seed: int = 1997
+    direct: object = False
 
 
 def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
@@ -145,14 +170,47 @@ def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
     return replace(s, **overrides)
 
 
+def derived_settings(cp, quick: bool = False, **overrides):
+    """The experiment for a deck's plant (:class:`trussid.campaign.structure.CampaignPlant`),
+    from its modes and sample rate (overridable):
+
+    - excitation white 0 to 0.4 of the sample rate, a quarter of the D/A range RMS per
+      driven channel (a crest factor of 4, as on the testbed);
+    - FRF band from half the first mode to the top of the excitation; Bode plots to 0.95
+      of Nyquist;
+    - records of 6000 + 4000 samples (quick) or 16000 + 8000, at least 100 periods of
+      the first mode;
+    - MIMO order twice the number of the plant's modes below Nyquist (at least 2), rounded
+      up to a multiple of the outputs (PLID's observer form), capped at 48 (quick: 36): the
+      model must hold every mode the records see, those just above the excitation band
+      too; SIMO models of every channel (quick: the first) at the same order; the direct
+      term estimated when the data show one (accelerometers).
+    """
+    fs = 1.0 / cp.discrete.dt
+    f = np.asarray(cp.modes.frequencies_hz, dtype=float)
+    f = f[f > 1e-6]
+    top = 0.4 * fs
+    p = cp.discrete.noutputs
+    order = int(min(p * math.ceil(max(2 * f.size, 2) / p), p * ((36 if quick else 48) // p)))
+    base = demo_settings(quick)
+    n_min = int(math.ceil(100 * fs / f[0])) if f.size else 0
+    lo = 0.5 * f[0] if f.size else 0.0
+    kw = dict(direct="auto", excitation_band=(0.0, top),
+              excitation_rms=0.25 * cp.lab.daq.full_scale, frf_band=(lo, top),
+              plot_band=(lo, 0.95 * 0.5 * fs), n_identification=max(base.n_identification, n_min),
+              n_validation=max(base.n_validation, n_min // 2), mimo_order=order,
+              simo_order=order,
+              simo_channels=(0,) if quick else tuple(range(cp.discrete.ninputs)))
+    kw.update(overrides)
+    return demo_settings(quick, **kw)
+
+
 # --------------------------------------------------------------------------- plant
 
 
 def build_plant(tb=None):
     """The plant of testbed ``tb`` (default: the default testbed) at its lab's sample rate,
     with its lab chain (:class:`trussid.testbed.plant.TestbedPlant`)."""
-    from trussid.testbed.plant import testbed_plant
-
     return testbed_plant(tb)
 
 
@@ -194,8 +252,6 @@ def conditioner_steps(y_rms, full_scale: float, target: float, steps=(1.0, 2.0, 
 
 def drive(settings: DemoSettings, plant, n: int, channels, seed: int) -> np.ndarray:
     """The excitation of the driven ``channels`` (others zero), at the plant's own rate."""
-    from trussid.plid.experiment import excitation
-
     u = np.zeros((n, plant.ninputs))
     u[:, list(channels)] = excitation(settings.excitation, n, len(channels), 1.0 / plant.dt,
                                       settings.excitation_rms, settings.excitation_band, seed)
@@ -206,8 +262,6 @@ def range_conditioners(plant, settings: DemoSettings, channels, seed: int, n_sam
                        noise_v: float, full_scale: float) -> list:
     """Conditioner steps from a noise-free trial run of the experiment (its own seed), for an
     A/D range of +-``full_scale`` [V]."""
-    from trussid.plid.experiment import simulate
-
     trial = drive(settings, plant, n_samples, channels, seed)
     rms = np.sqrt(np.mean(simulate(plant, trial) ** 2, axis=0) + noise_v**2)
     return conditioner_steps(rms, full_scale, settings.range_target, settings.gain_steps)
@@ -217,8 +271,6 @@ def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels
                 n_samples: int, noise_v: float, steps, lab) -> Record:
     """One record with the conditioners at ``steps`` (see the module docstring), through the
     converters of ``lab`` (:class:`trussid.geometry.lab.LabSpec`)."""
-    from trussid.plid.experiment import run_experiment
-
     full_scale, bits = lab.daq.full_scale, lab.daq.bits
     adc_fs = [full_scale / g for g in steps]
     u = drive(settings, plant, n_samples, channels, seed)
@@ -230,13 +282,25 @@ def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels
     return Record(name, purpose, tuple(channels), exp, steps, adc_fs, seed)
 
 
+def sensor_noise(tp, settings: DemoSettings):
+    """Sensor noise RMS in plant output units: the testbed lab's accelerometer noise at the
+    nominal conditioning gain, or for a deck :data:`trussid.campaign.structure.
+    DEFAULT_SNR_DB` under each output in a noise-free trial of the all-channel record."""
+    if hasattr(tp, "tbm"):
+        return tp.lab.accelerometers.noise_volts
+    trial = drive(settings, tp.discrete, settings.n_identification,
+                  range(tp.discrete.ninputs), settings.seed + 99)
+    rms = np.sqrt(np.mean(simulate(tp.discrete, trial) ** 2, axis=0))
+    return rms * 10 ** (-DEFAULT_SNR_DB / 20)
+
+
 def run_experiments(tp, settings: DemoSettings, progress=None) -> dict:
     """All records of the campaign: ``{model name: (identification, validation)}``.
 
     Model names are ``simo_ch<k>`` (k = 1..3) and ``mimo``.
     """
     plant, lab = tp.discrete, tp.lab
-    noise_v = lab.accelerometers.noise_volts
+    noise_v = sensor_noise(tp, settings)
     plan = [(f"simo_ch{c + 1}", (c,)) for c in settings.simo_channels]
     if settings.mimo_order:
         plan.append(("mimo", tuple(range(plant.ninputs))))
@@ -275,7 +339,7 @@ class Identified:
 
 
 def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
-                   progress: bool = False, log=None) -> Identified:
+                   progress: bool = False, log=None, direct=False) -> Identified:
     """Identify an order-``order`` model from one record: the one switchable call.
 
     Runs the project's identification recipe for under-modelled structures,
@@ -288,11 +352,6 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     ``benchmarks/results/plid_thesis.md``. The parameter history of the winning PLID pass is
     kept for the convergence plot.
     """
-    from trussid.plid.estimator import PLIDWarning
-    from trussid.plid.metrics import choose_predictor
-    from trussid.plid.multipass import Stabilised, default_via, fit_model
-    from trussid.plid.uncertainty import mode_intervals
-
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         # The candidates' PLID passes warn when a pass loses positive definiteness; the
@@ -301,7 +360,8 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         p = np.asarray(y).reshape(len(y), -1).shape[1]
         idn = fit_model(u, y, order, dt, start="subspace",
                         via=default_via(order, p) if via is None else via, progress=progress,
-                        log=log, block_rows=None if block_rows is None else list(block_rows))
+                        log=log, block_rows=None if block_rows is None else list(block_rows),
+                        direct=direct)
     res = idn.result
     model = idn.model
     prov = idn.provenance
@@ -311,7 +371,6 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         # No stable candidate (none was measured on the testbed): reflect the poles outside
         # the unit circle in (plid.stability keeps the magnitude response) so that the model
         # can be simulated, and choose its predictor afresh.
-        from trussid.plid.stability import stabilise
 
         st = stabilise(model)
         model = st.model
@@ -320,6 +379,24 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     else:
         K, kinfo = idn.K, prov.predictor or {}
         K_source = kinfo.get("chosen", "")
+    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
+    alt_info = {}
+    if direct is not False:
+        # The recipe's N4SID prior is strictly proper (D = 0); on a plant with a large
+        # feed-through (accelerometers on a bare structure) PLID can stay far from the
+        # subspace fit with D. That fit is a candidate too, judged as the recipe judges
+        # its own: by the one-step prediction on the identification record.
+        alt = _subspace_with_d(u, y, order, dt, block_rows or (40, 80))
+        if alt is not None:
+            ours = prediction_ratio_db(model, u, y, K=K, skip=alt[3])["overall"]
+            if alt[2] > ours:
+                alt_info = {"subspace_with_d_db": alt[2], "plid_db": ours}
+                model, K = alt[0], alt[1]
+                K_source = "kalman (N4SID with D, chosen on the identification record)"
+                method = (f"N4SID with D (block rows {alt[4]}): {alt[2]:.1f} dB one-step on "
+                          f"the identification record against {ours:.1f} dB for PLID's "
+                          f"{chosen}")
+                chosen = f"subspace with D, {alt[4]} block rows"
     hist, hidx = res.theta_history, res.history_index
     if hist.shape[0] < 2 and idn.prior is not None:
         # The recipe ran without a parameter history: repeat the winner's last PLID pass
@@ -330,15 +407,34 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
             "R": np.asarray(idn.R).tolist(), "predictor": kinfo,
             **{k: v for k, v in prov.as_dict().items() if k not in ("passes", "predictor")},
             "passes": prov.passes}
-    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
+    info["chosen"] = chosen
+    if alt_info:
+        info["candidate_with_d"] = alt_info
     modes = mode_intervals(model, res.model, res.theta_cov)
     return Identified(model, K, K_source, time.perf_counter() - t0, method,
                       res.innovations, hist, hidx, info, modes)
 
 
-def _history_of_last_pass(idn, u, y, order, dt):
-    from trussid.plid.estimator import PLID, PLIDWarning
+def _subspace_with_d(u, y, order: int, dt: float, block_rows):
+    """The best N4SID model with a direct term over ``block_rows`` by one-step prediction on
+    ``(u, y)``: ``(model, K, dB, skip, block rows)``, or None if none is stable."""
+    best = None
+    for br in block_rows:
+        try:
+            m = n4sid(u, y, order, int(br), dt).with_d
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        if np.max(np.abs(np.linalg.eigvals(np.asarray(m.A)))) >= 1:
+            continue
+        K, _, kinfo = choose_predictor(m, u, y)
+        skip = int(kinfo.get("skip", 0))
+        r = prediction_ratio_db(m, u, y, K=K, skip=skip)["overall"]
+        if best is None or r > best[2]:
+            best = (m, K, float(r), skip, int(br))
+    return best
 
+
+def _history_of_last_pass(idn, u, y, order, dt):
     last = (idn.provenance.passes or [{}])[-1]
     est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
                Q_theta=last.get("Q_theta", 0.0), prior=idn.prior,
@@ -358,8 +454,6 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
     """All metrics of one model, by :func:`trussid.plid.evaluate.compare` (as ``trussid
     compare``): validation prediction and simulation, FRF errors against the true plant and
     the H1 estimate, matched poles."""
-    from trussid.plid.evaluate import compare
-
     model = fit.model
     val = rval.data
     cols = list(rid.channels)
@@ -416,8 +510,6 @@ def _mode_checks(poles, modes, model, truth) -> list[ModeCheck]:
     """Per matched pole pair: the identified mode's 95 % intervals
     (:mod:`trussid.plid.uncertainty`) and the MAC of the true (FE) mode shape against the
     identified one at the sensors (:func:`trussid.plid.modal.mac`)."""
-    from trussid.plid.modal import mac, modal_table
-
     ident, true = modal_table(model), modal_table(truth)
     rows = []
     for r in poles:
@@ -558,8 +650,6 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> Provenan
 
 def _h1_error(h1_est, truth, keep) -> dict:
     """Magnitude/phase error of the H1 estimate against the true plant at its own frequencies."""
-    from trussid.plid.frf import frequency_response
-
     H, H_ref = h1_est.H[keep], frequency_response(truth, h1_est.f[keep])
     with np.errstate(divide="ignore", invalid="ignore"):
         mag = 20 * np.log10(np.abs(H)) - 20 * np.log10(np.abs(H_ref))
@@ -570,8 +660,6 @@ def _h1_error(h1_est, truth, keep) -> dict:
 
 def h1_estimate(record: Record, nperseg: int):
     """H1 estimate from an identification record (driven channels only)."""
-    from trussid.plid.frf import h1
-
     d = record.data
     return h1(d.u[:, list(record.channels)], d.y, d.fs, nperseg=nperseg)
 
@@ -589,7 +677,8 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
         say(f"      {name}: {order} states, {len(cols)} in x {d.n_outputs} out; candidates:")
         fits[name] = identify_model(d.u[:, cols], d.y, order, d.dt,
                                     block_rows=settings.block_rows,
-                                    log=lambda msg: say(f"        {msg}"))
+                                    log=lambda msg: say(f"        {msg}"),
+                                    direct=settings.direct)
         h1s[name] = h1_estimate(rid, settings.h1_nperseg)
         say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
             f"({fits[name].seconds:.1f} s)")
@@ -599,9 +688,6 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
 def write_files(out: Path, records: dict, fits: dict, truth, lab) -> ReportFiles:
     """The records (driven channels only) and the models as data and model files; the true
     plant's file records its ``lab`` (:func:`trussid.geometry.lab.lab_record`)."""
-    from trussid.plid.datafile import with_channels, write_data
-    from trussid.plid.modelfile import save_model
-
     files = ReportFiles()
     for name, (rid, rval) in records.items():
         for rec in (rid, rval):
@@ -625,8 +711,6 @@ def write_files(out: Path, records: dict, fits: dict, truth, lab) -> ReportFiles
 def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
                   settings: DemoSettings) -> list:
     """Bode overlays, pole maps, traces and the convergence plot; their file names."""
-    from trussid import plots
-
     written = []
 
     def save(fig, fname):
@@ -655,7 +739,8 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
 
 
 def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
-             force: bool = False, command: str | None = None, testbed=None) -> dict:
+             force: bool = False, command: str | None = None, testbed=None,
+             plant=None) -> dict:
     """Run the whole campaign and write the report directory ``out``.
 
     Parameters
@@ -676,15 +761,15 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     testbed : trussid.geometry.spec.Testbed, optional
         The testbed and its lab (``testbed.lab``: sample rate, converters, chain, sensor
         noise); default the default testbed in the thesis lab.
+    plant : trussid.campaign.structure.CampaignPlant, optional
+        Any other structure (a deck with its IO file and lab) instead of a testbed; its
+        experiment comes from :func:`derived_settings`.
 
     Returns
     -------
     DemoSummary
         The summary (written as ``summary.json`` and ``report.md``).
     """
-    from trussid._util.errors import UserError
-    from trussid._util.files import atomic_directory
-
     settings = settings or demo_settings()
     say = progress or (lambda msg: None)
     out = Path(out)
@@ -701,8 +786,12 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     timings = {}
 
     t0 = time.perf_counter()
-    say("[1/5] testbed -> modes -> plant ...")
-    tp = build_plant(testbed)
+    if plant is None:
+        say("[1/5] testbed -> modes -> plant ...")
+        tp = build_plant(testbed)
+    else:
+        say(f"[1/5] {plant.description}: modes -> plant ...")
+        tp = plant
     truth = tp.discrete
     fs = 1.0 / truth.dt
     timings["plant"] = time.perf_counter() - t0
@@ -731,7 +820,6 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
 
     control = None
     if "mimo" in records:  # close the loop on the MIMO model (issue 14)
-        from trussid.campaign.control import LoopSettings, demo_section
 
         t0 = time.perf_counter()
         say("      closing the loop: LQG from the MIMO model, on the FE truths ...")
@@ -739,8 +827,10 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
         loop = LoopSettings.for_lab(tp.lab, excitation_rms=settings.excitation_rms,
                                     excitation_band_hz=settings.excitation_band[1])
         control = demo_section(fits["mimo"].model, fits["mimo"].K, records["mimo"][0].data,
-                               truth, settings.quick, loop, tp.tbm.testbed,
-                               progress=lambda m: say("      " + m))
+                               truth, settings.quick, loop,
+                               tp.tbm.testbed if hasattr(tp, "tbm") else None,
+                               progress=lambda m: say("      " + m), lab=tp.lab,
+                               excitation_rms=settings.excitation_rms)
         timings["control"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -759,8 +849,6 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
     files = write_files(out, records, fits, truth, tp.lab)
     files.figures = write_figures(out, records, fits, h1s, truth, settings)
     if control is not None:
-        from trussid.plots import save_figure
-
         for fname, fig in control[1].items():
             save_figure(fig, out / fname)
         files.figures += list(control[1])
@@ -780,9 +868,20 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
 
 def plant_section(tp) -> PlantSummary:
     """The summary's plant: size, rate, modes, transducers, converters and noise."""
-    tb, lab = tp.tbm.testbed, tp.lab
+    lab = tp.lab
     f = tp.modes.frequencies_hz
     acc = lab.accelerometers
+    if not hasattr(tp, "tbm"):  # a deck's plant: outputs in its own units, no conditioner
+        nan = float("nan")
+        return PlantSummary(
+            states=int(tp.discrete.nstates), inputs=list(tp.discrete.input_labels),
+            outputs=list(tp.discrete.output_labels), sample_rate_hz=1.0 / tp.discrete.dt,
+            modes=int(f.size), mode_frequencies_hz=f.tolist(), modal_damping=tp.damping,
+            accelerometer_sensitivity_v_per_g=nan, conditioning_gain=1.0,
+            converter_bits=lab.daq.bits, converter_full_scale_v=lab.daq.full_scale,
+            sensor_noise_g_rms=nan, sensor_noise_v_rms=nan, lab=lab,
+            structure=tp.description, lab_source=tp.lab_source)
+    tb = tp.tbm.testbed
     return PlantSummary(
         states=int(tp.discrete.nstates), inputs=list(tp.discrete.input_labels),
         outputs=list(tp.discrete.output_labels), sample_rate_hz=1.0 / tp.discrete.dt,

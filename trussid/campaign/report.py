@@ -20,14 +20,24 @@ def report_markdown(s: DemoSummary) -> str:
     included (attributes of the typed summary only: a renamed field fails here)."""
     # Long: a report template, read best top to bottom in the order of the report.
     st, pl = s.settings, s.plant
-    L = ["# trussid demo: PLID on the simulated testbed", ""]
+    testbed = pl.structure == "the default testbed"
+    L = ["# trussid demo: PLID on the simulated " + ("testbed" if testbed else "structure"), ""]
     L += provenance_lines(s.provenance)
     L += [f"Run: {'quick' if st.quick else 'full'}; total {s.timings_s['total']:.1f} s "
           f"(plant {s.timings_s['plant']:.1f} s, experiments "
           f"{s.timings_s['experiments']:.1f} s, identification "
           f"{s.timings_s['identification']:.1f} s, evaluation "
           f"{s.timings_s['evaluation']:.1f} s).", ""]
-    L += ["## Plant", "",
+    if not testbed:
+        L += ["## Plant", "",
+              f"{pl.structure[0].upper() + pl.structure[1:]}, {pl.modes} modes below Nyquist, "
+              f"modal damping {100 * pl.modal_damping:.2f} %; discrete plant of {pl.states} "
+              f"states, {len(pl.inputs)} commands ({', '.join(pl.inputs)}) to "
+              f"{len(pl.outputs)} sensors ({', '.join(pl.outputs)}) at "
+              f"{pl.sample_rate_hz:g} Hz, in the IO file's units; {pl.converter_bits}-bit "
+              f"converters, +-{pl.converter_full_scale_v:g} units (lab: {pl.lab_source}); "
+              "sensor noise 60 dB under each output in the all-channel record.", ""]
+    L += [] if not testbed else ["## Plant", "",
           f"Default testbed, {pl.modes} modes below Nyquist, modal damping "
           f"{100 * pl.modal_damping:.2f} %; discrete plant of {pl.states} states, "
           f"{len(pl.inputs)} D/A channels ({', '.join(pl.inputs)}) to "

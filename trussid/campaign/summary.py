@@ -55,6 +55,8 @@ class PlantSummary:
     sensor_noise_g_rms: float
     sensor_noise_v_rms: float
     lab: LabSpec                  # the lab the plant and its records were made in
+    structure: str = "the default testbed"  # or "deck X.bdf with io.toml"
+    lab_source: str = ""          # where a deck's lab came from
 
 
 @dataclass(frozen=True)
@@ -150,8 +152,8 @@ class ModelSummary:
     seconds: float
     method: str
     unstable_poles: int
-    stabilised: Stabilised
-    poles: list                   # matched pole rows (plid.evaluate.compare)
+    stabilised: Stabilised        # poles reflected into the unit circle, if any
+    poles: list                   # of trussid.plid.metrics.PoleMatch (plid.evaluate.compare)
     poles_in_band_matched: int
     poles_in_band_true: int
     validation_output_rms_v: list

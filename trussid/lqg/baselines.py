@@ -14,6 +14,7 @@ import math
 import control
 import numpy as np
 
+from .errors import ControlError
 from .evaluate import damping_table
 
 KINDS = ("static", "static+delay", "bandpass", "bandpass+delay")
@@ -25,8 +26,8 @@ def decentralised(kind: str, gain: float, dt: float, inputs, outputs, band=(150.
     ``outputs`` (actuators) in order."""
     m = len(outputs)
     if len(inputs) != m:
-        raise ValueError(f"decentralised control pairs sensors with actuators: {len(inputs)} "
-                         f"sensors, {m} actuators")
+        raise ControlError(f"decentralised control pairs sensors with actuators: {len(inputs)} "
+                           f"sensors, {m} actuators (a baseline needs as many of each)")
     if kind.startswith("static"):
         h = control.ss([], [], [], [[1.0]], dt)
     elif kind.startswith("bandpass"):

@@ -41,11 +41,12 @@ from dataclasses import dataclass, field
 import control
 import numpy as np
 
+from trussid.plid.metrics import choose_predictor
 from trussid.plid.modal import assign_pairs
 
 from .errors import ControlError
+from .evaluate import damping_table
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
-from trussid.plid.metrics import choose_predictor
 
 FORMS = ("predictor", "filter")
 ESTIMATORS = ("record", "model")
@@ -103,7 +104,7 @@ def excited_band(u, fs: float, floor_db: float = -20.0) -> tuple[float, float]:
 
 
 def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping: float = 0.05,
-                 excited=None):
+                 excited=None, u_scale=None, y_scale=None, n_modes=None):
     """Indices of the target blocks of :func:`modal.real_modal_basis` and a table of all modes.
 
     Parameters
@@ -119,9 +120,20 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
         has spurious ones at 441-667 Hz, above its 400 Hz excitation).
     excited : (float, float), optional
         Band the identification record excited [Hz] (:func:`excited_band`).
+    n_modes : int, optional
+        Target the ``n_modes`` lightly damped modes with the largest residue (in ``band``
+        when given, else in the ``excited`` band) instead of all the dominant ones (or all
+        those in ``band``).
+    u_scale, y_scale : (m,), (p,) float, optional
+        Typical level of each input and output (the record's RMS) in their own units: the
+        residues are compared in these units, so that a shaker in N beside a PZT in V, or
+        an accelerometer beside a strain gauge, weigh as the experiment drove and saw them.
     """
     _, blocks = real_modal_basis(model.A)
-    md = modal_data(model.A, model.B, model.C, model.dt)
+    su = np.ones(model.ninputs) if u_scale is None else np.asarray(u_scale, dtype=float)
+    sy = np.ones(model.noutputs) if y_scale is None else np.asarray(y_scale, dtype=float)
+    md = modal_data(model.A, np.asarray(model.B) * su[None, :],
+                    np.asarray(model.C) / sy[:, None], model.dt)
     rows = []
     for k, (idx, lam) in enumerate(blocks):
         i = int(np.argmin(np.abs(md.poles - lam)))
@@ -134,10 +146,14 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
         if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
             raise ControlError(f"band: need 0 <= LO < HI [Hz], got {lo:g} {hi:g}")
         sel = [r["block"] for r in cand if lo <= r["frequency_hz"] <= hi]
+        if sel and n_modes is not None:
+            sel = sorted(sel, key=lambda b: -rows[b]["residue"])[:int(n_modes)]
         if not sel:
             near = ", ".join(f"{r['frequency_hz']:.1f}" for r in cand)
-            raise ControlError(f"band {lo:g}-{hi:g} Hz holds no lightly damped mode of the model "
-                              f"(its modes: {near} Hz)")
+            nyq = 0.5 / model.dt
+            above = f" (above the Nyquist frequency {nyq:g} Hz)" if lo >= nyq else ""
+            raise ControlError(f"band {lo:g}-{hi:g} Hz{above} holds no lightly damped mode of "
+                               f"the model (its modes: {near} Hz)")
     else:
         if excited is not None:
             cand = [r for r in cand if excited[0] <= r["frequency_hz"] <= excited[1]]
@@ -146,7 +162,10 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
                                + ("" if excited is None else
                                   f" in the excited band {excited[0]:.0f}-{excited[1]:.0f} Hz"))
         rmax = max(r["residue"] for r in cand)
-        sel = [r["block"] for r in cand if r["residue"] >= dominant_fraction * rmax]
+        if n_modes is not None:
+            sel = [r["block"] for r in sorted(cand, key=lambda r: -r["residue"])[:int(n_modes)]]
+        else:
+            sel = [r["block"] for r in cand if r["residue"] >= dominant_fraction * rmax]
     return sorted(sel, key=lambda b: rows[b]["frequency_hz"]), rows
 
 
@@ -154,7 +173,9 @@ def _mode_damping(Acl, T_blocks, n_modes, dt):
     """Damping of each design-model mode in a closed loop on the design model: each
     closed-loop pole (upper half plane) goes to the block holding most of its eigenvector."""
     lam, V = np.linalg.eig(Acl)
-    up = lam.imag > 0
+    # real poles count too: a block whose pair the feedback split into two real (overdamped)
+    # poles gets one of them, damping 1 (leaving it out left the block's damping NaN)
+    up = lam.imag >= 0
     lam, V = lam[up], V[:, up]
     share = np.array([[np.linalg.norm(V[idx, j]) for j in range(lam.size)] for idx in T_blocks])
     pole = assign_pairs(-share)
@@ -167,17 +188,18 @@ def _mode_damping(Acl, T_blocks, n_modes, dt):
 
 
 def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
-                    tol: float = 0.02):
+                    tol: float = 0.02, R=None):
     """State feedback ``u = -F x`` from :func:`control.dlqr` with a weight on each modal
     block, iterated so that every block's mode reaches damping ``target`` (relative ``tol``).
 
     A mode's state-feedback damping grows monotonically with its weight; each weight is
-    scaled by ``(target / zeta)^2`` (at most x10 per step) until all agree.
+    scaled by ``(target / zeta)^2`` (at most x10 per step) until all agree. ``R`` is the
+    input weight (default identity).
     """
     n, m = B.shape
-    R = np.eye(m)
+    R = np.eye(m) if R is None else np.asarray(R, dtype=float)
     # a starting weight of the size of the input matrix's effect
-    q = np.full(len(blocks), 1e-3 / max(np.linalg.norm(B, 2) ** 2, 1e-300))
+    q = np.full(len(blocks), 1e-3 * np.min(np.diag(R)) / max(np.linalg.norm(B, 2) ** 2, 1e-300))
     zeta = None
     for it in range(max_iter):
         Q = np.zeros((n, n))
@@ -188,6 +210,7 @@ def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
         F, _, _ = control.dlqr(A, B, Q, R, method="scipy")
         F = np.asarray(F)
         zeta = _mode_damping(A - B @ F, blocks, len(blocks), dt)
+        zeta = np.where(np.isfinite(zeta), zeta, 0.0)  # unassigned: treat as undamped
         # a mode already above the target with a vanishing weight needs no feedback
         done = (np.abs(zeta / target - 1) < tol) | ((zeta > target) & (q < 1e-12 * q.max()))
         if np.all(done):
@@ -198,7 +221,8 @@ def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
 
 def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
                form: str = "predictor", estimator: str = "record",
-               dominant_fraction: float = 0.25, K=None) -> LQGDesign:
+               dominant_fraction: float = 0.25, K=None, verify: bool = True,
+               min_fraction: float = 0.5, n_modes: int | None = None) -> LQGDesign:
     """Design a discrete LQG damping controller from an identified model and its record.
 
     Parameters
@@ -219,6 +243,13 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
         Residue fraction that makes a mode dominant (without ``band``).
     K : (n, p) float, optional
         The identified model's predictor gain (needed for ``estimator="model"``).
+    verify : bool
+        Close the loop on the whole ``model`` and refuse a design that is unstable there or
+        leaves a target mode below ``min_fraction`` of ``target_damping``
+        (:func:`verify_design`).
+    min_fraction : float
+    n_modes : int, optional
+        Target this many modes, those with the largest residue (:func:`select_modes`).
 
     Returns
     -------
@@ -247,8 +278,8 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     >>> print(np.round(loop.frequencies_hz, 1), np.round(100 * loop.damping, 1))
     [ 50.1  50.1 120.1 120.1] [4.9 5.  4.9 5. ]
     """
-    # One function over 80 lines: the four steps of the recipe (module docstring) in order,
-    # with the input checks before them; each step is a few lines calling a helper.
+    # Long: the four steps of the recipe (module docstring) in order, with the input checks
+    # before them and the check on the whole model after; each step calls a helper.
     if not (isinstance(target_damping, (int, float)) and 0 < target_damping < 1):
         raise ControlError(f"target damping must lie in (0, 1), got {target_damping!r}")
     if form not in FORMS:
@@ -261,12 +292,26 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     if u.shape[1] != model.ninputs or y.shape[1] != model.noutputs:
         raise ControlError(f"record has {u.shape[1]} inputs and {y.shape[1]} outputs; the model "
                           f"{model.ninputs} and {model.noutputs}")
+    D = np.asarray(model.D, dtype=float)
+    if form == "filter" and np.any(D != 0):
+        raise ControlError("the filter form needs a strictly proper model (its D is not zero: "
+                           "an algebraic loop with the plant's feed-through); use the "
+                           "predictor form")
     excited = excited_band(u, 1.0 / model.dt)
-    sel, rows = select_modes(model, band, dominant_fraction, excited=excited)
+    # Levels of the record's channels in their own units: residues and the LQR input weight
+    # (Bryson's rule, R = diag(1 / rms^2)) treat a shaker in N beside a PZT in V as the
+    # experiment drove them, instead of comparing a newton with a volt.
+    # The outputs are not rescaled: an accelerometer's RMS is that of its highest modes, and
+    # dividing by it would hide the low ones.
+    u_rms = _levels(u)
+    y_rms = _levels(y)
+    sel, rows = select_modes(model, band, dominant_fraction, excited=excited, u_scale=u_rms,
+                             n_modes=n_modes)
     dm, kept = modal_truncation(model, sel)
     A, B, C = (np.asarray(M, dtype=float) for M in (dm.A, dm.B, dm.C))
     blocks = [np.array([2 * k, 2 * k + 1]) for k in range(len(kept))]
-    F, q, zeta_sf, iters = lqr_for_damping(A, B, blocks, target_damping, model.dt)
+    F, q, zeta_sf, iters = lqr_for_damping(A, B, blocks, target_damping, model.dt,
+                                           R=np.diag(1.0 / u_rms**2))
     if estimator == "model":
         if K is None:
             raise ControlError("estimator 'model': the model file has no predictor gain K")
@@ -277,21 +322,24 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     else:
         Kd, _, kinfo = choose_predictor(dm, u, y)
         zeta_k = _mode_damping(A - Kd @ C, blocks, len(blocks), model.dt)
-        if np.nanmin(zeta_k) < 0.5 * target_damping:
+        # a NaN (a target mode with no estimator pole assigned) counts as a failure
+        if not np.all(zeta_k >= 0.5 * target_damping):
             # An estimator pole left lightly damped on a target mode rings in the closed loop
             # as the mode did (the best one-step predictor of a clean record can be slow).
             # Use the dual of the state-feedback tuning instead: a steady-state Kalman gain
             # whose predictor poles reach the target damping on every target mode.
-            Fd, _, _, _ = lqr_for_damping(A.T, C.T, blocks, target_damping, model.dt)
+            Fd, _, _, _ = lqr_for_damping(A.T, C.T, blocks, target_damping, model.dt,
+                                          R=np.diag(y_rms**2))
+            finite = zeta_k[np.isfinite(zeta_k)]
             kinfo = dict(kinfo, rejected=kinfo.get("chosen"),
-                         rejected_min_damping=float(np.nanmin(zeta_k)),
+                         rejected_min_damping=float(finite.min()) if finite.size else None,
                          chosen="dual of the damping tuning (the record's best predictor "
                                 "left a target mode below half the target damping)")
             Kd = Fd.T
     rho = np.max(np.abs(np.linalg.eigvals(A - Kd @ C)))
     if not rho < 1:
         raise ControlError(f"the estimator is unstable on the design model (pole magnitude {rho:.4f})")
-    ctrl = controller_matrices(A, B, C, F, Kd, form)
+    ctrl = controller_matrices(A, B, C, F, Kd, form, D=D)
     names_in, names_out = list(model.output_labels), list(model.input_labels)
     controller = control.ss(*ctrl, model.dt, inputs=names_in, outputs=names_out,
                             name=f"lqg_{form}")
@@ -300,20 +348,84 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
                for b, z, w in zip(sel, zeta_sf, q)]
     info = {"form": form, "estimator": estimator, "estimator_choice": kinfo,
             "target_damping": target_damping, "band": None if band is None else list(band),
-            "dominant_fraction": dominant_fraction, "lqr_iterations": iters,
+            "dominant_fraction": dominant_fraction, "n_modes": n_modes,
+            "lqr_iterations": iters,
             "excited_band_hz": list(excited),
             "design_states": int(A.shape[0]), "model_states": int(model.nstates),
             "estimator_min_damping": float(np.min(zeta_est)) if zeta_est.size else None,
+            "input_rms": u_rms.tolist(), "output_rms": y_rms.tolist(),
             "model_modes": rows}
-    return LQGDesign(controller, dm, F, Kd, form, targets, info)
+    des = LQGDesign(controller, dm, F, Kd, form, targets, info)
+    if verify:
+        info["on_model"] = verify_design(model, des, min_fraction=min_fraction)
+    return des
 
 
-def controller_matrices(A, B, C, F, K, form: str = "predictor"):
+def _levels(x) -> np.ndarray:
+    """RMS of each column about its mean; a constant column gets 1 (no level to scale by)."""
+    r = np.std(x, axis=0)
+    return np.where(r > 0, r, 1.0)
+
+
+def verify_design(model, design: LQGDesign, min_fraction: float = 0.5) -> dict:
+    """The designed controller on the whole model it was designed from: refuse a design that
+    is unstable there, or that leaves a target mode below ``min_fraction`` of the target
+    damping (:class:`ControlError` naming the pole or the mode).
+
+    The design model holds the target modes only; the modes it leaves out, the estimator
+    and the feed-through are all in this loop, so a design can fail here although its state
+    feedback reached every target.
+
+    Returns
+    -------
+    dict
+        ``spectral_radius`` and, per target mode, the worst visible closed-loop damping
+        (:func:`trussid.lqg.evaluate.damping_table`) on the model.
+    """
+    nyq = 0.5 / model.dt
+    tab = damping_table(model, design.controller, band=(0.0, nyq))
+    lam = tab["closed_loop_poles"]
+    if not tab["stable"]:
+        k = int(np.argmax(np.abs(lam)))
+        f, z = freq_damping(lam[k:k + 1], model.dt)
+        raise ControlError(
+            f"the design is unstable on the model it was designed from: closed-loop pole at "
+            f"{f[0]:.1f} Hz, damping {100 * z[0]:.2f} % (|z| = {abs(lam[k]):.4f}); try a lower "
+            f"--target-damping or a --band holding fewer modes")
+    target = design.info["target_damping"]
+    reached = []
+    for t in design.target_modes:
+        rows = tab["rows"]
+        r = min(rows, key=lambda r: abs(r["frequency_hz"] - t["frequency_hz"]))
+        reached.append(float(r["damping_worst_visible"]))
+    worst = int(np.argmin(reached)) if reached else None
+    if worst is not None and reached[worst] < min_fraction * target:
+        t = design.target_modes[worst]
+        raise ControlError(
+            f"the design falls short on the model it was designed from: the "
+            f"{t['frequency_hz']:.1f} Hz target mode reaches {100 * reached[worst]:.2f} % "
+            f"damping, less than {100 * min_fraction:g} % of the {100 * target:.1f} % asked "
+            f"(the other targets: "
+            + ", ".join(f"{x['frequency_hz']:.1f} Hz {100 * z:.2f} %"
+                        for x, z in zip(design.target_modes, reached) if x is not t)
+            + "); try another --band or --target-damping")
+    return {"spectral_radius": tab["spectral_radius"], "target_damping_reached": reached}
+
+
+def controller_matrices(A, B, C, F, K, form: str = "predictor", D=None):
     """``(Ac, Bc, Cc, Dc)`` of ``u = controller(y)`` for the LQG with state feedback ``F`` and
-    one-step predictor gain ``K`` (module docstring)."""
+    one-step predictor gain ``K`` (module docstring) of a model with feed-through ``D``
+    (default none): the innovation is ``y - C xhat - D u``."""
+    m, p = F.shape[0], C.shape[0]
+    D = np.zeros((p, m)) if D is None else np.asarray(D, dtype=float)
     if form == "predictor":
-        return A - B @ F - K @ C, K, -F, np.zeros((F.shape[0], C.shape[0]))
+        # xhat+ = A xhat + B u + K (y - C xhat - D u), u = -F xhat
+        return A - B @ F - K @ (C - D @ F), K, -F, np.zeros((m, p))
     L = np.linalg.solve(A, K)  # filter gain from the predictor gain (K = A L)
-    ABF = A - B @ F
+    # xf = xhat + L (y - C xhat - D u), u = -F xf  =>  (I - F L D) u = -F (I - L C) xhat - F L y
+    G = np.linalg.inv(np.eye(m) - F @ L @ D)
     IminusLC = np.eye(A.shape[0]) - L @ C
-    return ABF @ IminusLC, ABF @ L, -F @ IminusLC, -F @ L
+    Cc, Dc = -G @ F @ IminusLC, -G @ F @ L
+    # xhat+ = A xf + B u = (A - K C) xhat + K y + (B - K D) u
+    BKD = B - K @ D
+    return A - K @ C + BKD @ Cc, K + BKD @ Dc, Cc, Dc

@@ -22,6 +22,44 @@ from .errors import ControlError
 from .modal import freq_damping, modal_data
 
 
+
+#: Prefixes trussid's CSV convention puts on channel names (``u_shaker``, ``y_acc_tip_z``).
+CSV_PREFIXES = ("u_", "y_")
+
+
+def match_names(plant, controller):
+    """``controller`` with its channel names matched to ``plant``'s, and the renames made.
+
+    A model identified from a CSV record carries the record's column names (``y_acc``,
+    ``u_shaker``: :mod:`trussid.plid.datafile`'s convention), so its controller does too;
+    each name that is not a plant channel but is one without its ``u_``/``y_`` prefix is
+    renamed. Names that match neither way are left for :func:`check_pair` to refuse.
+
+    Returns
+    -------
+    controller : control.StateSpace
+    renamed : list of (str, str)
+    """
+    p_in, p_out = set(plant.input_labels), set(plant.output_labels)
+
+    def fix(names, known, prefix):
+        out, ren = [], []
+        for n in names:
+            if n not in known and n.startswith(prefix) and n[len(prefix):] in known:
+                ren.append((n, n[len(prefix):]))
+                n = n[len(prefix):]
+            out.append(n)
+        return out, ren
+
+    ins, r1 = fix(list(controller.input_labels), p_out, "y_")
+    outs, r2 = fix(list(controller.output_labels), p_in, "u_")
+    if not (r1 or r2):
+        return controller, []
+    c = control.ss(controller.A, controller.B, controller.C, controller.D, controller.dt,
+                   inputs=ins, outputs=outs, name=controller.name)
+    return c, r1 + r2
+
+
 def check_pair(plant, controller, label: str = "plant") -> None:
     """Refuse a controller that cannot close a loop around ``plant`` (names, sizes, dt),
     with one line naming the item; ``label`` names the plant in the message."""
@@ -316,11 +354,14 @@ def disk_margins(plant, controller, f=None) -> dict:
 # --------------------------------------------------------------------------- time domain
 
 
-def simulate_loop(plant, controller, d, noise_rms, *, bits: int, dac_full_scale,
+def simulate_loop(plant, controller, d, noise_rms, *, bits: int | None, dac_full_scale,
                   adc_full_scale, seed: int = 0) -> dict:
     """Closed loop in the time domain with quantising, clipping converters and sensor noise.
 
-    ``y_meas = ADC(C xp + n)``, ``u = controller(y_meas)``, the D/A sends ``DAC(u + d)``.
+    ``y_meas = ADC(C xp + D v + n)``, ``u = controller(y_meas)``, the D/A sends
+    ``v = DAC(u + d)``. A plant feed-through ``D`` (accelerometers) is taken with a
+    controller without one (then the command of sample k comes first, the measurement it
+    moves after it); both having one is an algebraic loop, refused.
 
     Parameters
     ----------
@@ -328,8 +369,9 @@ def simulate_loop(plant, controller, d, noise_rms, *, bits: int, dac_full_scale,
         Disturbance added to the command at the D/A [V] (e.g. the demo's excitation).
     noise_rms : float or (p,) float
         White sensor noise RMS [V].
-    bits : int
-        D/A and A/D resolution (the lab's; no default).
+    bits : int or None
+        D/A and A/D resolution (the lab's; no default); ``None``: ideal converters (no
+        quantising, no clipping).
     dac_full_scale, adc_full_scale : float or per-channel array
         Converter ranges +-V (the lab's; no default).
 
@@ -343,30 +385,43 @@ def simulate_loop(plant, controller, d, noise_rms, *, bits: int, dac_full_scale,
     iu, iy = _check_pair(plant, controller)
     Ap, Bp, Cp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C))
     Bu, Cy = Bp[:, iu], Cp[iy]
-    if np.any(np.asarray(plant.D)[np.ix_(iy, iu)] != 0):
-        raise ControlError("time simulation needs a strictly proper plant (discrete plants from "
-                        "the lab chain are)")
+    Dyu = np.asarray(plant.D, dtype=float)[np.ix_(iy, iu)]
     Ac, Bc, Cc, Dc = (np.asarray(M, dtype=float) for M in
                       (controller.A, controller.B, controller.C, controller.D))
+    command_first = not np.any(Dc != 0)  # _check_pair refused Dc and Dyu both non-zero
     d = np.asarray(d, dtype=float)
     N, m, p = d.shape[0], len(iu), len(iy)
     rng = np.random.default_rng(seed)
     noise = rng.standard_normal((N, p)) * np.broadcast_to(np.asarray(noise_rms, float), (p,))
-    lsb_a = 2.0 * np.broadcast_to(np.asarray(adc_full_scale, float), (p,)) / 2**bits
-    lsb_d = 2.0 * np.broadcast_to(np.asarray(dac_full_scale, float), (m,)) / 2**bits
-    lo, hi = -(2 ** (bits - 1)), 2 ** (bits - 1) - 1
+    if bits is not None:
+        lsb_a = 2.0 * np.broadcast_to(np.asarray(adc_full_scale, float), (p,)) / 2**bits
+        lsb_d = 2.0 * np.broadcast_to(np.asarray(dac_full_scale, float), (m,)) / 2**bits
+    if bits is None:  # ideal converters: no quantising, no clipping
+        lsb_a, lsb_d = np.ones(p), np.ones(m)
+        lo, hi = -np.inf, np.inf
+        rnd = np.asarray
+    else:
+        lo, hi = -(2 ** (bits - 1)), 2 ** (bits - 1) - 1
+        rnd = np.round
     xp, xc = np.zeros(Ap.shape[0]), np.zeros(Ac.shape[0])
     Y, U, V = np.empty((N, p)), np.empty((N, m)), np.empty((N, m))
     clip_a, clip_d = np.zeros(p, int), np.zeros(m, int)
     # A sample-by-sample loop: the converters are not linear, so lsim cannot do it.
     for k in range(N):
-        ca = np.round((Cy @ xp + noise[k]) / lsb_a)
+        if command_first:
+            uk = Cc @ xc
+            cd = rnd((uk + d[k]) / lsb_d)
+            v = np.clip(cd, lo, hi) * lsb_d
+            ca = rnd((Cy @ xp + Dyu @ v + noise[k]) / lsb_a)
+            ym = np.clip(ca, lo, hi) * lsb_a
+        else:
+            ca = rnd((Cy @ xp + noise[k]) / lsb_a)
+            ym = np.clip(ca, lo, hi) * lsb_a
+            uk = Cc @ xc + Dc @ ym
+            cd = rnd((uk + d[k]) / lsb_d)
+            v = np.clip(cd, lo, hi) * lsb_d
         clip_a += (ca < lo) | (ca > hi)
-        ym = np.clip(ca, lo, hi) * lsb_a
-        uk = Cc @ xc + Dc @ ym
-        cd = np.round((uk + d[k]) / lsb_d)
         clip_d += (cd < lo) | (cd > hi)
-        v = np.clip(cd, lo, hi) * lsb_d
         xp = Ap @ xp + Bu @ v
         xc = Ac @ xc + Bc @ ym
         Y[k], U[k], V[k] = ym, uk, v

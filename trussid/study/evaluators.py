@@ -28,8 +28,20 @@ from dataclasses import dataclass
 import numpy as np
 import pyarrow as pa
 
+from trussid.geometry.params_toml import testbed_from_dict
+from trussid.geometry.spec import Testbed
+from trussid.plid.estimator import PLIDWarning
+from trussid.plid.evaluate import compare
 from trussid.plid.frf import frequency_response
+from trussid.plid.multipass import identify, identify_reduced
+from trussid.plid.subspace import n4sid
+from trussid.study.deck import DeckModesEvaluator
 from trussid.study.errors import StudyError
+from trussid.study.plants import PLANTS, record
+from trussid.testbed.labels import label_testbed_modes
+from trussid.testbed.model import build_testbed, design_at_walls, wall_basis, wall_modes
+from trussid.testbed.plant import testbed_plant
+from trussid.testbed.sensitivity import wall_sensitivities
 
 WALLS = tuple(f"wall{i}" for i in range(6))
 
@@ -113,9 +125,6 @@ def _context(name: str, options_json: str):
 
 # ----------------------------------------------------------------------------- testbed
 def _testbed_of(options):
-    from trussid.geometry.params_toml import testbed_from_dict
-    from trussid.geometry.spec import Testbed
-
     tb = options.get("testbed")
     return Testbed() if not tb else testbed_from_dict(tb, source="[evaluate] testbed")
 
@@ -192,20 +201,13 @@ class ModesEvaluator(Evaluator):
         return cols
 
     def build_context(self, options):
-        from trussid.testbed.model import build_testbed, wall_basis
-
         tbm = build_testbed(_testbed_of(options))
         return WallContext(tbm=tbm, basis=wall_basis(tbm))
 
     def modes(self, ctx, walls, n):
-        from trussid.testbed.model import wall_modes
-
         return wall_modes(ctx.basis, walls, n)
 
     def point(self, ctx, params, options):
-        from trussid.testbed.labels import label_testbed_modes
-        from trussid.testbed.model import design_at_walls
-
         opts = self.resolved(options)
         w = ctx.basis.check_walls(_walls(ctx, params))
         if not opts["labels"]:
@@ -236,8 +238,6 @@ class SensitivitiesEvaluator(ModesEvaluator):
                 + [(f"dfdt{k + 1}_{i}", pa.float64()) for k in range(n) for i in range(6)])
 
     def point(self, ctx, params, options):
-        from trussid.testbed.sensitivity import wall_sensitivities
-
         n = self.resolved(options)["n_modes"]
         with warnings.catch_warnings():
             # a repeated pair is a property of the design, reported by its values
@@ -278,8 +278,6 @@ class PlantEvaluator(Evaluator):
 
     def point(self, ctx, params, options):
         import scipy.linalg as la
-
-        from trussid.testbed.plant import testbed_plant
 
         opts = self.resolved(options)
         walls = np.array(ctx.tb.struts.walls, float)
@@ -365,8 +363,6 @@ class IdentifyEvaluator(Evaluator):
     default_chunk = 1
 
     def check_options(self, options, where):
-        from trussid.study.plants import PLANTS
-
         if options["plant"] not in PLANTS:
             raise StudyError(f"{where}: [evaluate] plant {options['plant']!r} is unknown "
                              f"(expected one of {', '.join(PLANTS)})")
@@ -387,17 +383,10 @@ class IdentifyEvaluator(Evaluator):
             ("stable", pa.bool_()), ("block_rows", pa.int64())]
 
     def build_context(self, options):
-        from trussid.study.plants import PLANTS
-
         return CaseContext(case=PLANTS[options["plant"]]())
 
     def point(self, ctx, params, options):
         import time
-
-        from trussid.plid.estimator import PLIDWarning
-        from trussid.plid.multipass import identify, identify_reduced
-        from trussid.plid.subspace import n4sid
-        from trussid.study.plants import record
 
         p = {**{k: v for k, v in self.resolved(options).items() if k in self.parameters}, **params}
         opts = self.resolved(options)
@@ -429,15 +418,14 @@ class IdentifyEvaluator(Evaluator):
             else:
                 ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1], progress=False)
         out = _score(ident.model, case, val, time.perf_counter() - t0, opts, K=ident.K)
-        out["block_rows"] = (ident.provenance.subspace or {}).get("block_rows") or -1
+        sub = ident.provenance.subspace
+        out["block_rows"] = sub.block_rows if sub is not None else -1
         return out
 
 
 def _score(model, case, val, seconds, opts, K=None) -> dict:
     """The row of one fit, from :func:`trussid.plid.evaluate.compare` (the evaluator of
     ``trussid compare``, the demo and the benchmarks) on the validation record."""
-    from trussid.plid.evaluate import compare
-
     c = compare(model, case.plant, u=val.data.u, y=val.data.y, y_clean=val.y_clean, K=K,
                 band=tuple(opts["band"]))
     lo, hi = opts["mode_band"]
@@ -457,7 +445,7 @@ def _score(model, case, val, seconds, opts, K=None) -> dict:
 
 
 EVALUATORS = {e.name: e for e in (ModesEvaluator(), SensitivitiesEvaluator(), PlantEvaluator(),
-                                  IdentifyEvaluator())}
+                                  IdentifyEvaluator(), DeckModesEvaluator())}
 
 
 def get_evaluator(name: str, where: str = "spec") -> Evaluator:

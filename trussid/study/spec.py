@@ -4,7 +4,7 @@ A study is plain data (:class:`StudySpec`), written in TOML or built in Python::
 
     [study]
     name = "wall-study"
-    evaluate = "modes"          # modes | sensitivities | plant | identify
+    evaluate = "modes"          # modes | sensitivities | plant | identify | deck (any deck)
     chunk = 20                  # points per task (engine granularity; no effect on results)
 
     [evaluate]                  # options of the evaluator (evaluators.EVALUATORS)
@@ -185,7 +185,8 @@ def spec_from_dict(d: dict, where: str = "spec") -> StudySpec:
     if bad:
         raise StudyError(f"{where}: [study]: unknown key {sorted(bad)[0]!r} (expected name, evaluate, chunk)")
     if "evaluate" not in st:
-        raise StudyError(f"{where}: [study] needs evaluate = one of modes, sensitivities, plant, identify")
+        raise StudyError(f"{where}: [study] needs evaluate = one of modes, sensitivities, plant, identify, "
+                         "deck")
     chunk = st.get("chunk")
     if chunk is not None and (not isinstance(chunk, int) or isinstance(chunk, bool) or chunk < 1):
         raise StudyError(f"{where}: [study] chunk must be a positive integer, got {chunk!r}")

@@ -4,7 +4,8 @@
   model and the map of what is what), the wall-thickness basis and sweeps;
 - :mod:`.labels` - each mode named by where its energy sits;
 - :mod:`.sensitivity` - analytic frequency sensitivities to each strut's wall;
-- :mod:`.chain` - the lab's electronics (amplifier, filters, converters);
+- :mod:`.chain` - the lab's electronics (amplifier, filters), from its
+  :class:`trussid.geometry.lab.LabSpec`;
 - :mod:`.plant` - :func:`testbed_plant`, D/A volts in, accelerometer volts out;
 - :mod:`.render` - the testbed's solids riding on its FE nodes.
 
@@ -16,7 +17,7 @@ from trussid._util.lazy import lazy_exports
 _LAZY = {
     "TestbedMap": "model", "TestbedModel": "model", "build_testbed": "model",
     "solve_testbed_modes": "model", "WallBasis": "model", "wall_basis": "model",
-    "wall_matrices": "model", "wall_modes": "model",
+    "wall_matrices": "model", "wall_modes": "model", "design_at_walls": "model",
     "ModeLabels": "labels", "label_testbed_modes": "labels",
     "wall_sensitivities": "sensitivity", "testbed_sensitivities": "sensitivity",
     "LabChain": "chain", "lab_plant": "chain",

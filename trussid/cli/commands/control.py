@@ -24,7 +24,10 @@ def add_parser(subparsers):
         "modes (or those in --band), from the model and its identification record only. "
         "The design model is the identified model restricted to the target modes; the "
         "estimator gain is chosen on the record; the state feedback is tuned so that the "
-        "target modes reach --target-damping. Writes CONTROLLER.npz (u = controller(y)).")
+        "target modes reach --target-damping. The design is then closed around the whole "
+        "identified model: one that is unstable there, or leaves a target mode below half "
+        "--target-damping, is refused (exit 2, naming the pole or mode). Writes "
+        "CONTROLLER.npz (u = controller(y)).")
     p.add_argument("model", metavar="MODEL.npz", help="identified discrete model file")
     p.add_argument("--data", required=True, metavar="ID.npz",
                    help="the identification record of the model (.npz, .csv or .mat; "
@@ -35,7 +38,11 @@ def add_parser(subparsers):
                    "(default 0.07: the estimator and the model error take some away)")
     p.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"),
                    help="target every lightly damped mode in this band [Hz] (default: the "
-                   "dominant modes, residue >= 25 %% of the largest, in the excited band)")
+                   "dominant modes, residue >= 25 %% of the largest with each input at its "
+                   "record's RMS, in the band the record excited)")
+    p.add_argument("--modes", type=int, metavar="N",
+                   help="target the N modes with the largest residue (in --band when given, "
+                   "else in the band the record excited) instead of every dominant one")
     p.add_argument("--form", choices=FORMS, default="predictor",
                    help="predictor: u[k] from y up to k-1 (one sample to compute, as the "
                    "thesis's PC); filter: u[k] from y[k] (no computation time)")
@@ -43,7 +50,8 @@ def add_parser(subparsers):
                    help="estimator gain: a Kalman gain chosen on the record for the design "
                    "model (default), or the model file's own K projected on the target modes")
     p.add_argument("--no-baselines", action="store_true",
-                   help="do not tune the decentralised baselines")
+                   help="do not tune the decentralised baselines (they are tuned only when "
+                   "the model has as many sensors as actuators)")
     p.set_defaults(func=run)
     return p
 
@@ -61,6 +69,8 @@ def run(args) -> int:
         raise UserError(f"--out {args.out}: the controller file must end in .npz")
     if not (math.isfinite(args.target_damping) and 0 < args.target_damping < 1):
         raise UserError(f"--target-damping must lie in (0, 1), got {args.target_damping:g}")
+    if args.modes is not None and args.modes < 1:
+        raise UserError(f"--modes must be a positive integer, got {args.modes}")
     model, meta = load_model(args.model, which="discrete")
     data = read_data(args.data, inputs=meta["input_names"], outputs=meta["output_names"])
     if not math.isclose(data.fs, 1.0 / meta["dt"], rel_tol=1e-6):
@@ -68,7 +78,8 @@ def run(args) -> int:
                         f"{1.0 / meta['dt']:g} Hz")
     des, base, timings = design_controller(
         model, data.u, data.y, K=meta["K"], target_damping=args.target_damping,
-        band=args.band, form=args.form, baselines=not args.no_baselines, progress=print)
+        band=args.band, form=args.form, baselines=not args.no_baselines, progress=print,
+        n_modes=args.modes)
     info = json_safe({"form": des.form, "target_modes": des.target_modes,
                       "info": {k: v for k, v in des.info.items() if k != "model_modes"},
                       "model": str(args.model), "data": str(args.data), "timings_s": timings})
@@ -84,8 +95,12 @@ def run(args) -> int:
     print(f"controller: {c.nstates} states, {c.ninputs} sensors ({', '.join(c.input_labels)}) "
           f"-> {c.noutputs} actuators ({', '.join(c.output_labels)}), {des.form} form, "
           f"dt {c.dt:g} s")
-    for t in des.target_modes:
+    reached = des.info.get("on_model", {}).get("target_damping_reached") or [None] * len(
+        des.target_modes)
+    for t, z in zip(des.target_modes, reached):
+        on_model = "" if z is None else f", closed loop on the model {100 * z:.2f} %"
         print(f"  target {t['frequency_hz']:7.1f} Hz: identified damping "
-              f"{100 * t['damping']:.3f} %, state feedback {100 * t['state_feedback_damping']:.2f} %")
+              f"{100 * t['damping']:.3f} %, state feedback "
+              f"{100 * t['state_feedback_damping']:.2f} %{on_model}")
     print(f"written: {args.out}")
     return 0

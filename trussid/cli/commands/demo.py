@@ -1,9 +1,14 @@
-"""``trussid demo [--out DIR] [--quick]``: the main job, end to end on the default testbed.
+"""``trussid demo [MODEL] [--io IO.toml] [--lab LAB.toml] [--out DIR] [--quick]``: the main
+job, end to end, on the default testbed or on any structure.
 
-Default testbed -> modes -> plant (1600 Hz, 12-bit converters, sensor noise) -> simulated
-identification and validation records -> PLID (one SIMO model per actuator channel and a
-MIMO model) -> comparison against the true plant and the H1 estimate -> a report directory
-(``report.md``, PNG figures, ``summary.json``, the data and model files). The campaign is
+Structure -> modes -> plant (sample rate, converters, sensor noise from the lab) ->
+simulated identification and validation records -> PLID (one SIMO model per actuator
+channel and a MIMO model) -> comparison against the true plant and the H1 estimate -> LQG
+on the MIMO model, closed on the true plant -> a report directory (``report.md``, PNG
+figures, ``summary.json``, the data and model files). MODEL: none (the default testbed), a
+testbed parameter file (.toml) or a NASTRAN deck with ``--io``; for a deck the experiment
+(band, levels, record lengths, orders) is derived from its modes and sample rate
+(:func:`trussid.campaign.demo.derived_settings`) and each can be given. The campaign is
 :mod:`trussid.campaign.demo`; ``--quick`` is :func:`trussid.campaign.demo.demo_settings` ``(True)``.
 """
 
@@ -17,13 +22,34 @@ DEFAULT_OUT = "trussid-report"
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
-        "demo", help="the main job: identify the simulated testbed and write a report",
-        description="Run the simulated identification campaign on the default testbed: one "
+        "demo", help="the main job: identify a simulated structure and write a report",
+        description="Run the simulated identification campaign on the default testbed (or "
+        "on MODEL: a testbed file, or a NASTRAN deck with --io, whose experiment is derived "
+        "from its modes and sample rate): one "
         "SIMO PLID model (30 states) per actuator channel and one MIMO model (36 states), "
         "each compared with the true plant, the H1 estimate and validation data. Writes "
         "report.md, PNG figures, summary.json and the data and model files into DIR. "
         "--quick keeps only the channel-1 SIMO model (30 states) and an 18-state MIMO "
         "model, on shorter records (6000 + 4000 samples instead of 16000 + 8000).")
+    p.add_argument("model", nargs="?", metavar="MODEL",
+                   help="a NASTRAN deck (with --io) or a testbed parameter file (.toml); "
+                   "default: the default testbed")
+    p.add_argument("--io", metavar="IO.toml",
+                   help="actuators, sensors and [plant] sample rate and damping of a deck "
+                   "(the format of trussid plant --io)")
+    p.add_argument("--lab", metavar="LAB.toml",
+                   help="the lab of a deck's campaign, a lab file (trussid.geometry.lab."
+                   "LabSpec: [daq] sample_rate, bits, full_scale); default: the IO file's "
+                   "[plant] fs with 12-bit +-10 converters; sensor noise 60 dB under each "
+                   "output")
+    p.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="excitation band [Hz] (default: the testbed's 0-400 Hz; a deck's "
+                   "0 to 0.4 of the sample rate)")
+    p.add_argument("--order", type=int, metavar="N",
+                   help="MIMO (and SIMO) model order (default: the testbed's 36 / 30; a "
+                   "deck's twice its modes in the excitation band)")
+    p.add_argument("--samples", type=int, metavar="N",
+                   help="samples of each identification record (validation: half)")
     p.add_argument("--out", default=DEFAULT_OUT, metavar="DIR",
                    help=f"report directory (default {DEFAULT_OUT}/)")
     p.add_argument("--quick", action="store_true",
@@ -38,19 +64,72 @@ def add_parser(subparsers):
     return p
 
 
-def run(args) -> int:
-    from trussid.campaign.demo import demo_settings, run_demo
+def _overrides(args) -> dict:
+    from trussid._util.errors import UserError
 
-    overrides = {} if args.seed is None else {"seed": args.seed}
-    settings = demo_settings(args.quick, **overrides)
+    kw = {} if args.seed is None else {"seed": args.seed}
+    if args.band is not None:
+        lo, hi = args.band
+        if not 0 <= lo < hi:
+            raise UserError(f"--band needs 0 <= LO < HI [Hz], got {lo:g} {hi:g}")
+        kw["excitation_band"] = (lo, hi)
+    if args.order is not None:
+        if args.order < 1:
+            raise UserError(f"--order must be a positive integer, got {args.order}")
+        kw.update(mimo_order=args.order, simo_order=args.order)
+    if args.samples is not None:
+        if args.samples < 500:
+            raise UserError(f"--samples must be at least 500, got {args.samples}")
+        kw.update(n_identification=args.samples, n_validation=max(args.samples // 2, 500))
+    return kw
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from trussid._util.errors import UserError
+    from trussid.campaign.demo import demo_settings, derived_settings, run_demo
+
+    overrides = _overrides(args)
+    out = Path(args.out)  # refused before any computation (run_demo checks it again)
+    if out.exists() and (not out.is_dir() or not args.force):
+        raise UserError(f"--out {out} exists" + (" and is not a directory" if not out.is_dir()
+                        else "; give --force to replace it (it is replaced only once the "
+                        "new report is complete)"))
     t0 = time.perf_counter()
 
     def say(msg):
         print(f"[{time.perf_counter() - t0:6.1f} s] {msg}", flush=True)
 
+    plant = testbed = None
+    suffix = Path(args.model).suffix.lower() if args.model else ""
+    if args.model and suffix != ".toml":
+        from trussid.campaign.structure import deck_campaign_plant
+        from trussid.cli.loaders import BULK_SUFFIXES
+
+        if suffix not in BULK_SUFFIXES:
+            raise UserError(f"{args.model}: give a NASTRAN deck ({', '.join(BULK_SUFFIXES)}) "
+                            f"with --io, or a testbed parameter file (.toml)")
+        if not args.io:
+            raise UserError(f"{args.model}: a deck needs --io IO.toml (its actuators and "
+                            f"sensors)")
+        say(f"reading {args.model} with {args.io} ...")
+        plant = deck_campaign_plant(args.model, args.io, args.lab)
+        settings = derived_settings(plant, args.quick, **overrides)
+    else:
+        if args.io or args.lab:
+            raise UserError("--io and --lab apply to a NASTRAN deck MODEL; the testbed's lab "
+                            "is in its parameter file")
+        if args.model:
+            from trussid.cli.loaders import testbed_spec
+
+            testbed = testbed_spec(args.model)
+        settings = demo_settings(args.quick, **overrides)
+
     import shlex
 
-    summary = run_demo(args.out, settings, progress=say, force=args.force,
+    summary = run_demo(args.out, settings, progress=say, force=args.force, plant=plant,
+                       testbed=testbed,
                        command="trussid " + " ".join(
                            shlex.quote(a) for a in getattr(args, "argv", sys.argv[1:])))
     print()

@@ -66,7 +66,8 @@ def add_parser(subparsers):
                    "'t [ms]'; # comments), .npz, .mat or .uff/.unv (UFF 58 time histories)")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--order", type=int, metavar="N",
-                      help="model order (number of states; a multiple of the number of outputs)")
+                      help="model order (number of states): any order; one that is not a multiple of the "
+                      "outputs is identified at the next multiple and reduced to it")
     what.add_argument("--orders", metavar="LO:HI:STEP",
                       help="order selection instead of one model: identify at each order "
                       "LO, LO+STEP, ... HI (multiples of the number of outputs) on the first "

@@ -20,7 +20,8 @@ from trussid._util.jsonio import dumps
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        "plant", help="build the testbed's state-space plant (PZT volts in, accelerometer volts out)",
+        "plant", help="build a state-space plant: the testbed's (PZT volts in, accelerometer volts "
+        "out) or a deck's with --io",
         description="Build the control-ready plant of a testbed: modes by finite elements, PZT "
         "strain actuators (3 channels, each driving the two struts that share a top vertex), "
         "accelerometers at the UDF corners, the lab's smoothing filter, amplifier and converters, "
@@ -72,7 +73,7 @@ def run(args) -> int:
     if args.io is not None:
         return run_io(args, out)
     if args.conventions is not None:
-        raise UserError("--conventions applies to a NASTRAN deck (with --io), not to a testbed")
+        raise UserError("--conventions applies to a NASTRAN deck given with --io IO.toml, not to a testbed")
     if args.model is not None and Path(args.model).suffix.lower() != ".toml":
         raise UserError(f"{args.model}: a plant needs actuators and sensors: give them with "
                         "--io IO.toml for a NASTRAN deck, or a testbed parameter file (.toml), "

@@ -10,6 +10,13 @@ study DIR`` resumes the study stored in DIR; ``--report`` writes DIR/_report/.
 
 from __future__ import annotations
 
+import re
+
+
+def _plain(text: str) -> str:
+    """The module docstring's reST as --help shows it: ``code`` and :role:`target` bare."""
+    return re.sub(r":\w+:`([^`]*)`", r"\1", text).replace("``", "")
+
 import json
 import sys
 from pathlib import Path
@@ -17,7 +24,8 @@ from pathlib import Path
 
 def add_parser(sub) -> None:
     p = sub.add_parser("study", help="run a design study / identification campaign (Dask); report on one",
-                       description=__doc__.split("\n\n")[0] + "\n\n" + __doc__.split("\n\n")[1],
+                       description=_plain(__doc__.split("\n\n")[0] + "\n\n"
+                                          + __doc__.split("\n\n")[1]),
                        formatter_class=__import__("argparse").RawDescriptionHelpFormatter)
     p.add_argument("spec", metavar="SPEC.toml|DIR", help="study spec (TOML), or a study output directory")
     p.add_argument("--out", metavar="DIR", help="output directory (a Parquet dataset); required with a spec")

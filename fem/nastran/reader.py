@@ -1,223 +1,32 @@
-"""NASTRAN bulk data in and out, through pyNastran.
-
-:func:`read_bdf` maps a bulk-data deck onto a :class:`trussid.fem.Model` and reports, in a
-:class:`BdfInfo`, every choice that changes the answer (mass formulation, WTMASS, beam
-theory, SPC set, eigenvalue request, AUTOSPC). :func:`write_bdf` writes a model back as a
-deck that NASTRAN can run and that :func:`read_bdf` re-reads to the same model.
-
-The deck is parsed by pyNastran (``pyNastran.bdf.bdf.BDF``), so the card formats (small,
-large and free field, continuations, INCLUDE) are pyNastran's. pyNastran's own element
-matrices are not used: this module only translates cards into the model's arrays.
-
-Conventions that matter
------------------------
-* Units are the deck's: numbers are used as given, except that every mass (densities,
-  non-structural mass, CONM2 mass and inertia) is multiplied by ``PARAM,WTMASS``.
-* Mass formulation: NASTRAN's default is lumped mass; ``PARAM,COUPMASS`` > 0 selects the
-  coupled (consistent) mass.
-* PBAR/PBEAM ``I1`` is the second moment for bending in plane 1 (the element x-y plane, which
-  contains the orientation vector v), i.e. about the element z axis: ``Iz = I1``,
-  ``Iy = I2``. Shear areas are ``K1 A`` (along y) and ``K2 A`` (along z).
-* Shear flexibility follows NASTRAN: PBAR without K1/K2 has none (infinite shear area);
-  PBEAM has K1 = K2 = 1.0 by default (0.0 means none); PBARL/PBEAML compute shear
-  factors from the shape: ROD 0.9 as recent NASTRAN builds convert it, the other shapes the
-  Cowper factors of :mod:`trussid.fem.sections` (whose torsion constants are used too). The
-  model is Timoshenko when any CBAR/CBEAM has a finite shear area, else Euler-Bernoulli.
-* Element mass follows NASTRAN where it differs from :mod:`trussid.fem.elements` (lumped
-  CBEAM torsional inertia, coupled CROD, CBAR and shear-flexible CBEAM mass): see
-  :func:`_nastran_mass_conventions`; these were found on real NASTRAN output.
-* Displacement systems (GRID CD, rectangular, cylindrical or spherical) become node frames
-  of the model (:meth:`trussid.fem.Model.set_node_frames`): supports, scalar masses and
-  springs, rigid elements, MPCs and OP2 results refer to them, as in NASTRAN.
-* CONM2 inertia: the deck gives I11, I21, I22, I31, I32, I33 with the products of inertia as
-  positive integrals (I21 = int x1 x2 dm); NASTRAN supplies the minus signs, so the tensor
-  is ``[[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]]`` (MSC/Autodesk QRG, CONM2
-  remark on the form of the inertia matrix).
-"""
+"""Translation of a parsed deck into a :class:`trussid.fem.Model` (:func:`read_bdf`)."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
 import os
-import re
+import warnings
 from collections import defaultdict
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from trussid.fem.errors import ModelError
-from trussid.fem.model import Model
-from trussid.fem.sections import Section
-from trussid._util.files import atomic_path
 from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transform
 from trussid.fem.elements import frame_matrices, local_axes, to_global
+from trussid.fem.errors import ModelError, UnitsWarning
+from trussid.fem.materials import wave_speed_problem
+from trussid.fem.model import Model
+from trussid.fem.sections import Section
+from trussid.fem.nastran.matrices import add_direct_matrices
+from trussid.fem.nastran.preload import add_preload_stiffness
+from trussid.fem.nastran.entries import SECTION_TYPES
+from trussid.fem.nastran.conventions import (BAR_SHEAR_FACTOR, CONVENTIONS, ROD_SHEAR_FACTOR,
+                                             _nastran_mass_conventions)
+from trussid.fem.nastran.deck import (_is_preload_run, BdfInfo, _card_lines, _case_has, _case_values, _check_cards,
+                                      _comps, _ints, _nastran_value, _parse, _raw_cards,
+                                      _raw_fields, _read_params, _select_eigen)
 
-__all__ = ["SUPPORTED_CARDS", "RAW_CARDS", "IGNORED_CARDS", "THERMAL_CARDS", "HANDLED_PARAMS",
-           "OUTPUT_PARAMS", "ROD_SHEAR_FACTOR", "SECTION_TYPES", "EigenRequest", "BdfInfo",
-           "read_bdf", "coord_axes", "offset_spring_matrix", "write_bdf"]
-
-#: Bulk-data cards :func:`read_bdf` translates.
-SUPPORTED_CARDS = frozenset({
-    "GRID", "GRDSET", "CORD1R", "CORD2R", "CORD1C", "CORD2C", "CORD1S", "CORD2S",
-    "CBAR", "CBEAM", "CROD", "CONROD", "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PTUBE",
-    "MAT1", "CONM2", "CMASS1", "CMASS2", "PMASS", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH",
-    "RBE2", "RBE3", "RBAR", "MPC", "MPCADD", "CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR",
-    "SPC", "SPC1", "SPCADD", "OMIT", "OMIT1", "ASET", "ASET1", "SUPORT", "SUPORT1", "SPOINT",
-    "EIGRL", "EIGR", "PARAM", "ENDDATA",
-})
-
-#: NASTRAN-95 rigid elements that pyNastran does not parse: read from the raw card lines.
-RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR"})
-
-#: Entries that cannot change the real eigenvalues of the structure: accepted, not
-#: translated, and listed with their counts in :attr:`BdfInfo.ignored`. Loads and enforced
-#: motion (a SOL 103 run has no load; SPCD values are irrelevant to modes, their SPC set is
-#: read), dynamic-load, frequency and random tables, damping (real modes are undamped),
-#: aeroelastic model (its splines only read the structural modes), output and DMAP book-
-#: keeping (USET, DTI, MDLPRM, PLOTEL), thermal materials (MAT4/MAT5: heat transfer only)
-#: and the complex-eigenvalue method EIGC.
-IGNORED_CARDS = frozenset({
-    # static and dynamic loads, enforced motion
-    "FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "LOAD", "GRAV", "ACCEL",
-    "ACCEL1", "PLOAD", "PLOAD1", "PLOAD2", "PLOAD4", "RFORCE", "SPCD", "DLOAD", "RLOAD1",
-    "RLOAD2", "TLOAD1", "TLOAD2", "DAREA", "DELAY", "DPHASE", "LSEQ", "ACSRCE",
-    # tables, frequencies, random and transient set-up
-    "TABLED1", "TABLED2", "TABLED3", "TABLED4", "TABDMP1", "TABRND1", "TABRNDG", "RANDPS",
-    "RANDT1", "FREQ", "FREQ1", "FREQ2", "FREQ3", "FREQ4", "FREQ5", "TSTEP", "TSTEP1", "NLPARM",
-    "EIGC", "EPOINT",
-    # damping elements (real modes are undamped)
-    "CDAMP1", "CDAMP2", "CDAMP3", "CDAMP4", "CVISC", "PDAMP", "PVISC",
-    # aeroelastic model
-    "AERO", "AEROS", "CAERO1", "CAERO2", "CAERO3", "CAERO4", "CAERO5", "PAERO1", "PAERO2",
-    "PAERO3", "PAERO4", "PAERO5", "SPLINE1", "SPLINE2", "SPLINE3", "SPLINE4", "SPLINE5", "SET1",
-    "SET2", "AEFACT", "AELIST", "AESTAT", "AESURF", "AESURFS", "AELINK", "AEPARM", "AECOMP",
-    "AECOMPL", "MKAERO1", "MKAERO2", "FLFACT", "FLUTTER", "GUST", "TRIM", "DIVERG", "MONPNT1",
-    "MONPNT2", "MONPNT3", "MONDSP1", "CSSCHD", "AEDW", "AEPRESS", "AEFORCE",
-    # output, sets for DMAP, tables for post-processing, plotting
-    "MDLPRM", "USET", "USET1", "DTI", "PLOTEL",
-    # heat-transfer materials (structural SOL 103 does not use them)
-    "MAT4", "MAT5",
-})
-
-#: Temperature-dependent material entries: ignored like the above unless the deck gives
-#: temperatures (TEMP/TEMPD), when they would change the stiffness and are refused.
-THERMAL_CARDS = frozenset({"MATT1", "TABLEM1", "TABLEM2", "TABLEM3", "TABLEM4", "TEMPD", "TEMP"})
-
-#: PARAMs read. Every other PARAM is accepted and listed in :attr:`BdfInfo.ignored`
-#: unless it is one of :data:`MODE_PARAMS`: NASTRAN has hundreds of PARAMs (and MYSTRAN,
-#: NASTRAN-95 their own), and those that change a beam model's real modes are few.
-HANDLED_PARAMS = frozenset({"WTMASS", "COUPMASS", "AUTOSPC"})
-
-#: PARAMs that change the real modes and are not translated: the scale factors of direct
-#: input matrices (K2GG, M2GG... through CK1-CK3, CM1-CM2, CP1-CP2, CB1-CB2). Refused unless
-#: they keep their default 1.0.
-MODE_PARAMS = frozenset({"CK1", "CK2", "CK3", "CM1", "CM2", "CP1", "CP2", "CB1", "CB2"})
-
-#: PARAMs known to have no effect on the real modes of a beam model (output and solver
-#: book-keeping, damping, aeroelastic and shell-only settings): listed like any other
-#: accepted PARAM; kept as the documented list of those checked.
-OUTPUT_PARAMS = frozenset({
-    "POST", "PRTMAXIM", "GRDPNT", "OGEOM", "NOCOMPS", "PATVER", "SRCOMPS", "EST", "OUGCORD",
-    "MAXRATIO", "BAILOUT", "NEWSEQ", "LMODES", "RESVEC", "PRGPST", "SEMAPPRT", "USETPRT",
-    "AUTOMSET", "DDRMM", "POSTEXT", "PRINT", "NASPRT", "SOLADJC", "G", "W3", "W4", "K6ROT",
-    "SNORM", "LAMLIM", "OIBULK", "OMACHPR", "RDRBE", "RSCON", "RSOPT", "UNITSYS", "KDAMP",
-    "OPPHIPA", "GUSTAERO", "AUNITS", "Q", "USETSEL", "GRDEQ", "RPOSTS1", "SPARSEDR", "LGDISP",
-    "MACH", "VREF", "OPGTKG", "PRTPCH", "DBALL", "SCRSAVE", "DBDICT", "DBUP", "OUNIT1", "OUNIT2",
-    "SEP1XOVR", "AUTOQSET", "CHECKOUT", "OPTEXIT", "INREL", "FIXEDB", "MODACC", "NOELOF",
-    "NOELOP", "NOGPF", "NOPRT", "PRTGPL", "PRTEQXIN", "PRTGPDT", "PRTCSTM", "PRTBGPDT",
-    "PRTGPTT", "PRTMGG", "PRTPG", "ERROR", "DBCDIAG", "TINY", "XFLAG",
-})
-
-#: Build conventions :func:`read_bdf` can follow (``conventions=``), default first.
-CONVENTIONS = ("nx", "msc")
-
-#: Shear factor K1 = K2 of a PBARL/PBEAML ROD by build conventions (see :func:`_properties`):
-#: 0.9 as NX/Simcenter and the newer MSC builds convert it, 6/7 as an MSC 2012 build did.
-ROD_SHEAR_FACTOR = {"nx": 0.9, "msc": 6.0 / 7.0}
-
-#: Shear factor of a PBARL/PBEAML BAR: 5/6, as NASTRAN converts it (MSC 2012.2 on a deep
-#: CBEAM cantilever: bending modes 1e-4..7e-4 off with Cowper's 10(1+nu)/(12+11nu), 1e-6 with 5/6).
-BAR_SHEAR_FACTOR = 5.0 / 6.0
-
-#: PBARL/PBEAML shapes with a matching :class:`trussid.fem.sections.Section` constructor.
-SECTION_TYPES = ("ROD", "TUBE", "BAR", "BOX")
-
-
-@dataclass
-class EigenRequest:
-    """The deck's real-eigenvalue request (EIGRL or EIGR).
-
-    Attributes
-    ----------
-    card : str
-        "EIGRL" or "EIGR".
-    sid : int
-    n_modes : int or None
-        ND: number of modes wanted.
-    f_low, f_high : float or None
-        Frequency range [Hz in the deck's time unit] (EIGRL V1, V2; EIGR F1, F2).
-    """
-
-    card: str
-    sid: int
-    n_modes: int | None
-    f_low: float | None
-    f_high: float | None
-
-
-@dataclass
-class BdfInfo:
-    """What :func:`read_bdf` found and decided, for reports.
-
-    Attributes
-    ----------
-    path : str
-    wtmass : float
-        PARAM,WTMASS (1.0 when absent): the factor applied to every mass.
-    mass : {"consistent", "lumped"}
-        Mass formulation used.
-    mass_reason : str
-        Why (the PARAM,COUPMASS value, or NASTRAN's lumped default).
-    beam_theory : {"euler-bernoulli", "timoshenko"}
-    beam_theory_reason : str
-    eigen : EigenRequest or None
-        The eigenvalue request selected by the case control (METHOD), or the only one.
-    spc_sets : list of int or None
-        SPC set ids applied (after SPCADD expansion); ``None`` when the deck has none.
-    spc_reason : str
-    autospc : bool
-        Whether DOFs with neither stiffness nor mass should be removed (NASTRAN's AUTOSPC,
-        on by default in SOL 103; ``PARAM,AUTOSPC,NO`` turns it off).
-    autospc_reason : str
-    conventions : {"nx", "msc"}
-        The NASTRAN build conventions followed (see :func:`read_bdf`).
-    cards : dict of str to int
-        Bulk-data cards read, with counts.
-    ignored : list of str
-        Accepted entries without effect on the modes, with counts (e.g. ``"FORCE (3)"``,
-        ``"PARAM,POST"``).
-    notes : list of str
-        Other things a user should know (multiple subcases, enforced displacements...).
-    """
-
-    path: str
-    wtmass: float = 1.0
-    mass: str = "lumped"
-    mass_reason: str = ""
-    beam_theory: str = "euler-bernoulli"
-    beam_theory_reason: str = ""
-    eigen: EigenRequest | None = None
-    spc_sets: list | None = None
-    spc_reason: str = ""
-    autospc: bool = True
-    autospc_reason: str = ""
-    conventions: str = "nx"
-    cards: dict = field(default_factory=dict)
-    ignored: list = field(default_factory=list)
-    notes: list = field(default_factory=list)
+__all__ = ['read_bdf', 'coord_axes', 'offset_spring_matrix']
 
 
 # ======================================================================= reading
@@ -283,12 +92,23 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
         raise ModelError(f"conventions must be one of {', '.join(CONVENTIONS)}, got {conventions!r}")
     bdf = _parse(path)
     info = BdfInfo(path=str(path), cards=dict(sorted(bdf.card_count.items())), conventions=conventions)
+    info.notes.extend(bdf.trussid_notes)
     _check_cards(bdf, path, info)
     _read_params(bdf, info)
 
     node_ids, xyz, frames = _nodes(bdf)
+    scalar = _scalar_points(bdf, set(node_ids.tolist()), info)
+    if scalar:
+        # Scalar points become nodes of their own with only component 1 free (position and
+        # frame are irrelevant: only scalar elements and MPCs join them).
+        node_ids = np.concatenate([node_ids, np.array(scalar, dtype=np.int64)])
+        xyz = np.concatenate([xyz, np.zeros((len(scalar), 3))])
+        if frames is not None:
+            frames = np.concatenate([frames, np.broadcast_to(np.eye(3), (len(scalar), 3, 3))])
     nodes = _NodeTable(node_ids, xyz, frames)
+    nodes.spoints = set(scalar)
     mats = _materials(bdf, info.wtmass)
+    _check_units(bdf, mats, info.wtmass)
     props = _properties(bdf, mats, info.wtmass, conventions)
 
     if beam_theory is None:
@@ -311,12 +131,17 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     model.add_nodes(node_ids, xyz)
     if nodes.frames is not None:
         model.set_node_frames(node_ids, nodes.frames)
-    _check_scalar_points(bdf, info)
+    if scalar:
+        model.fix(scalar, "23456")
     _add_bars(bdf, model, nodes, props)
     _add_rods(bdf, model, nodes, props, mats, info.wtmass)
     _nastran_mass_conventions(bdf, model, nodes, props, info)
     _add_masses(bdf, model, nodes, info.wtmass)
     _add_scalar_masses(bdf, model, nodes, info.wtmass)
+    _add_scalar_point_elements(bdf, model, nodes, info.wtmass)
+    _add_conm1(bdf, model, nodes, info.wtmass)
+    _add_genel(bdf, model, nodes)
+    add_direct_matrices(bdf, model, info, lambda dofs, card, eid: _dof_matrix(nodes, dofs, card, eid))
     _add_springs(bdf, model, nodes)
     _add_rigid(bdf, model, nodes)
     _add_raw_rigid(bdf, model, nodes)
@@ -324,237 +149,9 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     _add_spcs(bdf, model, nodes, info)
     _add_dof_sets(bdf, model, nodes, info)
     _select_eigen(bdf, info)
+    if _is_preload_run(*bdf.trussid_solution):
+        add_preload_stiffness(bdf, model, nodes, info, _rect_frame)
     return model, info
-
-
-@dataclass
-class _RawParam:
-    """A PARAM entry from its raw fields (pyNastran validates PARAM values against its own
-    lists and refuses legal ones, e.g. ``PARAM,EXTOUT,MATRIXPCH`` or MYSTRAN's EQCHECK)."""
-
-    name: str
-    values: list
-
-
-def _nastran_value(text: str):
-    """A field as NASTRAN reads it: int, real (also ``1.5-3`` = 1.5e-3), or the string."""
-    t = text.strip()
-    for conv in (int, float):
-        try:
-            return conv(t)
-        except ValueError:
-            pass
-    m = re.fullmatch(r"([+-]?(?:\d+\.?\d*|\.\d+))([+-]\d+)", t)
-    if m:
-        return float(f"{m.group(1)}e{m.group(2)}")
-    return t.upper()
-
-
-def _executive(text: str, path: Path) -> tuple[str, str, list[str]]:
-    """(executive control, rest, notes): the executive control is dropped before pyNastran.
-
-    trussid needs nothing from it but the solution (read here), and pyNastran refuses
-    statements it does not know (NASTRAN-95's ``APP AERO``, ``APP DISP``, DMAP ALTERs).
-    """
-    m = re.search(r"^\s*CEND\b.*$", text, re.IGNORECASE | re.MULTILINE)
-    if m is None:
-        return "", text, []
-    return text[:m.start()], text[m.end() + 1:], []
-
-
-def _solution(executive: str) -> tuple[str | None, str | None]:
-    """(SOL value, APP value) of an executive control, upper case, or None."""
-    sol = re.search(r"^\s*SOL\s+([^\s$]+)", executive, re.IGNORECASE | re.MULTILINE)
-    app = re.search(r"^\s*APP\s+([^\s$]+)", executive, re.IGNORECASE | re.MULTILINE)
-    return (sol.group(1).upper() if sol else None), (app.group(1).upper() if app else None)
-
-
-def _check_solution(path: Path, sol: str | None, app: str | None) -> None:
-    """Refuse solutions whose printed modes are not the structure's real modes, naming them."""
-    if sol is None:
-        return
-    number = sol.split(",")[0]
-    if app in (None, "DISP", "DISPLACEMENT", "AERO") and number == "13":
-        raise ModelError(f"{path}: SOL 13 (NASTRAN-95 rigid format 13, normal modes with differential "
-                         f"stiffness): its modes are those of the structure preloaded by the static subcase, "
-                         f"which trussid does not compute (differential stiffness is not supported)")
-
-
-def _parse(path: Path):
-    """pyNastran's BDF of ``path``, quietly; any failure becomes a one-line ModelError."""
-    from cpylog import SimpleLogger
-    from pyNastran.bdf.bdf import BDF
-
-    if not path.exists():
-        raise ModelError(f"{path}: no such file")
-    if path.is_dir():
-        raise ModelError(f"{path}: is a directory, not a bulk-data file")
-    try:
-        text = path.read_text(errors="replace")
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read ({exc.strerror})") from None
-    flags = re.IGNORECASE | re.MULTILINE
-    # INCLUDE files are relative to the deck. Checked here so that a missing one is named
-    # (pyNastran would also leave a crash file in the working directory).
-    includes = re.findall(r"^\s*INCLUDE\s+'([^']+)'", text, flags)
-    for inc in includes:
-        if not (path.parent / inc).is_file():
-            raise ModelError(f"{path}: INCLUDE '{inc}': no such file (looked in {path.parent})")
-    notes = []
-    executive, rest, _ = _executive(text, path)
-    sol, app = _solution(executive)
-    _check_solution(path, sol, app)
-    punch = re.search(r"^\s*BEGIN\s+(BULK|SUPER)", text, flags) is None
-    if not punch:
-        # The deck goes to pyNastran from memory, with an empty executive control (see
-        # _executive) and INCLUDEs made absolute (pyNastran resolves them from the working
-        # directory when reading from memory).
-        text = re.sub(r"^(\s*INCLUDE\s+')([^']+)(')",
-                      lambda m: m.group(1) + str((path.parent / m.group(2)).resolve()) + m.group(3),
-                      rest, flags=flags)
-        # A repeated BEGIN BULK (MSC's HA144D) is accepted by NASTRAN; pyNastran reads the
-        # second as a superelement header.
-        heads = list(re.finditer(r"^\s*BEGIN\s+BULK\b.*$\n?", text, flags))
-        if len(heads) > 1:
-            for h in reversed(heads[1:]):
-                text = text[:h.start()] + text[h.end():]
-            notes.append(f"BEGIN BULK repeated {len(heads)} times: read once, as NASTRAN")
-        source: str | io.StringIO = io.StringIO("CEND\n" + text)
-    else:
-        source = str(path)
-    bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
-    # Cards this reader does not translate are only counted, never parsed, so that a
-    # malformed one is reported as unsupported rather than failing the parse; those read
-    # from their raw fields (RAW_CARDS, PARAM) too.
-    bdf.disable_cards(sorted((set(bdf.cards_to_read) - SUPPORTED_CARDS) | RAW_CARDS | {"PARAM"}))
-    try:
-        # pyNastran also print()s some complaints; keep them off the user's terminal (the
-        # exception carries the message).
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            bdf.read_bdf(source, xref=False, validate=False, punch=punch)
-    except Exception as exc:  # pyNastran raises many types for malformed decks
-        raise ModelError(f"{path}: not a readable bulk-data deck ({_parser_message(exc)})") from None
-    if not bdf.card_count:
-        raise ModelError(f"{path}: no bulk-data cards found")
-    bdf.params = _raw_params(bdf)
-    bdf.trussid_notes = notes
-    bdf.trussid_solution = (sol, app)
-    return bdf
-
-
-def _parser_message(exc: Exception) -> str:
-    """pyNastran's message in user terms: the entry and its id, without its internals.
-
-    pyNastran words its complaints as ``field 'x' (field #3) on card must be ...
-    card=['CBAR', '1', ...]``: the list is the raw card; the entry name and id (its first
-    two fields) are what a user can find in the deck.
-    """
-    msg = " ".join(str(exc).split())
-    card = re.search(r"card=\[\s*'([A-Z0-9*]+)'\s*,\s*'?([^',\]]*)'?", msg)
-    msg = re.sub(r"\s*card=\[.*$", "", msg)
-    msg = re.sub(r"\s*\b(uline|allowed_methods|allowed|len\(\w+ card\))\s*=.*$", "", msg)
-    msg = msg.strip(" ;,.") or type(exc).__name__
-    if card:
-        name, ident = card.group(1), card.group(2).strip()
-        msg = f"{name} {ident}: {msg}" if ident else f"{name}: {msg}"
-    return msg[:300]
-
-
-def _card_lines(lines: list[str]) -> list[str]:
-    """A rejected card's lines without the comment lines pyNastran keeps in front."""
-    return [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("$")]
-
-
-def _raw_params(bdf) -> dict:
-    """PARAM name -> :class:`_RawParam` from the raw lines (the last entry of a name wins)."""
-    params = {}
-    for lines in getattr(bdf, "reject_lines", []):
-        body = _card_lines(lines)
-        if not body or not re.match(r"\s*PARAM\b", body[0], re.IGNORECASE):
-            continue
-        f = _raw_fields(body, "PARAM")
-        if len(f) < 2 or not f[1]:
-            raise ModelError(f"PARAM: no name ({body[0].strip()!r})")
-        params[f[1]] = _RawParam(f[1], [_nastran_value(v) for v in f[2:] if v.strip()])
-    return params
-
-
-def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
-    """Every card must be translated or known to be harmless: list all the others.
-
-    Unsupported element entries (shells, solids...) come first in the message: they are
-    the reason a beam code cannot read the deck, the rest would follow from them.
-    """
-    counts = bdf.card_count
-    thermal_on = any(counts.get(c) for c in ("TEMPD", "TEMP")) or _case_values(bdf, "TEMPERATURE") \
-        or _case_values(bdf, "TEMP")
-    bad, ignored = {}, {}
-    for name, n in counts.items():
-        if name in SUPPORTED_CARDS:
-            continue
-        if name in IGNORED_CARDS or (name in THERMAL_CARDS and not thermal_on):
-            ignored[name] = n
-        else:
-            bad[name] = n
-    for name in sorted(bdf.params):
-        if name in HANDLED_PARAMS:
-            continue
-        if name in MODE_PARAMS and bdf.params[name].values not in ([], [1], [1.0]):
-            bad[f"PARAM,{name}"] = 1
-        else:
-            ignored[f"PARAM,{name}"] = 1
-    info.ignored = [f"{k} ({v})" if not k.startswith("PARAM,") else k for k, v in sorted(ignored.items())]
-    if not bad:
-        return
-    elements = {k: v for k, v in bad.items() if _is_element_entry(k)}
-    if elements:
-        listing = ", ".join(f"{k} ({v})" for k, v in sorted(elements.items()))
-        rest = {k: v for k, v in bad.items() if k not in elements}
-        also = f"; also unsupported: {', '.join(f'{k} ({v})' for k, v in sorted(rest.items()))}" if rest else ""
-        raise ModelError(f"{path}: unsupported element entries: {listing} (trussid reads beam, rod, "
-                         f"spring, mass and rigid elements: CBAR, CBEAM, CROD, CONROD, CELAS1/2, "
-                         f"CBUSH, CONM2, CMASS1/2, RBE2, RBE3, RBAR, CRIGD1/2/3/R){also}")
-    listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items()))
-    raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
-                     f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")
-
-
-def _is_element_entry(name: str) -> bool:
-    """Element connection entries (CQUAD4, CHEXA, CTUBE, GENEL...), not coordinate systems."""
-    return (name.startswith("C") and not name.startswith("CORD") and name not in ("CONM1", "CMASS3", "CMASS4")
-            ) or name in ("GENEL", "PLOTEL")
-
-
-def _param(bdf, name):
-    p = bdf.params.get(name)
-    if p is None:
-        return None
-    return p.values[0]
-
-
-def _read_params(bdf, info: BdfInfo) -> None:
-    wt = _param(bdf, "WTMASS")
-    if wt is not None:
-        if not (isinstance(wt, (int, float)) and math.isfinite(wt) and wt > 0):
-            raise ModelError(f"PARAM,WTMASS must be a positive number, got {wt!r}")
-        info.wtmass = float(wt)
-    cm = _param(bdf, "COUPMASS")
-    if cm is None:
-        info.mass = "lumped"
-        info.mass_reason = "PARAM,COUPMASS absent: NASTRAN's default lumped mass"
-    else:
-        if not isinstance(cm, (int, float)):
-            raise ModelError(f"PARAM,COUPMASS must be a number, got {cm!r}")
-        info.mass = "consistent" if cm > 0 else "lumped"
-        info.mass_reason = f"PARAM,COUPMASS,{cm}: {'> 0, coupled' if cm > 0 else '<= 0, lumped'} mass"
-    auto = _param(bdf, "AUTOSPC")
-    if auto is None:
-        info.autospc, info.autospc_reason = True, "NASTRAN's default (AUTOSPC=YES in SOL 103)"
-    else:
-        value = str(auto).strip().upper()
-        if value not in ("YES", "NO"):
-            raise ModelError(f"PARAM,AUTOSPC must be YES or NO, got {auto!r}")
-        info.autospc, info.autospc_reason = value == "YES", f"PARAM,AUTOSPC,{value}"
 
 
 class _NodeTable:
@@ -615,12 +212,16 @@ def _nodes(bdf):
     depend on the position): returned as frames whose rows are the axes in basic.
     """
     if not bdf.nodes:
+        if getattr(bdf, "spoints", None):  # scalar points only: added by the caller
+            return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), None
         raise ModelError("the deck has no GRID cards")
     grdset = getattr(bdf, "grdset", None)
     if grdset is not None:
-        if grdset.cp or grdset.cd:
-            raise ModelError(f"GRDSET: default CP={grdset.cp} / CD={grdset.cd} is not supported "
-                             f"(pyNastran cannot tell a GRID's blank CP/CD from 0); give them on the GRIDs")
+        blank_cp, blank_cd = getattr(bdf, "trussid_blank_cp_cd", ({}, {}))
+        for default, blanks, attr in ((grdset.cp, blank_cp, "cp"), (grdset.cd, blank_cd, "cd")):
+            if default:
+                for nid in blanks:
+                    setattr(bdf.nodes[nid], attr, default)
         if grdset.seid:
             raise ModelError("GRDSET: superelements (SEID) are not supported")
         if grdset.ps:
@@ -697,6 +298,23 @@ def coord_axes(coord, xyz: np.ndarray, label: str) -> np.ndarray:
         loc = np.stack([np.stack([st * cp_, st * sp_, ct], 1), np.stack([ct * cp_, ct * sp_, -st], 1),
                         np.stack([-sp_, cp_, 0 * cp_], 1)], axis=1)
     return loc @ R
+
+
+def _check_units(bdf, mats: dict, wtmass: float) -> None:
+    """Warn (:class:`UnitsWarning`, once per deck) when a material used by an element has an
+    E and a density that no consistent unit system gives a solid (:func:`wave_speed_problem`):
+    NASTRAN would run such a deck too, with frequencies off by orders of magnitude."""
+    used = set()
+    for p in bdf.properties.values():
+        mid = getattr(p, "mid", None)
+        if mid is not None:
+            used.add(int(mid))
+    for mid in sorted(used & set(mats)):
+        m = mats[mid]
+        why = wave_speed_problem(m["E"], m["rho"], wtmass)
+        if why:
+            warnings.warn(f"MAT1 {mid}: {why}", UnitsWarning, stacklevel=3)
+            return
 
 
 def _materials(bdf, wtmass: float) -> dict:
@@ -901,6 +519,9 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         if bad.any():
             raise ModelError(f"{card} {eids[bad][0]}: no orientation (give X1-X3 or G0)")
         mat, nsm = prop.mat, prop.nsm
+        if prop.section["A"] == 0 or prop.mat["G"] == 0:
+            _add_spring_bars(model, group, xyz, orient, prop, eids)
+            continue
         if card == "CBAR" and model.mass_formulation == "consistent":
             # NASTRAN's coupled CBAR mass has no torsional (nor rotary) inertia: the structural
             # mass goes in as non-structural mass per length, which the element gives
@@ -911,6 +532,37 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         pinned = np.array([bool(e.pa or e.pb) for e in group])
         if pinned.any():
             _add_pin_flags(model, [e for e, p in zip(group, pinned) if p], xyz[pinned], orient[pinned], prop)
+
+
+def _add_spring_bars(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarray, prop: _Prop,
+                     eids: np.ndarray) -> None:
+    """Bars with A = 0 (bending springs: no axial stiffness, no structural mass) or a MAT1
+    with G = 0 (no torsional stiffness), legal in NASTRAN (MSC NAS120 problem F).
+
+    Their stiffness is the frame element's with placeholders (A = 1, G = E / 2), the axial
+    (and, for G = 0, torsion) rows and columns then set to zero in element axes: in a
+    straight frame element these are uncoupled from bending, so this is exact.
+    """
+
+    sec, mat = prop.section, prop.mat
+    card = f"{elems[0].type} {eids[0]}"
+    if any(e.pa or e.pb for e in elems):
+        raise ModelError(f"{card}: pin flags on a bar with A = 0 or G = 0 are not supported")
+    G0 = mat["G"] == 0
+    if G0 and model.beam_theory == "timoshenko" and (math.isfinite(sec["Asy"]) or math.isfinite(sec["Asz"])):
+        raise ModelError(f"{card}: {prop.label} has shear flexibility with G = 0 (infinite shear flexibility)")
+    A0 = sec["A"] == 0
+    L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
+    K, M = frame_matrices(L, 1.0 if A0 else sec["A"], sec["Iy"], sec["Iz"], sec["J"], mat["E"],
+                          mat["E"] / 2.0 if G0 else mat["G"], 0.0 if A0 else mat["rho"],
+                          nsm=prop.nsm, Asy=sec["Asy"], Asz=sec["Asz"], theory=model.beam_theory,
+                          mass=model.mass_formulation)
+    zero = ([0, 6] if A0 else []) + ([3, 9] if G0 else [])
+    K[:, zero, :] = 0.0
+    K[:, :, zero] = 0.0
+    ends = np.array([[e.ga, e.gb] if e.type == "CBAR" else e.nodes for e in elems], dtype=np.int64)
+    model.add_matrices(eids, ends, K=to_global(K, R), M=to_global(M, R),
+                       label=f"{prop.label} ({'A = 0' if A0 else 'G = 0'})")
 
 
 def _add_pin_flags(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarray, prop: _Prop) -> None:
@@ -1028,8 +680,13 @@ def _scalar_ends(e, card: str, nodes: _NodeTable):
     if g1 == 0:  # grounded at its first end: swap
         g1, g2, c1, c2 = g2, g1, c2, c1
     spoints = getattr(nodes, "spoints", set())
-    if c1 == 0 or (g2 != 0 and c2 == 0) or g1 in spoints or g2 in spoints:
-        raise ModelError(f"{card}: scalar points (SPOINT, component 0) are not supported")
+    # A scalar point's only DOF is its component 1 here (component 0 in the deck).
+    if g1 in spoints and c1 == 0:
+        c1 = 1
+    if g2 in spoints and c2 == 0:
+        c2 = 1
+    if c1 == 0 or (g2 != 0 and c2 == 0):
+        raise ModelError(f"{card}: component 0 is a scalar point's, but {g1 if c1 == 0 else g2} is no SPOINT")
     if not (1 <= c1 <= 6) or (g2 and not 1 <= c2 <= 6):
         raise ModelError(f"{card}: component must be 1-6, got {c1} / {c2}")
     if g2 == g1 and c1 == c2:
@@ -1125,8 +782,11 @@ def _add_scalar_masses(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> N
             value = float(p.mass)
         else:
             value = float(m.mass)
-        if not (math.isfinite(value) and value >= 0):
-            raise ModelError(f"{card}: mass must be finite and >= 0, got {value:g}")
+        if not math.isfinite(value):
+            raise ModelError(f"{card}: mass must be finite, got {value:g}")
+        # A negative scalar mass is legal in NASTRAN (a coupling term of a lumped mass matrix
+        # given element by element, as NASTRAN-95's D11-03-1A wing); the assembled mass
+        # matrix is what must be positive, and the eigensolver says so if it is not.
         ends.append(_scalar_ends(m, card, nodes))
         values.append(value * wtmass)
         eids.append(m.eid)
@@ -1179,8 +839,13 @@ def _add_bushes(bdf, model: Model, nodes: _NodeTable) -> None:
                 v = nodes.coords([e.g0], "CBUSH", [e.eid])[0] - xa
             elif e.x is not None and e.x[0] is not None:
                 v = np.asarray(e.x, float)
+            elif k[1] == k[2] and k[4] == k[5]:
+                # No orientation: the axis is GA-GB, and a stiffness symmetric about it
+                # (K2 = K3, K5 = K6, e.g. an axial spring) is the same for any y-z pair.
+                v = np.eye(3)[np.argmin(np.abs(d))]
             else:
-                raise ModelError(f"{card}: no orientation (give X1-X3, G0 or CID)")
+                raise ModelError(f"{card}: no orientation (give X1-X3, G0 or CID; without one, the "
+                                 f"stiffness must be symmetric about GA-GB: K2 = K3 and K5 = K6)")
             x = d / L
             z = np.cross(x, v)
             if np.linalg.norm(z) <= 1e-9 * np.linalg.norm(v):
@@ -1208,14 +873,6 @@ def _add_bushes(bdf, model: Model, nodes: _NodeTable) -> None:
     if offset_ids:
         model.add_matrices(np.array(offset_ids, dtype=np.int64), np.array(offset_pairs, dtype=np.int64),
                            K=np.array(offset_K), label="CBUSH")
-
-
-def _comps(text, card: str) -> list[int]:
-    """0-based components of a NASTRAN component string such as "123456"."""
-    text = "" if text is None else str(text).strip()
-    if any(ch not in "123456" for ch in text):
-        raise ModelError(f"{card}: components {text!r} must be digits 1-6")
-    return sorted({int(ch) - 1 for ch in text})
 
 
 def _add_rigid_element(model: Model, nodes: _NodeTable, eid: int, grids, independent, dependent,
@@ -1279,29 +936,6 @@ def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
             raise ModelError(f"{card}: not supported")
 
 
-def _raw_fields(lines: list[str], name: str) -> list[str]:
-    from pyNastran.bdf.bdf_interface.utils import to_fields
-
-    return [f.strip().upper() for f in to_fields(lines, name)]
-
-
-def _ints(fields: list[str], card: str) -> list[int]:
-    """Grid ids of a field list, with ``A THRU B`` expanded and blanks dropped."""
-    out, i = [], 0
-    fields = [f for f in fields if f]
-    while i < len(fields):
-        if i + 2 < len(fields) and fields[i + 1] == "THRU":
-            out.extend(range(int(fields[i]), int(fields[i + 2]) + 1))
-            i += 3
-            continue
-        try:
-            out.append(int(fields[i]))
-        except ValueError:
-            raise ModelError(f"{card}: field {fields[i]!r} is not a grid id") from None
-        i += 1
-    return out
-
-
 def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
     """NASTRAN-95's rigid elements CRIGD1, CRIGD2, CRIGD3 and CRIGDR (unparsed by pyNastran).
 
@@ -1315,7 +949,7 @@ def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
         name = body[0][:8].strip().rstrip("*").upper() if body else ""
         if "," in name:
             name = name.split(",")[0]
-        if name not in RAW_CARDS:
+        if name not in ("CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR"):
             continue
         f = _raw_fields(body, name)
         try:
@@ -1350,6 +984,93 @@ def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
                 _add_rigid_rod(model, nodes, eid, gi, gm, cm, card)
         except (IndexError, ValueError):
             raise ModelError(f"{card}: malformed entry") from None
+
+
+def _dof_matrix(nodes: _NodeTable, dofs: list, card: str, eid: int) -> tuple[list, np.ndarray]:
+    """(grids, A): A maps the grids' 6-DOF vectors (basic) to the listed (grid, component) DOFs."""
+    grids = list(dict.fromkeys(g for g, _ in dofs))
+    pos = {g: i for i, g in enumerate(grids)}
+    for g, c in dofs:
+        if not 1 <= c <= 6:
+            raise ModelError(f"{card}: component {c} of grid {g} must be 1-6 (scalar points are not supported)")
+    vec = nodes.dof_vectors([g for g, _ in dofs], [c for _, c in dofs], card.split()[0], [eid] * len(dofs))
+    A = np.zeros((len(dofs), 6 * len(grids)))
+    for k, (g, _c) in enumerate(dofs):
+        A[k, 6 * pos[g]:6 * pos[g] + 6] = vec[k]
+    return grids, A
+
+
+def _add_conm1(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
+    """CONM1: a 6x6 mass matrix at a grid (lower triangle by rows, in system CID), times WTMASS.
+
+    pyNastran parses CONM1, but it is read here from the raw fields like the other entries
+    this reader adds, so that a blank is NASTRAN's 0.0 and a malformed entry is named.
+    """
+    for eid, f in _raw_cards(bdf, "CONM1"):
+        card = f"CONM1 {eid}"
+        try:
+            g = int(f[2])
+            cid = int(f[3]) if f[3] else 0
+            vals = [float(_nastran_value(v)) if v else 0.0 for v in (f[4:25] + [""] * 21)[:21]]
+        except (IndexError, ValueError, TypeError):
+            raise ModelError(f"{card}: malformed entry (GRID, CID and 21 mass terms expected)") from None
+        M = np.zeros((6, 6))
+        M[np.tril_indices(6)] = vals  # row-wise lower triangle: M11, M21, M22, M31, ...
+        M = M + np.tril(M, -1).T
+        if cid:
+            R = _rect_frame(bdf, cid, card)
+            R6 = np.kron(np.eye(2), R)
+            M = R6.T @ M @ R6
+        nodes.index([g], "CONM1", [eid])
+        model.add_matrices([eid], [[g]], M=[M * wtmass], label="CONM1")
+
+
+def _add_genel(bdf, model: Model, nodes: _NodeTable) -> None:
+    """GENEL: a general element given by its stiffness K or flexibility Z with rigid-body matrix S.
+
+    UI (m DOFs) and UD (n DOFs) pairs, then K or Z (lower triangle by columns, m x m), then
+    optionally S (m x n, by rows). With Z, K = Z^-1; the element's stiffness on (UI, UD) is
+    ``[[K, -K S], [-S^T K, S^T K S]]`` (NASTRAN QRG, GENEL), so that the UD DOFs moving as
+    the rigid motion S leaves it unstrained.
+    """
+    for eid, f in _raw_cards(bdf, "GENEL"):
+        card = f"GENEL {eid}"
+        vals = [v for v in f[2:] if v]
+        try:
+            keys = {k: vals.index(k) for k in ("UD", "K", "Z", "S") if k in vals}
+            mat_key = "K" if "K" in keys else "Z" if "Z" in keys else None
+            if mat_key is None:
+                raise ModelError(f"{card}: no K or Z matrix given")
+            end_ui = keys.get("UD", keys[mat_key])
+            ui = [(int(g), int(c or 0)) for g, c in zip(vals[0:end_ui:2], vals[1:end_ui:2])]
+            ud = ([(int(g), int(c or 0)) for g, c in zip(vals[end_ui + 1:keys[mat_key]:2],
+                                                          vals[end_ui + 2:keys[mat_key]:2])]
+                  if "UD" in keys else [])
+            end_m = keys.get("S", len(vals))
+            tri = [float(_nastran_value(v)) for v in vals[keys[mat_key] + 1:end_m]]
+            svals = [float(_nastran_value(v)) for v in vals[end_m + 1:]] if "S" in keys else []
+        except (ValueError, TypeError):
+            raise ModelError(f"{card}: malformed entry") from None
+        m, n = len(ui), len(ud)
+        if len(tri) != m * (m + 1) // 2:
+            raise ModelError(f"{card}: {mat_key} needs {m * (m + 1) // 2} terms for {m} UI DOFs, got {len(tri)}")
+        if "S" in keys and len(svals) != m * n:
+            raise ModelError(f"{card}: S needs {m * n} terms ({m} UI x {n} UD), got {len(svals)}")
+        KZ = np.zeros((m, m))
+        KZ[np.triu_indices(m)] = tri  # columns of the lower triangle = rows of the upper one
+        KZ = KZ + np.triu(KZ, 1).T
+        if mat_key == "Z":
+            try:
+                K = np.linalg.inv(KZ)
+            except np.linalg.LinAlgError:
+                raise ModelError(f"{card}: the flexibility matrix Z is singular") from None
+        else:
+            K = KZ
+        S = np.asarray(svals, float).reshape(m, n) if n and svals else np.zeros((m, n))
+        full = np.block([[K, -K @ S], [-S.T @ K, S.T @ K @ S]]) if n else K
+        grids, A = _dof_matrix(nodes, ui + ud, card, eid)
+        Kg = A.T @ full @ A
+        model.add_matrices([eid], [grids], K=[0.5 * (Kg + Kg.T)], label="GENEL")
 
 
 def _add_rigid_rod(model: Model, nodes: _NodeTable, eid: int, gi: int, gm: int, cm: int, card: str) -> None:
@@ -1394,11 +1115,30 @@ def _add_mpcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
         sets.append(sid)
         for add in bdf.mpcadds.get(sid, []):
             stack.extend(add.sets)
+    qpoints = set()
+    for q in getattr(bdf, "qsets", []):
+        qpoints |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
+    qpoints &= set(getattr(bdf, "spoints", {}) or {})
     for sid in sets:
         for k, c in enumerate(bdf.mpcs.get(sid, [])):
             card = f"MPC {sid}"
             g = np.asarray(c.nodes, dtype=np.int64)
-            comp = [_comps(x, card) for x in c.components]
+            comps_raw = [str(x).strip() for x in c.components]
+            onq = np.array([int(n) in qpoints and cm in ("0", "") for n, cm in zip(g, comps_raw)])
+            if onq.any():
+                # A Q-set scalar point is a modal coordinate of the component reduction,
+                # held at zero with the boundary in the fixed-interface modes: its term drops.
+                if onq[0]:
+                    raise ModelError(f"{card}: dependent term on Q-set scalar point {g[0]} is not supported")
+                keep = ~onq
+                g = g[keep]
+                c = type("MPCTerms", (), {"components": [x for x, k in zip(c.components, keep) if k],
+                                          "coefficients": [x for x, k in zip(c.coefficients, keep) if k]})
+                if len(g) == 1:
+                    model.fix([int(g[0])], str(_comps(c.components[0], card)[0] + 1))
+                    continue
+            comp = [[0] if int(gi) in nodes.spoints and str(x).strip() in ("0", "") else _comps(x, card)
+                    for gi, x in zip(g, c.components)]
             if any(len(x) != 1 for x in comp):
                 raise ModelError(f"{card}: each term needs exactly one component (scalar points are "
                                  f"not supported)")
@@ -1436,110 +1176,131 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                 model.omit(nodes.ids[sel], str(c + 1))
         info.notes.append(f"OMIT/ASET: {int(omitted.sum())} DOFs condensed by Guyan reduction, as "
                           f"NASTRAN does (exact for DOFs without mass)")
+    spoints = set(getattr(bdf, "spoints", {}) or {})
+    bsets, qsets = getattr(bdf, "bsets", []), getattr(bdf, "qsets", [])
+    for c in qsets:
+        ids = [int(g) for g in (c.ids if hasattr(c, "ids") else c.node_ids)]
+        grids = [g for g in ids if g not in spoints]
+        if grids:
+            raise ModelError(f"{c.type} {grids[0]}: modal (Q-set) DOFs on grid points are not supported; "
+                             f"the Craig-Bampton Q-set is read on scalar points only")
+    if bsets:
+        extseout = _case_has(bdf, "EXTSEOUT")
+        if not (qsets or extseout):
+            g0 = (bsets[0].ids if hasattr(bsets[0], "ids") else bsets[0].node_ids)[0]
+            raise ModelError(f"{bsets[0].type} (grid {g0}): a boundary set without QSET or EXTSEOUT (residual-structure "
+                             f"B-set analysis) is not supported")
+        held = mask_of(bsets, bsets[0].type)
+        for c in range(6):
+            if held[:, c].any():
+                model.fix(nodes.ids[held[:, c]], str(c + 1))
+        info.notes.append(f"BSET: {int(held.sum())} boundary DOFs held: a component reduction (QSET/EXTSEOUT) "
+                          f"prints its fixed-interface (Craig-Bampton) modes, which these are"
+                          + (f"; QSET on {len(spoints)} scalar points: modal coordinates of the reduction, "
+                             f"no part of these modes" if qsets else ""))
     suport = getattr(bdf, "suport", []) + list(getattr(bdf, "suport1", {}).values())
-    if suport:
+    sol = (getattr(bdf, "trussid_solution", (None, None))[0] or "").split(",")[0]
+    if suport and sol == "31":
+        # MYSTRAN SOL 31 is a Craig-Bampton reduction whose boundary is the SUPORT set: its
+        # printed eigenvalues are those of the structure with that boundary held.
+        held = np.zeros((n, 6), bool)
+        for c in suport:
+            ids = np.asarray(c.nodes if hasattr(c, "nodes") else c.IDs, dtype=np.int64)
+            comps = c.Cs if hasattr(c, "Cs") else c.components
+            idx = nodes.index(ids, "SUPORT", np.zeros(len(ids), dtype=np.int64))
+            for i, cm in zip(np.atleast_1d(idx), comps):
+                held[i, _comps(cm, "SUPORT")] = True
+        for c in range(6):
+            if held[:, c].any():
+                model.fix(nodes.ids[held[:, c]], str(c + 1))
+        info.notes.append(f"SOL 31 (MYSTRAN Craig-Bampton): the {int(held.sum())} SUPORT DOFs are the reduction "
+                          f"boundary, held for the fixed-interface modes MYSTRAN prints")
+    elif suport:
         info.notes.append("SUPORT accepted: it selects reference DOFs for NASTRAN's rigid-body modes, "
                           "which trussid computes anyway (they come first, at about 0 Hz)")
 
 
-def _check_scalar_points(bdf, info: BdfInfo) -> None:
-    """SPOINTs are accepted only when nothing connects them (then they are inert)."""
-    spoints = set(getattr(bdf, "spoints", {}) or {})
-    if not spoints:
-        return
-    used = set()
+#: Scalar elements between scalar points, read from their raw fields (two elements may share
+#: one entry: EID, PID or value, S1, S2, then a second EID...).
+SCALAR_POINT_CARDS = ("CELAS3", "CELAS4", "CMASS3", "CMASS4")
+
+
+def _scalar_point_refs(bdf) -> set:
+    """Scalar points that scalar elements or selected MPCs reference (besides Q-set points)."""
+    refs = set()
     for e in list(bdf.elements.values()) + list(bdf.masses.values()):
-        used |= {n for n in (getattr(e, "nodes", None) or []) if n in spoints}
-    if used:
-        g = sorted(used)[0]
-        raise ModelError(f"SPOINT {g}: scalar points joined by elements are not supported")
-    info.notes.append(f"SPOINT {', '.join(map(str, sorted(spoints)[:5]))}: unconnected scalar "
-                      f"point(s), no effect on the modes: ignored")
+        if e.type in ("CELAS1", "CELAS2", "CMASS1", "CMASS2"):
+            refs |= {int(n) for n, c in zip(list(e.nodes), (e.c1, e.c2)) if n and not c}
+    for name in SCALAR_POINT_CARDS:
+        for _eid, f in _raw_cards(bdf, name):
+            for k in (3, 4, 7, 8):
+                if k < len(f) and f[k]:
+                    refs.add(int(f[k]))
+    for sid in _case_values(bdf, "MPC")[:1]:
+        for c in bdf.mpcs.get(int(sid), []):
+            refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
+    return refs
 
 
-def _nastran_mass_conventions(bdf, model: Model, nodes: _NodeTable, props: dict, info: BdfInfo) -> None:
-    """NASTRAN's element mass where it differs from the textbook elements of fem.elements.
-
-    Each was found on real NASTRAN output (the nastran-corpus diagnosis) and is added as a
-    correction, so that :mod:`trussid.fem.elements` stays the textbook formulation:
-
-    * lumped CBEAM: the section's torsional inertia ``rho (I1 + I2) L / 2`` about the axis
-      at each end (a CBAR's lumped mass has none);
-    * coupled CBAR: no torsional inertia (the textbook element has ``rho (I1 + I2)``): done
-      in :func:`_add_bars`, exactly, by reading its structural mass as non-structural mass;
-    * coupled CROD/CONROD: axial ``m [[5/12, 1/12], [1/12, 5/12]]``, transverse lumped
-      ``m / 2`` (the textbook rod interpolates all three translations linearly);
-    * coupled shear-flexible CBEAM (NX) and CBAR (MSC 2013 and the MSC NAS102 workshop run):
-      the Euler-Bernoulli cubic translational mass without rotary inertia, on the
-      shear-flexible stiffness (CBAR frames 1.7e-4 and 4.1e-4 off with the Timoshenko
-      mass, 4e-7 and 7e-6 with this).
-    """
-    b = model.beams
-    if len(b) == 0:
-        return
-    idx = nodes.index(b.nodes, "element", b.ids)
-    xa, xb = nodes.xyz[idx[:, 0]], nodes.xyz[idx[:, 1]]
-    d = xb - xa
-    L = np.linalg.norm(d, axis=1)
-    if not (L > 0).all():
-        return  # zero-length elements are reported by the assembly, naming them
-    e = d / L[:, None]
-    cbeam = np.array([str(lbl).split()[0] in ("PBEAM", "PBEAML") for lbl in b.labels]) & ~b.rod
-    if model.mass_formulation == "lumped":
-        sel = cbeam & (b.rho * (b.Iy + b.Iz) > 0)
-        if sel.any():
-            polar = b.rho[sel] * (b.Iy[sel] + b.Iz[sel]) * L[sel] / 2.0
-            tensor = polar[:, None, None] * e[sel][:, :, None] * e[sel][:, None, :]
-            model.add_point_masses(np.concatenate([b.nodes[sel, 0], b.nodes[sel, 1]]), 0.0,
-                                   inertia=np.concatenate([tensor, tensor]))
-            info.notes.append(f"CBEAM lumped mass: torsional inertia rho (I1 + I2) L / 2 at each end "
-                              f"({int(sel.sum())} elements), as NASTRAN")
-        return
-    cbar = np.array([str(lbl).split()[0] in ("PBAR", "PBARL") for lbl in b.labels]) & ~b.rod
-    if cbar.any():
-        info.notes.append(f"CBAR coupled mass: no torsional inertia ({int(cbar.sum())} elements: structural "
-                          f"mass read as non-structural mass per length), as NASTRAN")
-    rod = np.asarray(b.rod, bool)
-    if rod.any():
-        m = (b.rho[rod] * b.A[rod] + b.nsm[rod]) * L[rod]
-        ee = e[rod][:, :, None] * e[rod][:, None, :]
-        # NASTRAN minus textbook: axial 5/12 - 1/3 = 1/12, transverse 1/2 - 1/3 = 1/6 on the
-        # diagonal, the opposite off the diagonal (total mass unchanged).
-        B3 = m[:, None, None] * (ee / 12.0 + (np.eye(3) - ee) / 6.0)
-        dM = np.zeros((int(rod.sum()), 12, 12))
-        dM[:, :3, :3] = dM[:, 6:9, 6:9] = B3
-        dM[:, :3, 6:9] = dM[:, 6:9, :3] = -B3
-        model.add_matrices(b.ids[rod], b.nodes[rod], M=dM, label="CROD coupled mass (NASTRAN)")
-        info.notes.append(f"CROD coupled mass: axial 5/12, 1/12 and lumped transverse mass "
-                          f"({int(rod.sum())} rods), as NASTRAN")
-    shear = (cbeam | cbar) & (np.isfinite(b.Asy) | np.isfinite(b.Asz))
-    if model.beam_theory == "timoshenko" and shear.any():
-        s = shear
-        Ls, R = local_axes(xa[s], xb[s], b.orient[s], b.ids[s])
-        args = (Ls, b.A[s], b.Iy[s], b.Iz[s], b.J[s], b.E[s], b.G[s], b.rho[s])
-        kw = dict(nsm=b.nsm[s], Asy=b.Asy[s], Asz=b.Asz[s], R=R, mass="consistent")
-        M_eb = frame_matrices(*args, **kw, theory="euler-bernoulli")[1]
-        M_t = frame_matrices(*args, **kw, theory="timoshenko")[1]
-        dM = M_eb - M_t
-        dM = 0.5 * (dM + dM.transpose(0, 2, 1))
-        model.add_matrices(b.ids[s], b.nodes[s], M=dM, label="CBAR/CBEAM coupled mass (NASTRAN)")
-        info.notes.append(f"CBAR/CBEAM coupled mass with shear flexibility: Euler-Bernoulli cubic mass "
-                          f"without rotary inertia ({int(s.sum())} elements), as NASTRAN")
+def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
+    """Ids of the SPOINTs that something connects (sorted); the others are noted and ignored."""
+    spoints = set(getattr(bdf, "spoints", {}) or {})
+    qset = set()
+    for q in getattr(bdf, "qsets", []):
+        qset |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
+    refs = _scalar_point_refs(bdf) - qset
+    missing = sorted(refs - spoints - grids)
+    if missing:
+        raise ModelError(f"scalar point {missing[0]} is referenced (component 0 or a CELAS3/4, CMASS3/4) but "
+                         f"no SPOINT defines it")
+    clash = sorted(spoints & grids)
+    if clash:
+        raise ModelError(f"SPOINT {clash[0]}: the id is also a GRID")
+    used = sorted(refs & spoints)
+    idle = sorted(spoints - refs - qset)
+    if idle:
+        info.notes.append(f"SPOINT {', '.join(map(str, idle[:5]))}{' ...' if len(idle) > 5 else ''}: unconnected "
+                          f"scalar point(s), no effect on the modes: ignored")
+    return used
 
 
-def _case_values(bdf, key: str) -> list:
-    """Values of case-control ``key`` (e.g. "SPC", "METHOD") over the subcases, in order."""
-    deck = getattr(bdf, "case_control_deck", None)
-    if deck is None:
-        return []
-    values = []
-    for sid in sorted(deck.subcases):
-        sub = deck.subcases[sid]
-        if sub.has_parameter(key)[0]:
-            value = sub.get_parameter(key)[0]
-            if value not in values:
-                values.append(value)
-    return values
+def _add_scalar_point_elements(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
+    """CELAS3/CELAS4 springs and CMASS3/CMASS4 masses between scalar points (or to ground)."""
+    for name in SCALAR_POINT_CARDS:
+        kind = "K" if name.startswith("CELAS") else "M"
+        ends, values, eids = [], [], []
+        for _eid, f in _raw_cards(bdf, name):
+            f = f + [""] * 9
+            for base in (1, 5):  # a second element on the same entry starts in field 5
+                if not f[base]:
+                    continue
+                try:
+                    eid = int(f[base])
+                    ref = int(f[base + 1]) if name.endswith("3") else float(_nastran_value(f[base + 1]))
+                    s1, s2 = (int(x) if x else 0 for x in f[base + 2:base + 4])
+                except (ValueError, TypeError):
+                    raise ModelError(f"{name} {f[base]}: malformed entry") from None
+                if name.endswith("3"):
+                    table = bdf.properties if kind == "K" else bdf.properties_mass
+                    p = table.get(ref)
+                    if p is None or p.type != ("PELAS" if kind == "K" else "PMASS"):
+                        raise ModelError(f"{name} {eid}: property {ref} is not a defined "
+                                         f"{'PELAS' if kind == 'K' else 'PMASS'}")
+                    value = float(p.k if kind == "K" else p.mass)
+                else:
+                    value = ref
+                if not (s1 or s2):
+                    raise ModelError(f"{name} {eid}: no scalar point given")
+                for sp in (s1, s2):
+                    if sp and sp not in nodes.spoints:
+                        raise ModelError(f"{name} {eid}: {sp} is not a scalar point (SPOINT)")
+                if not s1:
+                    s1, s2 = s2, 0
+                ends.append((s1, 1, s2, 1 if s2 else 0))
+                values.append(value * (wtmass if kind == "M" else 1.0))
+                eids.append(eid)
+        _add_scalar_elements(model, nodes, ends, np.array(values, float), np.array(eids, dtype=np.int64),
+                             name, kind)
 
 
 def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
@@ -1551,9 +1312,14 @@ def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
             info.notes.append(f"subcases select different SPC sets {chosen}; using the first, {chosen[0]}")
         top = int(chosen[0])
         if top not in all_sets:
-            raise ModelError(f"case control SPC = {top}, but no SPC, SPC1 or SPCADD has set {top}")
-        info.spc_reason = f"SPC = {top} in the case control"
-        roots = [top]
+            # NASTRAN only warns (and runs without the set); said loudly in the notes.
+            info.spc_reason = f"SPC = {top} in the case control, but no SPC, SPC1 or SPCADD has set {top}: no SPC applied, as NASTRAN"
+            info.notes.append(f"WARNING: case control SPC = {top} names no SPC/SPC1/SPCADD set: run without it, "
+                              f"as NASTRAN does (it warns too)")
+            roots = []
+        else:
+            info.spc_reason = f"SPC = {top} in the case control"
+            roots = [top]
     elif all_sets:
         roots = sorted(all_sets)
         info.spc_reason = "no SPC request in the case control: all SPC sets applied"
@@ -1593,233 +1359,11 @@ def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
         if g.ps:
             by_comp[str(g.ps)].append(np.array([g.nid], dtype=np.int64))
     for comp, chunks in sorted(by_comp.items()):
-        comp = comp.replace("0", "")  # component 0 is a scalar point's: nothing to fix
-        if comp:
-            model.fix(np.unique(np.concatenate(chunks)), comp)
-
-
-def _select_eigen(bdf, info: BdfInfo) -> None:
-    methods = {sid: m for sid, m in bdf.methods.items() if m.type in ("EIGRL", "EIGR")}
-    chosen = _case_values(bdf, "METHOD")
-    if chosen:
-        sid = int(chosen[0])
-        if sid not in methods:
-            raise ModelError(f"case control METHOD = {sid}, but no EIGRL or EIGR has SID {sid}")
-        if len(chosen) > 1:
-            info.notes.append(f"subcases select different METHODs {chosen}; using the first, {sid}")
-    elif methods:
-        sid = min(methods)
-        if len(methods) > 1:
-            info.notes.append(f"several eigenvalue requests and no METHOD in the case control; using {sid}")
-    else:
-        return
-    m = methods[sid]
-    if m.type == "EIGRL":
-        info.eigen = EigenRequest("EIGRL", sid, m.nd, m.v1, m.v2)
-    else:
-        info.eigen = EigenRequest("EIGR", sid, m.nd or m.ne, m.f1, m.f2)
-
-
-# ======================================================================= writing
-def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
-              title: str | None = None) -> None:
-    """Write ``model`` as a runnable SOL 103 NASTRAN deck.
-
-    Parameters
-    ----------
-    model : fem.Model
-    path : path-like
-        Output deck; written atomically (no partial file on error).
-    n_modes : int or None
-        ND of the EIGRL written (with METHOD in the case control); None writes no EIGRL.
-    title : str, optional
-        Case-control TITLE (default: the model's name).
-
-    Notes
-    -----
-    Cards written: GRID; CBAR + PBAR (``I1 = Iz``, ``I2 = Iy``, K1/K2 = shear areas / A only
-    for a Timoshenko model, blank otherwise) or CROD + PROD for rods; MAT1 (E, G, RHO; NU
-    left blank so NASTRAN derives it); CONM2 (mass, offset and inertia about the cg, products
-    of inertia with NASTRAN's sign); CELAS2 per nonzero component of springs in global axes,
-    CBUSH + PBUSH with a CORD2R for springs in other axes (grounded or between coincident
-    grids only: elsewhere NASTRAN adds a lever arm the model's spring does not have); RBE2
-    (a rigid body's mass as a CONM2 at its master, CID = 0, offset to its cg); SPC1 (set 1);
-    PARAM,COUPMASS (1 consistent, -1 lumped); EIGRL. NASTRAN's coupled CROD and CBAR mass differ
-    from the model's textbook consistent mass (see :func:`_nastran_mass_conventions`), so a
-    consistent-mass model with rods or torsional inertia reads back with NASTRAN's mass, as
-    NASTRAN would run it. Element ids that clash across kinds are
-    renumbered above the largest id. Values are written in 16-character fields so that a
-    re-read model matches to about 1e-12 (16-character fields).
-
-    Examples
-    --------
-    A model built in Python, written as a deck and read back: the same modes.
-
-    >>> import numpy as np
-    >>> from trussid.fem import ALUMINIUM, Model, Section, read_bdf, solve_modes, write_bdf
-    >>> m = Model(mass="lumped")
-    >>> m.add_nodes([1, 2, 3], [[0, 0, 0], [0, 0, 0.5], [0, 0, 1.0]])
-    >>> m.add_beams([1, 2], [[1, 2], [2, 3]], Section.tube(0.0125, 0.002), ALUMINIUM, orient=[1, 0, 0])
-    >>> m.fix(1)
-    >>> write_bdf(m, "mast.bdf", n_modes=4)
-    >>> again, info = read_bdf("mast.bdf")
-    >>> f0, f1 = solve_modes(m, 4).frequencies_hz, solve_modes(again, 4).frequencies_hz
-    >>> print(np.round(f0, 2), np.allclose(f0, f1, rtol=1e-6), info.eigen.n_modes)
-    [ 20.71  20.71 106.69 106.69] True 4
-    """
-    from cpylog import SimpleLogger
-    from pyNastran.bdf.bdf import BDF
-    from pyNastran.bdf.case_control_deck import CaseControlDeck
-
-    bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
-    ids, xyz = model.node_ids, model.xyz
-    if len(ids) == 0:
-        raise ModelError("write_bdf: the model has no nodes")
-    unwritable = [what for what, present in (
-        ("element matrices (add_matrices)", bool(getattr(model, "general", None))),
-        ("linear constraints (add_constraint)", bool(getattr(model, "constraints", None))),
-        ("node displacement frames", model.node_frames() is not None if hasattr(model, "node_frames") else False),
-        ("omitted DOFs", bool(model.omitted_mask().any()) if hasattr(model, "omitted_mask") else False),
-    ) if present]
-    if unwritable:
-        raise ModelError(f"write_bdf: the model has {', '.join(unwritable)}, which this writer does not "
-                         f"translate back into NASTRAN entries")
-    for nid, x in zip(ids.tolist(), xyz):
-        bdf.add_grid(nid, x.tolist())
-
-    used_eids: set[int] = set()
-    next_id = [0]
-    beams = model.beams
-    all_ids = [beams.ids, model.springs.ids, np.array([b.id for b in model.rigid_bodies], dtype=np.int64)]
-    next_id[0] = int(max([a.max() for a in all_ids if len(a)] + [0])) + 1
-
-    def eid_for(wanted: int) -> int:
-        if wanted > 0 and wanted not in used_eids:
-            used_eids.add(wanted)
-            return wanted
-        new = next_id[0]
-        next_id[0] += 1
-        used_eids.add(new)
-        return new
-
-    _write_beams(bdf, model, eid_for)
-    _write_masses(bdf, model, eid_for)
-    _write_springs(bdf, model, eid_for)
-    _write_rigid(bdf, model, eid_for)
-
-    fixed = model.fixed_mask() if model.has_supports else np.zeros((len(ids), 6), bool)
-    has_spc = bool(fixed.any())
-    if has_spc:
-        codes = np.array(["".join(str(k + 1) for k in np.flatnonzero(row)) for row in fixed])
-        for comp in sorted(set(codes) - {""}):
-            bdf.add_spc1(1, comp, ids[codes == comp].tolist())
-    bdf.add_param("COUPMASS", [1 if model.mass_formulation == "consistent" else -1])
-    if n_modes:
-        bdf.add_eigrl(1, nd=int(n_modes))
-
-    bdf.sol = 103
-    bdf.executive_control_lines = ["SOL 103", "CEND"]
-    lines = [f"TITLE = {title or model.name}", "ECHO = NONE", "SUBCASE 1"]
-    if n_modes:
-        lines.append("  METHOD = 1")
-    if has_spc:
-        lines.append("  SPC = 1")
-    lines += ["  DISPLACEMENT = ALL", "BEGIN BULK"]
-    bdf.case_control_deck = CaseControlDeck(lines, log=bdf.log)
-    with atomic_path(path) as tmp:
-        bdf.write_bdf(str(tmp), size=16, is_double=False, enddata=True)
-
-
-def _unique_rows(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    rows, inverse = np.unique(arr, axis=0, return_inverse=True)
-    return rows, inverse.ravel()
-
-
-def _write_beams(bdf, model: Model, eid_for) -> None:
-    b = model.beams
-    if len(b) == 0:
-        return
-    mats, mat_of = _unique_rows(np.column_stack([b.E, b.G, b.rho]))
-    for mid, (E, G, rho) in enumerate(mats, start=1):
-        bdf.add_mat1(mid, float(E), float(G), None, rho=float(rho))
-    timo = model.beam_theory == "timoshenko"
-    Asy = np.where(np.isfinite(b.Asy), b.Asy, 0.0)
-    Asz = np.where(np.isfinite(b.Asz), b.Asz, 0.0)
-    keys = np.column_stack([b.rod, b.A, b.Iy, b.Iz, b.J, Asy, Asz, b.nsm, mat_of])
-    props, prop_of = _unique_rows(keys)
-    for pid, (rod, A, Iy, Iz, J, asy, asz, nsm, mi) in enumerate(props, start=1):
-        mid = int(mi) + 1
-        label = str(b.labels[np.flatnonzero(prop_of == pid - 1)[0]])
-        if rod:
-            bdf.add_prod(pid, mid, float(A), j=float(J), nsm=float(nsm), comment=label)
-        else:
-            # Euler-Bernoulli: K1/K2 blank (no shear flexibility). pyNastran writes blank
-            # for its 1e8 sentinel.
-            k1 = float(asy / A) if timo and asy > 0 else 1e8
-            k2 = float(asz / A) if timo and asz > 0 else 1e8
-            bdf.add_pbar(pid, mid, A=float(A), i1=float(Iz), i2=float(Iy), j=float(J), nsm=float(nsm),
-                         k1=k1, k2=k2, comment=label)
-    for i in range(len(b)):
-        eid = eid_for(int(b.ids[i]))
-        pid = int(prop_of[i]) + 1
-        ga, gb = (int(n) for n in b.nodes[i])
-        if b.rod[i]:
-            bdf.add_crod(eid, pid, [ga, gb])
-        else:
-            bdf.add_cbar(eid, pid, [ga, gb], b.orient[i].tolist(), None)
-
-
-def _tensor_to_conm2(I: np.ndarray) -> list[float]:
-    """Tensor about the cg -> CONM2 I11, I21, I22, I31, I32, I33 (NASTRAN adds the minus)."""
-    return [float(I[0, 0]), float(-I[1, 0]), float(I[1, 1]), float(-I[2, 0]), float(-I[2, 1]),
-            float(I[2, 2])]
-
-
-def _write_masses(bdf, model: Model, eid_for) -> None:
-    pm = model.point_masses
-    for i in range(len(pm)):
-        bdf.add_conm2(eid_for(0), int(pm.nodes[i]), float(pm.mass[i]), cid=0,
-                      X=pm.offset[i].tolist(), I=_tensor_to_conm2(pm.inertia[i]))
-
-
-def _write_springs(bdf, model: Model, eid_for) -> None:
-    s = model.springs
-    if len(s) == 0:
-        return
-    ids, xyz = model.node_ids, model.xyz
-    pos = {int(n): i for i, n in enumerate(ids)}
-    next_cid = [max(bdf.coords) + 1]
-    next_pid = [max(bdf.properties, default=0) + 1]
-    for i in range(len(s)):
-        ga, gb = int(s.nodes[i, 0]), int(s.nodes[i, 1])
-        frame = s.frame[i]
-        if np.array_equal(frame, np.eye(3)):
-            for c in np.flatnonzero(s.k[i]):
-                nodes = [ga, gb] if gb >= 0 else [ga, None]
-                comps = [int(c) + 1, int(c) + 1] if gb >= 0 else [int(c) + 1, 0]
-                bdf.add_celas2(eid_for(int(s.ids[i])), float(s.k[i, c]), nodes, c1=comps[0], c2=comps[1])
-            continue
-        if gb >= 0 and np.linalg.norm(xyz[pos[ga]] - xyz[pos[gb]]) > 0:
-            raise ModelError(f"spring {s.ids[i]}: a spring in rotated axes between non-coincident nodes "
-                             f"{ga} and {gb} has no exact NASTRAN equivalent (CBUSH adds a lever arm)")
-        cid = next_cid[0]
-        next_cid[0] += 1
-        # CORD2R by origin, a point on z and a point in the x-z plane (basic coordinates).
-        bdf.add_cord2r(cid, [0.0, 0.0, 0.0], frame[2].tolist(), frame[0].tolist())
-        pid = next_pid[0]
-        next_pid[0] += 1
-        bdf.add_pbush(pid, s.k[i].tolist(), [0.0] * 6, [0.0] * 6)
-        bdf.add_cbush(eid_for(int(s.ids[i])), pid, [ga, gb if gb >= 0 else None], None, None, cid=cid)
-
-
-def _write_rigid(bdf, model: Model, eid_for) -> None:
-    xyz_of = dict(zip(model.node_ids.tolist(), model.xyz))
-    for rb in model.rigid_bodies:
-        comps = "".join(str(k + 1) for k in np.flatnonzero(rb.dofs))
-        bdf.add_rbe2(eid_for(rb.id), rb.master, comps, rb.slaves.tolist(), comment=rb.label)
-        if rb.mass > 0 or np.any(rb.inertia):
-            if rb.master not in xyz_of:
-                raise ModelError(f"{rb.label}: master node {rb.master} is not defined")
-            offset = np.zeros(3) if rb.cg is None else np.asarray(rb.cg, float) - xyz_of[rb.master]
-            bdf.add_conm2(eid_for(0), rb.master, float(rb.mass), cid=0, X=offset.tolist(),
-                          I=_tensor_to_conm2(rb.inertia), comment=f"mass of {rb.label}")
+        ids = np.unique(np.concatenate(chunks))
+        if "0" in comp or not comp.strip():  # component 0 (or blank): a scalar point's only DOF
+            held = [i for i in ids.tolist() if i in nodes.spoints]
+            if held:
+                model.fix(held, "1")
+        comp = comp.replace("0", "")
+        if comp.strip():
+            model.fix(ids, comp)

@@ -1,0 +1,84 @@
+"""``trussid modes`` on malformed or unsupported decks: exit status 2, one line on stderr that
+names the entry and its id (as the user can find it in the deck), none of pyNastran's
+internals, and no file written (not even the OP2 that was asked for)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from trussid.cli import main
+
+BEAM = "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,70.+9,,0.3,2700.\nPBAR,1,1,1.-4,2.-9,2.-9,4.-9\n"
+CBAR = "CBAR,10,1,1,2,0.,0.,1.\n"
+
+#: (case, bulk data, the entry and id the message must name)
+BAD_DECKS = [
+    ("no orientation", BEAM + "CBAR,10,1,1,2\n", "CBAR 10"),
+    ("undefined grid", BEAM + "CBAR,10,1,1,7,0.,0.,1.\n", "CBAR 10"),
+    ("undefined property", BEAM + "CBAR,10,5,1,2,0.,0.,1.\n", "CBAR 10"),
+    ("text in an integer field", BEAM + "CBAR,10,1,1,abc,0.,0.,1.\n", "CBAR 10"),
+    ("offsets", BEAM + "CBAR,10,1,1,2,0.,0.,1.\n,,,1.,0.,0.\n", "CBAR 10"),
+    ("bad pin flag", BEAM + "CBAR,10,1,1,2,0.,0.,1.\n,7\n", "CBAR 10"),
+    ("undefined material", BEAM.replace("PBAR,1,1,", "PBAR,1,9,") + CBAR, "PBAR 1"),
+    ("unknown PBARL shape", BEAM + "PBARL,2,1,,HAT\n,1.,2.,3.,4.\nCBAR,10,2,1,2,0.,0.,1.\n", "PBARL 2"),
+    ("tapered PBEAM", BEAM + "PBEAM,3,1,1.-4,2.-9,2.-9,,4.-9\n,YES,1.,2.-4,3.-9,3.-9,,4.-9\n"
+     "CBEAM,10,3,1,2,0.,0.,1.\n", "PBEAM 3"),
+    ("text in a GRID coordinate", "GRID,1,,0.,x,0.\n", "GRID 1"),
+    ("CONM2 on an undefined grid", BEAM + CBAR + "CONM2,20,9,,1.\n", "CONM2 20"),
+    ("negative CONM2 mass", BEAM + CBAR + "CONM2,20,2,,-1.\n", "CONM2 20"),
+    ("CELAS2 component 9", BEAM + CBAR + "CELAS2,30,1.,2,9\n", "CELAS2 30"),
+    ("RBE2 on an undefined grid", BEAM + CBAR + "RBE2,40,1,123456,8\n", "RBE2 40"),
+    ("GENEL short of terms", BEAM + CBAR + "GENEL,50,,1,1,2,1\n,Z,1.,2.\n", "GENEL 50"),
+    ("CONM1 with text", BEAM + CBAR + "CONM1,60,2,0,abc\n", "CONM1 60"),
+    ("EIGR with text in ND", BEAM + CBAR + "EIGR,70,FEER,0.,10.,,abc\n", "EIGR 70"),
+    ("EIGRL with text", BEAM + CBAR + "EIGRL,1,abc\n", "EIGRL 1"),
+    ("SPC1 on an undefined grid", BEAM + CBAR + "SPC1,90,123456,5\n", "SPC1 90"),
+    ("CMASS3 without its SPOINT", BEAM + CBAR + "CMASS3,100,1,5\n", "scalar point 5"),
+    ("CMASS3 without its PMASS", BEAM + CBAR + "SPOINT,5\nCMASS3,100,1,5\n", "CMASS3 100"),
+    ("EIGP", BEAM + CBAR + "EIGP,90,1.,2.,1\n", "EIGP 90"),
+    ("DMIG with text in a term", BEAM + CBAR + "DMIG,KX,0,6,1,0\nDMIG,KX,1,1,,1,abc,1.\n", "DMIG KX"),
+    ("matrix scale factor", BEAM + CBAR + "PARAM,CK1,2.\n", "PARAM,CK1"),
+    ("boundary set alone", BEAM + CBAR + "BSET1,123456,1\n", "BSET1 (grid 1)"),
+    ("Q-set on a grid", BEAM + CBAR + "QSET1,123456,2\n", "QSET1 2"),
+    ("text WTMASS", BEAM + CBAR + "PARAM,WTMASS,abc\n", "PARAM,WTMASS"),
+    ("NASTRAN-95 blank-separated free field", BEAM + "CBAR,  10  1   1   2  0. 0. 1.\n", "CBAR 10"),
+    ("NASTRAN-95 replicator", BEAM + CBAR + "=(3),*(1),=,*(1),/\n", "replicator, line"),
+    ("shell elements", BEAM + CBAR + "CQUAD4,200,1,1,2,2,1\n", "CQUAD4 200"),
+    ("GRDSET with an undefined system", "GRDSET,,,,,,7\n" + BEAM + CBAR, "GRID 1"),
+    ("GRDSET with text", "GRDSET,,abc\n" + BEAM + CBAR, "GRDSET"),
+]
+
+#: What pyNastran's own messages carry and a user's message must not.
+INTERNALS = re.compile(r"uline=|allowed_methods=|allowed=|card=\[|Traceback|len\(\w+ card\)")
+
+
+def test_at_least_twenty_bad_decks():
+    assert len(BAD_DECKS) >= 20
+
+
+@pytest.mark.parametrize("bulk,named", [(b, n) for _c, b, n in BAD_DECKS], ids=[c for c, _b, _n in BAD_DECKS])
+def test_bad_deck_exits_2_naming_the_entry_and_writes_nothing(tmp_path, monkeypatch, capsys, bulk, named):
+    deck = tmp_path / "bad.bdf"
+    deck.write_text("BEGIN BULK\n" + bulk + "ENDDATA\n")
+    monkeypatch.chdir(tmp_path)  # pyNastran leaves crash files in the working directory
+    before = sorted(p.name for p in tmp_path.iterdir())
+    code = main(["modes", str(deck), "--op2", str(tmp_path / "out.op2")])
+    out, err = capsys.readouterr()
+    assert code == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("trussid modes: error: ")
+    assert named in lines[0], lines[0]
+    assert not INTERNALS.search(lines[0]), lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_rigid_format_13_is_refused_naming_the_analysis(tmp_path, capsys):
+    deck = tmp_path / "d13.dat"
+    deck.write_text("APP DISP\nSOL 13,0\nCEND\nBEGIN BULK\n" + BEAM + CBAR + "ENDDATA\n")
+    assert main(["modes", str(deck)]) == 2
+    err = capsys.readouterr().err
+    assert "SOL 13" in err and "differential stiffness" in err
