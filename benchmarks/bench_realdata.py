@@ -170,9 +170,9 @@ def fit_plid(u, y, n, dt, h=None):
             f"K: {(prov.predictor or {}).get('chosen')}"
             + (f"; {prov.structure}" if prov.structure is not None else ""))
     out = _mk(m.A, m.B, m.C, m.D, idn.K, note)
-    out["recursion_seconds"] = info.get("recursion_seconds")
-    out["recursion_cpu_seconds"] = info.get("recursion_cpu_seconds")
-    out["stabilised"] = info.get("stabilised")
+    out["recursion_seconds"] = prov.recursion_seconds
+    out["recursion_cpu_seconds"] = prov.recursion_cpu_seconds
+    out["stabilised"] = prov.stabilised
     return out
 
 
@@ -492,7 +492,9 @@ def cli_check(name, res, log=print):
     out = {"order": s["order"]}
     with tempfile.TemporaryDirectory() as tmp:
         csv = os.path.join(tmp, f"{name}.csv")
-        cols = ["t"] + [f"u{j + 1}" for j in range(ui.shape[1])] + [
+        # the time column's unit in its header, as a user writes it (``t [s]``): a unitless
+        # time column stepping by 1 is refused as ambiguous (seconds or milliseconds?)
+        cols = ["t [s]"] + [f"u{j + 1}" for j in range(ui.shape[1])] + [
             f"y{j + 1}" for j in range(yi.shape[1])]
         t = np.arange(ui.shape[0]) * d["dt"]
         np.savetxt(csv, np.column_stack([t, ui, yi]), delimiter=",", header=",".join(cols),
@@ -548,6 +550,8 @@ def main(argv=None):
                     help="results stem (.md and .json are written)")
     ap.add_argument("--from-json", metavar="FILE",
                     help="do not run: rewrite the report from this results file")
+    ap.add_argument("--cli", action="store_true",
+                    help="with --from-json: (re)run only the trussid identify check of each set")
     ap.add_argument("--others", metavar="FILE",
                     help="take the methods this run did not fit from an earlier results file "
                     "(the comparators do not depend on trussid's commit); the report says so")
@@ -559,6 +563,9 @@ def main(argv=None):
         with open(a.from_json) as fh:
             saved = json.load(fh)
         env, all_res = saved["environment"], saved["results"]
+        if a.cli:
+            for name, res in all_res.items():
+                res["cli"] = cli_check(name, res, log=lambda s: print(s, flush=True))
     else:
         if not os.path.isdir(DATA):
             print(f"bench_realdata: no data directory {DATA}", file=sys.stderr)

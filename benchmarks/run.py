@@ -68,8 +68,14 @@ BENCHMARKS = {
                 ["bench_control.py", "--quick", "--samples", "3000", "--truths", "2", "--no-baselines",
                  "--out", "{out}/control.md"]),
     "render": (["bench_render.py"], ["bench_render.py", "--quick", "--out", "{out}/render.md"]),
+    # study engine: serial loop vs local and `dask` command-line clusters (~4 min quiet); a
+    # 1e5-design study uninterrupted, then interrupted and resumed (~30 min quiet; quick: 600)
     "study": (["bench_study.py"], ["bench_study.py", "--quick", "--out", "{out}"]),
+    "study_scale": (["bench_study_scale.py", "--json", "{json}"],
+                    ["bench_study_scale.py", "--quick", "--json", "{json}"]),
     "threads": (["bench_threads.py"], ["bench_threads.py", "--repeats", "1", "--out", "{out}/threads.md"]),
+    "uncertainty": (["bench_uncertainty.py"],
+                    ["bench_uncertainty.py", "--records", "2", "--out", "{out}/uncertainty"]),
     # Not a measurement: the README's tables from the results; the quick run checks that the
     # README shows what benchmarks/results holds.
     "readme_tables": (["readme_tables.py"], ["readme_tables.py", "--check"]),

@@ -92,7 +92,7 @@ spec = spec_from_dict({
     "parameters": {f"wall{i}": [float(v) for v in designs[:, i]] for i in range(6)}})
 study_dir = args.study or tempfile.mkdtemp(prefix="wall_sweeps_")
 with tqdm(total=6 * args.points, desc="designs", unit="design", disable=__name__ != "__main__") as bar:
-    run_study(spec, study_dir, workers=args.workers, progress=lambda rows: bar.update(len(rows)))
+    run_study(spec, study_dir, workers=args.workers, progress=lambda batch: bar.update(batch.points))
 table = read_study(study_dir)[1]  # one row per design, in point order
 sweep = table[[f"f{k + 1}" for k in range(len(f0))]].to_numpy().reshape(6, args.points, len(f0))  # Hz
 

@@ -10,7 +10,7 @@ and its one-step predictor runs ``x[k+1] = (A - K C) x[k] + (B - K D) u[k] + K y
 criterion); a predictor gain picked from a few one-parameter families of Kalman gains
 (:func:`trussid.plid.metrics.best_predictor`) cannot represent a coloured disturbance, and
 that is where the one-step fit was lost on measured data (``docs/plid.md``, "The predictor
-gain"; ``../shared/docs/plid-research.md`` section 3).
+gain"; the prototype measurements behind ``benchmarks/results/realdata.md``).
 
 :func:`refine_gain` fits ``K`` and the initial state with ``A, B, C, D`` fixed by
 Gauss-Newton / Levenberg-Marquardt on the maximum-likelihood criterion of Gaussian
@@ -22,10 +22,6 @@ project's modal regressors (:func:`trussid.plid._linalg.modal_regressors`): with
 ``d yhat / d x0 = C (A - K C)^k``. A step is rejected when the predictor's spectral radius
 would reach ``margin`` (a predictor at the unit circle forgets its start and its errors
 never). ``A, B, C, D`` and hence the simulation fit are untouched by construction.
-
-:func:`refine_innovations` frees ``A, B, C, D`` as well (``ssest``'s default
-``Focus`` 'prediction'): more one-step fit where the order allows, at a cost in simulation
-fit, and with ``A`` kept inside the unit circle (steps that would leave it are rejected).
 
 scipy's ``least_squares`` takes the same residual and Jacobian, but it cannot reject a step
 on a stability condition, so the Levenberg-Marquardt loop is written out here.
@@ -46,8 +42,7 @@ from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.experiment import simulate
 from trussid.plid._linalg import modal_regressors
 
-__all__ = ["GainFit", "InnovationsFit", "refine_gain", "refine_innovations",
-           "gain_iterations"]
+__all__ = ["GainFit", "refine_gain", "gain_iterations"]
 
 
 @dataclass(frozen=True)
@@ -83,20 +78,6 @@ class GainFit:
     cpu_seconds: float
 
 
-@dataclass(frozen=True)
-class InnovationsFit:
-    """An innovations model fitted by prediction error (:func:`refine_innovations`)."""
-
-    model: control.StateSpace
-    K: np.ndarray
-    iterations: int
-    logdet_start: float
-    logdet_end: float
-    spectral_radius: float          # of A
-    predictor_spectral_radius: float  # of A - K C
-    cpu_seconds: float
-
-
 def _rho(A) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(A)), initial=0.0)) if np.size(A) else 0.0
 
@@ -117,7 +98,7 @@ def gain_iterations(n_samples: int, order: int, outputs: int) -> int:
     """Default iteration limit of :func:`refine_gain`: 30 on short records, fewer where one
     iteration is expensive (about ``N p (n p)^2`` flops for the normal equations).
 
-    Measured (``../shared/docs/plid-research.md``, "Iterations needed"): the subframe
+    Measured (the prototype's "iterations needed" runs): the subframe
     (5114 samples, n = 30, p = 3) reaches its one-step fit in 5 iterations (97.80 %, 97.81 %
     after 20); flutter (614 samples, n = 8) creeps from a poor start and needs 30 (77.8 %
     after 5, 98.4 % after 30).
@@ -209,7 +190,7 @@ def refine_gain(model: control.StateSpace, u, y, K0, *, iterations: int | None =
         Steps that would put the predictor's spectral radius at or beyond ``margin`` are
         rejected (if the start already lies beyond it, the start's radius is the margin).
         0.999 cost at most 0.04 points of one-step fit on the four measured sets; 0.995
-        cost up to 4.7 (``../shared/docs/plid-research.md``, the margin table).
+        cost up to 4.7 (the prototype's margin table).
     tol : float
         Stop when an accepted step lowers the weighted criterion by less than this
         fraction.

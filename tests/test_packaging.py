@@ -41,6 +41,16 @@ def _declared():
 #: Installed by scripts/setup.sh outside dependency resolution, with the reason there.
 SETUP_INSTALLED = {"slycot"}
 
+#: Optional features: the module -> the extra that installs it. Each is imported only where
+#: the feature is used, inside ``try``/``except ImportError`` that names the extra.
+OPTIONAL = {"dask_jobqueue": "cluster"}
+
+
+def _extra(name):
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    return {re.split(r"[<>=!~\[; ]", d, maxsplit=1)[0].lower().replace("_", "-")
+            for d in meta["project"]["optional-dependencies"][name]}
+
 
 def test_every_third_party_import_is_a_runtime_dependency():
     dists = packages_distributions()
@@ -48,6 +58,11 @@ def test_every_third_party_import_is_a_runtime_dependency():
     missing = {}
     for top, where in _imported_top_levels().items():
         if top in sys.stdlib_module_names or top in PACKAGES or top == "__future__":
+            continue
+        if top in OPTIONAL:
+            assert top.replace("_", "-") in _extra(OPTIONAL[top]), (top, OPTIONAL[top])
+            text = (ROOT / where).read_text()
+            assert "except ImportError" in text and f"trussid[{OPTIONAL[top]}]" in text, where
             continue
         owners = {d.lower().replace("_", "-") for d in dists.get(top, [top])}
         if not owners & declared:

@@ -82,3 +82,63 @@ def test_a_directory_holding_other_files_is_refused(tmp_path):
     with pytest.raises(StudyError, match="is not a study output"):
         run_study(small_spec(), tmp_path, workers=0)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
+
+
+# ----------------------------------------------------------------------------- batch sizes
+def test_batches_aim_at_a_second_of_work_from_the_measured_cost_of_a_point():
+    from trussid.study.engine import BatchSizer
+
+    s = BatchSizer(first=20)
+    assert s.size(remaining=10_000, threads=4) == 20  # nothing measured yet: the evaluator's hint
+    s.observe(points=20, seconds=20 * 0.016)  # 16 ms a point
+    assert s.size(remaining=100_000, threads=4) == 62  # floor(1 s / 16 ms)
+    s.observe(points=20, seconds=20 * 0.004)  # the mean is now 10 ms a point
+    assert s.size(remaining=100_000, threads=4) == 100
+
+
+def test_batches_shrink_at_the_end_so_that_the_workers_finish_together():
+    from trussid.study.engine import BatchSizer
+
+    s = BatchSizer(first=1)
+    s.observe(points=10, seconds=0.1)  # 10 ms a point
+    assert s.size(remaining=400, threads=4) == 50  # remaining / (2 threads), below 1 s of work
+    assert s.size(remaining=40, threads=4) == 15  # never under 0.15 s of work (per-task costs)
+    assert s.size(remaining=7, threads=4) == 7
+    slow = BatchSizer(first=1)
+    slow.observe(points=1, seconds=3.0)  # a 3-s fit: one per task
+    assert slow.size(remaining=30, threads=2) == 1
+
+
+def test_a_fixed_chunk_overrides_the_measured_size(tmp_path):
+    from trussid.study.engine import BatchSizer
+
+    s = BatchSizer(first=20, fixed=7)
+    s.observe(points=7, seconds=7 * 0.016)
+    assert [s.size(r, 4) for r in (1000, 7, 3)] == [7, 7, 3]
+    sizes = []
+    run = run_study(small_spec(chunk=None), tmp_path / "s", workers=0, chunk=5, progress=lambda b: sizes.append(b.points))
+    assert sizes == [5, 5, 2] and run.tasks == 3 and len(list((tmp_path / "s").glob("part-*.parquet"))) == 3
+
+
+def test_the_run_reports_what_points_and_tasks_cost(tmp_path):
+    run = run_study(small_spec(), tmp_path / "s", workers=0)
+    df = read_study(tmp_path / "s")[1]
+    assert run.tasks == 3 and (run.batch_min, run.batch_max) == (4, 4)
+    assert run.eval_cpu_s == pytest.approx(df["cpu_seconds"].sum())
+    assert run.eval_s == pytest.approx(df["seconds"].sum())
+    assert run.task_cpu_s >= run.eval_cpu_s + run.context_cpu_s > 0
+    assert run.peak_rss_mb > 50
+    text = run.costs()
+    assert "per point: evaluation" in text and "3 tasks of 4..4 points" in text
+
+
+def test_a_stop_request_ends_the_run_after_the_batch_in_hand_and_a_rerun_completes(tmp_path):
+    """The CLI's SIGINT/SIGTERM handler only sets a flag (an exception raised from a signal
+    handler inside a finaliser is lost); the engine reads it after each saved batch."""
+    spec, out = small_spec(), tmp_path / "s"
+    saved = []
+    with pytest.raises(KeyboardInterrupt):
+        run_study(spec, out, workers=0, progress=lambda b: saved.append(b.points), stop=lambda: len(saved) >= 2)
+    assert saved == [4, 4] and len(pd.read_parquet(out)) == 8
+    again = run_study(spec, out, workers=0)
+    assert (again.computed, again.already) == (4, 8)

@@ -127,3 +127,26 @@ def test_sigint_then_rerun_computes_only_the_missing_points(tmp_path, serial):
     new_points = pd.concat([pd.read_parquet(p) for p in new])["point"]
     assert sorted(new_points) == sorted(set(range(200)) - set(saved))
     pd.testing.assert_frame_equal(table(out), serial, check_exact=True)
+
+
+def test_the_driver_holds_a_bounded_number_of_tasks_whatever_the_study_size(tmp_path, serial):
+    """Batches are submitted as others finish (IN_FLIGHT per worker thread): the scheduler
+    never holds the whole study, and each batch is written and released as it arrives."""
+    from distributed import Client
+
+    from trussid.study.engine import IN_FLIGHT, local_cluster
+
+    spec = spec_from_dict({**WALL_STUDY, "study": {**WALL_STUDY["study"], "chunk": 2}})  # 100 tasks
+    held = []
+    with local_cluster(2) as cluster, Client(cluster) as client:
+        def progress(batch):
+            held.append(client.run_on_scheduler(lambda dask_scheduler: len(dask_scheduler.tasks)))
+
+        run = run_study(spec, tmp_path / "d", client=client, progress=progress)
+        # the workers run with the study environment (malloc thresholds, no profiler)
+        env = client.run(lambda: (os.environ.get("MALLOC_MMAP_THRESHOLD_"),
+                                  __import__("dask").config.get("distributed.worker.profile.enabled")))
+    assert run.tasks == 100 and len(held) == 100
+    assert max(held) <= IN_FLIGHT * 2 + 1
+    assert set(env.values()) == {("33554432", False)}
+    pd.testing.assert_frame_equal(table(tmp_path / "d"), serial, check_exact=True)

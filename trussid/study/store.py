@@ -3,13 +3,13 @@
 Layout of an output directory ``DIR``::
 
     DIR/_study.json               spec (TOML layout as JSON), its hash, point count
-    DIR/part-000000-<id>.parquet  one file per finished chunk of points
+    DIR/part-0000000-<id>.parquet one file per finished batch of points
     DIR/_report/                  plots and report.md (``trussid study DIR --report``)
 
 ``pandas.read_parquet(DIR)`` reads every part as one table, one row per point (Arrow's
 dataset reader skips names starting with ``_`` or ``.``: the metadata, the report and any
 half-written temporary file). A part is written under a ``.``-name and renamed when
-complete, so an interrupted run leaves only whole chunks; a rerun computes the points no
+complete, so an interrupted run leaves only whole batches; a rerun computes the points no
 part holds.
 """
 
@@ -21,6 +21,7 @@ import uuid
 from pathlib import Path
 
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from trussid._util.files import atomic_path
@@ -90,10 +91,11 @@ class StudyStore:
             done.update(pq.read_table(p, columns=["point"]).column("point").to_pylist())
         return done
 
-    def write_chunk(self, rows: list[dict]) -> Path:
-        """Write one chunk of rows as a new part, atomically (temporary ``.``-name, rename)."""
-        table = pa.Table.from_pylist(rows, schema=self.schema)
-        first = min(r["point"] for r in rows)
+    def write_table(self, table: pa.Table) -> Path:
+        """Write one batch of rows as a new part, atomically (temporary ``.``-name, rename)."""
+        if table.schema != self.schema:
+            table = table.cast(self.schema)
+        first = pc.min(table.column("point")).as_py()
         path = self.out / f"part-{first:07d}-{uuid.uuid4().hex[:8]}.parquet"
         with atomic_path(path) as tmp:
             pq.write_table(table, tmp)
