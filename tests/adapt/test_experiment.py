@@ -24,16 +24,18 @@ def test_ideal_converters_give_the_linear_closed_loop(structure, controller):
 def test_records_continue_one_another(structure, controller):
     """Two records started from the first one's final states equal one long record."""
     d = dither(600, 3, structure.dt, 1.0, seed=5)
-    whole = run_loop(structure, controller, d, 0.0)
-    a = run_loop(structure, controller, d[:250], 0.0)
+    lab = dict(adc_full_scale=10.0, dac_full_scale=10.0, bits=12)   # the converters
+    whole = run_loop(structure, controller, d, 0.0, **lab)
+    a = run_loop(structure, controller, d[:250], 0.0, **lab)
     b = run_loop(structure, controller, d[250:], 0.0, x_plant=a.x_plant,
-                 x_controller=a.x_controller)
+                 x_controller=a.x_controller, **lab)
     np.testing.assert_array_equal(np.vstack([a.measured, b.measured]), whole.measured)
 
 
 def test_record_carries_names_noise_and_quantisation(structure, controller):
     rec = closed_loop_record(structure, controller, 500, dither_rms=0.5, noise_rms=1e-3,
-                             adc_full_scale=[1.0, 2.0, 5.0], seed=1)
+                             adc_full_scale=[1.0, 2.0, 5.0], dac_full_scale=10.0, bits=12,
+                             seed=1)
     assert rec.input_names == ["ch1", "ch2", "ch3"] and rec.output_names == ["acc1", "acc2", "acc3"]
     assert rec.n_samples == 500 and rec.dither.shape == (500, 3)
     lsb = 2 * np.array([1.0, 2.0, 5.0]) / 2**12

@@ -14,7 +14,7 @@ def record(structure, controller):
     # the closed loop's sensors carry about 2.6 mV RMS under 1 V of dither: the A/D ranged
     # to 8 times that, sensor noise 5 % of it
     return closed_loop_record(structure, controller, 4000, dither_rms=1.0, noise_rms=1.3e-4,
-                              adc_full_scale=0.02, seed=7)
+                              adc_full_scale=0.02, dac_full_scale=10.0, bits=12, seed=7)
 
 
 @pytest.mark.parametrize("identify, df, dz", [(identify_plid, 1e-4, 0.05),

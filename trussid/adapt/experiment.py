@@ -66,8 +66,8 @@ def dither(n: int, m: int, dt: float, rms: float, band=(0.0, 400.0), seed: int =
     return excitation("white", n, m, 1.0 / dt, rms, band, seed)
 
 
-def run_loop(plant, controller, d, noise_rms, *, adc_full_scale=10.0, dac_full_scale=10.0,
-             bits: int = 12, seed: int = 0, x_plant=None, x_controller=None):
+def run_loop(plant, controller, d, noise_rms, *, adc_full_scale, dac_full_scale,
+             bits: int, seed: int = 0, x_plant=None, x_controller=None):
     """The loop sample by sample from given states (:mod:`module docstring <.experiment>`).
 
     :func:`trussid.lqg.evaluate.simulate_loop` does the same from rest and drops the states;
@@ -143,8 +143,8 @@ def trial_rms(plant, controller, n: int, dither_rms: float, band=(0.0, 400.0),
 
 
 def closed_loop_record(plant, controller, n: int, *, dither_rms: float = 2.0,
-                       band=(0.0, 400.0), noise_rms=0.0, adc_full_scale=10.0,
-                       dac_full_scale=10.0, bits: int = 12, seed: int = 0, x_plant=None,
+                       band=(0.0, 400.0), noise_rms=0.0, adc_full_scale,
+                       dac_full_scale, bits: int, seed: int = 0, x_plant=None,
                        x_controller=None) -> ClosedLoopRecord:
     """A closed-loop identification record: white dither of ``dither_rms`` [V] per channel
     in ``band`` [Hz] (seed ``seed``) at the D/A, sensor noise of ``noise_rms`` [V] (seed

@@ -318,9 +318,9 @@ class AdaptSettings:
     dither_rms: float = 2.0
     dither_band: tuple = (0.0, 400.0)
     noise_rms: object = 0.0
-    adc_full_scale: object = 10.0
-    dac_full_scale: float = 10.0
-    bits: int = 12
+    adc_full_scale: object = None   # the lab's converters: required (adapt() checks)
+    dac_full_scale: float | None = None
+    bits: int | None = None
     max_windows: int = 4
     seed: int = 27
     supervisor: SupervisorSettings = SupervisorSettings()
@@ -403,6 +403,10 @@ def adapt(truth, controller, reference_hz, settings: AdaptSettings = AdaptSettin
     switch one more window is recorded with the new controller, then the run ends (or after
     ``max_windows``).
     """
+    missing = [k for k in ("adc_full_scale", "dac_full_scale", "bits")
+               if getattr(settings, k) is None]
+    if missing:
+        raise ValueError(f"AdaptSettings: the lab's converters are needed: {', '.join(missing)}")
     say = progress or (lambda msg: None)
     sv = settings.supervisor
     dt = float(truth.dt)

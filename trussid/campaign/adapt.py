@@ -110,13 +110,13 @@ class NominalClosedLoop:
     identified_dominant: dict     # {"plid", "n4sid"}: [(f, damping)] nearest those
     adc_full_scale: list
     noise_v: float
-    dac_full_scale: float = 10.0
-    bits: int = 12
+    dac_full_scale: float         # the lab's converters [V], bits
+    bits: int
 
 
 def nominal_closed_loop(truth, controller, s: AdaptDemoSettings, noise_v: float,
                         full_scale: float, ranging, open_loop_model=None, progress=None,
-                        bits: int = 12):
+                        *, bits: int):
     """Closed-loop record on ``truth`` with ``controller``, PLID and N4SID models from it,
     their FRF RMS errors against the truth (and the open-loop model's, if given).
     ``full_scale`` [V] and ``bits``: the lab's converters (both D/A and A/D); ``ranging``:
@@ -173,8 +173,8 @@ class ChangeResult:
 
 
 def run_change(name, label, truth, controller, reference_hz, s: AdaptDemoSettings,
-               noise_v: float, adc, progress=None, dac_full_scale: float = 10.0,
-               bits: int = 12) -> ChangeResult:
+               noise_v: float, adc, progress=None, *, dac_full_scale: float,
+               bits: int) -> ChangeResult:
     """The adaptive loop on one changed truth, and its evaluation on that truth."""
     c0 = time.process_time()
     a = AdaptSettings(window=s.n_samples, order=s.order, block_rows=s.block_rows,
@@ -226,7 +226,7 @@ def adapt_study(truth, tb, lab, model, K, data, demo_settings, ranging,
     noise_v = lab.accelerometers.noise_volts * s.noise_factor
     c0 = time.process_time()
     nom = nominal_closed_loop(truth, ctrl, s, noise_v, lab.daq.full_scale, ranging, m, say,
-                              lab.daq.bits)
+                              bits=lab.daq.bits)
     cpu["nominal_closed_loop"] = time.process_time() - c0
     ref_hz = nearest_modes(nom.plid.model, [f for f, _ in nom.truth_dominant])
     ref_hz = [f for f, _ in ref_hz]
@@ -352,12 +352,13 @@ def report_markdown(study: AdaptStudy) -> str:
     T = THRESHOLDS
     ck = checks(study)
     f = nom.frf_rms_db
+    seconds = s.n_samples * study.nominal.record.dt  # a window [s] at the lab's rate
     L = ["## Closed-loop identification and adaptive redesign", "",
          f"The demo's LQG ({study.controller.nstates} states) runs on the FE truth; "
          f"{s.dither_rms:g} V RMS white dither ({s.dither_band[0]:g}-{s.dither_band[1]:g} Hz) "
          f"is added at each D/A; sensor noise {1000 * nom.noise_v:.2f} mV RMS; A/D ranges "
          f"{', '.join(f'+-{v:g}' for v in nom.adc_full_scale)} V (ranged from a trial run of "
-         f"the loop). Records of {s.n_samples} samples ({s.n_samples / 1600:g} s). The plant "
+         f"the loop). Records of {s.n_samples} samples ({seconds:g} s). The plant "
          f"is identified from what the D/A sent to the measurements (direct method), "
          f"{s.order} states.", "",
          "### Nominal truth: the plant identified in closed loop", "",
@@ -380,7 +381,7 @@ def report_markdown(study: AdaptStudy) -> str:
                  f"{n[0]:.1f} / {100 * n[1]:.3f} |")
     L += ["", "### Changes of the truth, adapted in closed loop", "",
           "The change is made at t = 0 with the nominal controller in the loop. Every window "
-          f"of {s.n_samples / 1600:g} s the plant is re-identified from that window; a change "
+          f"of {seconds:g} s the plant is re-identified from that window; a change "
           "is detected when a dominant mode moved by more than 1 % or the running "
           "controller's damping predicted on the new model fell; candidate redesigns must "
           "pass the supervisor on the model (stable, every dominant mode >= 5 %, better than "
