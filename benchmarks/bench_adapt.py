@@ -79,7 +79,7 @@ def main() -> int:
         sk = replace(s, noise_factor=float(k))
         noise_v = tp.lab.accelerometers.noise_volts * k
         nom, w, c = timed(nominal_closed_loop, truth, des.controller, sk, noise_v,
-                          tp.lab.daq.full_scale, ranging, model, print, tp.lab.daq.bits)
+                          tp.lab.daq.full_scale, ranging, model, print, bits=tp.lab.daq.bits)
         row = {"noise_factor": k, "noise_v": noise_v, "wall_s": w, "cpu_s": c,
                "frf_rms_db": nom.frf_rms_db, "truth": nom.truth_dominant,
                "plid": nom.identified_dominant["plid"], "n4sid": nom.identified_dominant["n4sid"],
