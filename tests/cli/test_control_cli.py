@@ -79,7 +79,7 @@ def test_control_writes_a_named_controller_and_closed_loop_reports_on_a_plant_fi
     conv = json.loads((d / "rep16" / "summary.json").read_text())["rows"]["plant16"]["converters"]
     assert conv["dac_lsb_v"] == [10.0 / 2**16] * 3 and conv["adc_lsb_v"] == [10.0 / 2**16] * 3
     assert (conv["bits"], conv["full_scale_v"], conv["sample_rate_hz"]) == (16, 5.0, 1600.0)
-    assert "in a 16-bit closed-loop simulation" in (d / "rep16" / "report.md").read_text()
+    assert "closed-loop simulation (16-bit converters)" in (d / "rep16" / "report.md").read_text()
 
 
 @pytest.mark.parametrize("args, message", [
