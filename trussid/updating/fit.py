@@ -148,11 +148,14 @@ def wall_intervals(known_sigma, dFj, sig, walls, chi2, dof, rep, confidence):
         jl = (dFj / sig[:, None]) * walls[None, :]
         birge = math.sqrt(chi2 / dof) if dof > 0 else 1.0
         infl = max(1.0, birge)
-        try:
+        # Fewer independent data than walls (five modes for six struts, say) leave J^T J
+        # singular: its "inverse" is round-off, and its diagonal can come out negative,
+        # i.e. a zero-width interval. Such walls get no interval, not a false one.
+        sv = np.linalg.svd(jl, compute_uv=False)
+        ok = jl.shape[0] >= jl.shape[1] and sv.size and sv[-1] > 1e-10 * sv[0]
+        if ok:
             cov = la.inv(jl.T @ jl) * infl**2
-            ok = np.isfinite(cov).all()
-        except la.LinAlgError:
-            ok = False
+            ok = bool(np.isfinite(cov).all() and (np.diag(cov) > 0).all())
         zq = scipy.stats.norm.ppf(0.5 + confidence / 2)
         for i, n in enumerate(WALL_NAMES):
             if ok and rep.determined.get(n, True) and n not in rep.at_bound:
