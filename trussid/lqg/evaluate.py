@@ -340,8 +340,10 @@ def disk_margins(plant, controller, f=None) -> dict:
         rest = [j for j in range(m) if j != i]
         # L_i = L_ii - L_ir (I + L_rr)^-1 L_ri : loop i with the others closed
         Lrr = L[:, rest][:, :, rest]
-        Li = L[:, i, i] - np.einsum("fr,fr->f", L[:, i, rest],
-                                    np.linalg.solve(np.eye(m - 1)[None] + Lrr, L[:, rest, i]))
+        # b as a stack of column matrices (f, m-1, 1): numpy >= 2 reads a (f, m-1) b as one
+        # matrix broadcast over the stack, not as a stack of vectors.
+        x = np.linalg.solve(np.eye(m - 1)[None] + Lrr, L[:, rest, i][:, :, None])[:, :, 0]
+        Li = L[:, i, i] - np.einsum("fr,fr->f", L[:, i, rest], x)
         a = 1.0 / np.abs(1.0 / (1.0 + Li) - 0.5)
         k = int(np.argmin(a))
         gm, pm = _disk_from_alpha(a[k])
