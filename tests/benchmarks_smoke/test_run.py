@@ -36,4 +36,6 @@ def test_a_new_unregistered_script_is_found_and_stops_the_runner(tmp_path, monke
 
 
 def test_ci_runs_the_quick_form_of_all_of_them():
-    assert "python3 benchmarks/run.py --quick\n" in (ROOT / ".ci" / "run").read_text()
+    # run with the set-up's virtual environment's interpreter, whichever path names it
+    lines = (ROOT / ".ci" / "run").read_text().splitlines()
+    assert any(line.split()[1:] == ["benchmarks/run.py", "--quick"] for line in lines if line.strip())
