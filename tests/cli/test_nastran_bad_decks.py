@@ -44,7 +44,7 @@ BAD_DECKS = [
     ("Q-set on a grid", BEAM + CBAR + "QSET1,123456,2\n", "QSET1 2"),
     ("text WTMASS", BEAM + CBAR + "PARAM,WTMASS,abc\n", "PARAM,WTMASS"),
     ("NASTRAN-95 blank-separated free field", BEAM + "CBAR,  10  1   1   2  0. 0. 1.\n", "CBAR 10"),
-    ("NASTRAN-95 replicator", BEAM + CBAR + "=(3),*(1),=,*(1),/\n", "replicator, line"),
+    ("NASTRAN-95 replicator", BEAM + CBAR + "=(3),*(1),=,*(1),/\n", "line 7: NASTRAN-95 free-field input (a replicator"),
     ("shell elements", BEAM + CBAR + "CQUAD4,200,1,1,2,2,1\n", "CQUAD4 200"),
     ("GRDSET with an undefined system", "GRDSET,,,,,,7\n" + BEAM + CBAR, "GRID 1"),
     ("GRDSET with text", "GRDSET,,abc\n" + BEAM + CBAR, "GRDSET"),
