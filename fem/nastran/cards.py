@@ -39,7 +39,7 @@ from pathlib import Path, PureWindowsPath
 from trussid.fem.errors import ModelError
 
 __all__ = ["Card", "CaseControl", "ParsedDeck", "parse_deck", "integer", "real", "integer_or_blank",
-           "real_or_blank", "string_or_blank", "number", "nastran_value"]
+           "real_or_blank", "string_or_blank", "number", "nastran_value", "deck_text"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -508,3 +508,23 @@ def _bulk_cards(lines: list) -> list:
         lns = [n]
     flush()
     return cards
+
+
+def deck_text(deck: ParsedDeck, cards=None) -> str:
+    """``deck`` as one self-contained input file (INCLUDEs in place): its executive and case
+    control as read (comments dropped), then ``cards`` (default: its own) in free field, which
+    has no field width to overflow, so every field is written exactly as it was read."""
+    out = []
+    if deck.executive.strip():
+        out.append(deck.executive.rstrip("\n"))
+    out.append("CEND")
+    if deck.case.text.strip():
+        out.append(deck.case.text)
+    out.append("BEGIN BULK")
+    for card in deck.cards if cards is None else cards:
+        f = card.fields
+        out.append(",".join(f[:9]).rstrip(","))
+        for k in range(9, len(f), 8):
+            out.append(("," + ",".join(f[k:k + 8])).rstrip(",") or ",")
+    out.append("ENDDATA\n")
+    return "\n".join(out)
