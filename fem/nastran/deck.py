@@ -347,10 +347,10 @@ def _select_eigen(bdf, info: BdfInfo) -> None:
         info.notes.append(f"EIGR {sid} method {m.method}: the lowest modes are listed, whatever the method")
 
 
-@dataclass
+@dataclass(frozen=True)
 class _RawEigr:
-    """An EIGR from its raw fields: pyNastran refuses methods outside its list (FEER, MGIV...),
-    and trussid lists the lowest modes whatever the method."""
+    """An EIGR from its fields: any method name (FEER, MGIV, GIV...) is accepted, since trussid
+    lists the lowest modes whatever the method."""
 
     sid: int
     method: str

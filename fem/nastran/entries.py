@@ -22,7 +22,8 @@ SUPPORTED_CARDS = frozenset({
 })
 
 
-#: NASTRAN-95 rigid elements that pyNastran does not parse: read from the raw card lines.
+#: Entries the reader takes from their fields directly (NASTRAN-95 rigid elements, CONM1,
+#: GENEL, scalar-point elements, DMIG), not through :mod:`trussid.fem.nastran.bulk`.
 RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR", "CONM1", "GENEL",
                        "CELAS3", "CELAS4", "CMASS3", "CMASS4", "DMIG"})
 

@@ -321,7 +321,7 @@ def _material(mats: dict, mid: int, label: str) -> dict:
 def _section_from_shape(shape: str, dims, nu: float, label: str) -> Section:
     """A :class:`Section` for a PBARL/PBEAML shape.
 
-    NASTRAN's element axes for these shapes (QRG PBARL figure, and pyNastran's I1/I2): DIM1
+    NASTRAN's element axes for these shapes (QRG PBARL figure): DIM1
     runs along element z, DIM2 along element y, so for BAR ``I1 = Izz = DIM1 DIM2^3 / 12``.
     """
     d = [float(x) for x in dims]
@@ -909,7 +909,7 @@ def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
 
 
 def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
-    """NASTRAN-95's rigid elements CRIGD1, CRIGD2, CRIGD3 and CRIGDR (unparsed by pyNastran).
+    """NASTRAN-95's rigid elements CRIGD1, CRIGD2, CRIGD3 and CRIGDR (from their fields).
 
     CRIGD1 EID GI GM...: every component of each GM follows GI rigidly. CRIGD2 EID GI
     (GM CM)...: the listed components. CRIGD3 EID (GI CI)... MSET (GM CM)...: six
@@ -971,8 +971,7 @@ def _dof_matrix(nodes: _NodeTable, dofs: list, card: str, eid: int) -> tuple[lis
 def _add_conm1(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
     """CONM1: a 6x6 mass matrix at a grid (lower triangle by rows, in system CID), times WTMASS.
 
-    pyNastran parses CONM1, but it is read here from the raw fields like the other entries
-    this reader adds, so that a blank is NASTRAN's 0.0 and a malformed entry is named.
+    Read from its fields, so that a blank is NASTRAN's 0.0 and a malformed entry is named.
     """
     for eid, f in _raw_cards(bdf, "CONM1"):
         card = f"CONM1 {eid}"
