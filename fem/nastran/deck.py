@@ -138,9 +138,16 @@ def _parse(path: Path) -> Bulk:
     """The deck at ``path`` as typed entries; any malformed field is a one-line ModelError
     naming the file, line, entry and field."""
     path = Path(path)
+    if path.is_file():
+        # analyses trussid cannot reproduce are named before any entry is read (NASTRAN-95
+        # rigid format 13 decks with pressure stiffness are written in NASTRAN-95's free field)
+        text = path.read_text(errors="replace")
+        head = re.split(r"^\s*CEND\b", text, maxsplit=1, flags=re.IGNORECASE | re.MULTILINE)
+        executive = head[0] if len(head) > 1 else ""
+        sol = re.search(r"^\s*SOL\s+([^\s$]+)", executive, re.IGNORECASE | re.MULTILINE)
+        app = re.search(r"^\s*APP\s+([^\s$]+)", executive, re.IGNORECASE | re.MULTILINE)
+        _check_solution(path, sol.group(1).upper() if sol else None, app.group(1).upper() if app else None, text)
     parsed = parse_deck(path)
-    _check_solution(path, parsed.sol, parsed.app, parsed.case.text + "\n" + parsed.executive + "\n"
-                    + "\n".join(c.name + "," + c.get(1) for c in parsed.cards if c.name.startswith("CPSE")))
     if not parsed.cards:
         raise ModelError(f"{path}: no bulk-data cards found")
     typed = TYPED_CARDS | (PRELOAD_CARDS if _is_preload_run(parsed.sol, parsed.app) else frozenset())
