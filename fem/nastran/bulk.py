@@ -638,6 +638,7 @@ def _pairs(card: Card, start: int, what: str) -> tuple:
 def build_bulk(parsed: ParsedDeck, typed: frozenset) -> Bulk:
     """Typed entries of the cards named in ``typed`` (the others stay raw); GRDSET,
     BAROR/BEAMOR defaults applied, coordinate systems and grid positions resolved."""
+    # Long: one branch per entry type (the QRG's field layouts), in one pass over the cards.
     nodes, elements, masses, props, pmass, mats, rigid = {}, {}, {}, {}, {}, {}, {}
     spcs, spcadds, mpcs, mpcadds, suport1, methods, loads = {}, {}, {}, {}, {}, {}, {}
     omits, asets, bsets, qsets, suport = [], [], [], [], []

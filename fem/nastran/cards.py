@@ -343,6 +343,7 @@ def parse_deck(path) -> ParsedDeck:
     A file without BEGIN BULK is taken as bulk data alone (a "punch" file); one without
     CEND has no executive control.
     """
+    # Long: the sections of an input file (executive, case control, bulk) found in one place.
     path = Path(path)
     if not path.exists():
         raise ModelError(f"{path}: no such file")
@@ -429,6 +430,8 @@ def _free_fields(body: str, card_name: str, file: str, lineno: int) -> list:
 
 def _bulk_cards(lines: list) -> list:
     """Bulk-data lines to :class:`Card` s (entries after ENDDATA are ignored)."""
+    # Long: one pass over the lines with the three formats inline (the hot loop of a large
+    # deck: no per-line function calls for fixed-field lines).
     cards = []
     name = None
     fields: list = []
