@@ -152,7 +152,7 @@ class Conm2:
 
 @dataclass(frozen=True, slots=True)
 class Prop:
-    """PBAR, PBEAM (per-station arrays), PBARL/PBEAML, PROD, PTUBE, PELAS, PBUSH, PMASS."""
+    """PBAR, PBEAM (per-station arrays A, i1...), PBARL/PBEAML, PROD, PTUBE, PELAS, PBUSH, PMASS."""
 
     type: str
     pid: int
@@ -165,17 +165,28 @@ class Prop:
     nsm: object = 0.0
     k1: float | None = None
     k2: float | None = None
-    extra: dict = field(default_factory=dict)  # PBEAM M/N/NSI/CW, PTUBE OD/T, PBARL type/dims...
     k: float = 0.0  # PELAS K
     mass: float = 0.0  # PMASS M
     Ki: tuple = ()  # PBUSH K1-K6
     vars: tuple = ()  # PBUSH keywords given
-
-    def __getattr__(self, name):  # the extra fields by name (PBEAM m1a..., PTUBE OD1...)
-        try:
-            return object.__getattribute__(self, "extra")[name]
-        except KeyError:
-            raise AttributeError(name) from None
+    beam_type: str = ""  # PBARL/PBEAML section type
+    dim: object = None  # PBARL dimensions; PBEAML (stations, dimensions)
+    OD1: float = 0.0  # PTUBE outer diameters and wall thickness (None: solid)
+    OD2: float | None = None
+    t: float | None = None
+    # PBEAM non-structural inertia, warping, centre-of-mass and neutral-axis offsets
+    nsia: float = 0.0
+    nsib: float = 0.0
+    cwa: float = 0.0
+    cwb: float = 0.0
+    m1a: float = 0.0
+    m2a: float = 0.0
+    m1b: float = 0.0
+    m2b: float = 0.0
+    n1a: float = 0.0
+    n2a: float = 0.0
+    n1b: float = 0.0
+    n2b: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -463,10 +474,9 @@ def _pbeam(card: Card) -> Prop:
     cwa = z[6]
     cwb = cwa if tail[7] is None else tail[7]
     S = np.array(stations, float)
-    extra = dict(m1a=m1a, m2a=m2a, m1b=m1b, m2b=m2b, n1a=n1a, n2a=n2a, n1b=n1b, n2b=n2b, nsia=nsia,
-                 nsib=nsib, cwa=cwa, cwb=cwb, s1=z[2], s2=z[3])
     return Prop("PBEAM", pid, mid, A=S[:, 0], i1=S[:, 1], i2=S[:, 2], i12=S[:, 3], j=S[:, 4], nsm=S[:, 5],
-                k1=k1, k2=k2, extra=extra)
+                k1=k1, k2=k2, m1a=m1a, m2a=m2a, m1b=m1b, m2b=m2b, n1a=n1a, n2a=n2a, n1b=n1b, n2b=n2b,
+                nsia=nsia, nsib=nsib, cwa=cwa, cwb=cwb)
 
 
 def _pbarl(card: Card) -> Prop:
@@ -484,7 +494,7 @@ def _pbarl(card: Card) -> Prop:
         if any(d is None for d in dims):
             raise card.error(9 + dims.index(None), f"DIM{dims.index(None) + 1} of {shape} is blank")
         nsm = real_or_blank(card, 9 + ndim, "NSM", 0.0)
-        return Prop("PBARL", pid, mid, nsm=nsm, extra={"beam_type": shape, "dim": dims})
+        return Prop("PBARL", pid, mid, nsm=nsm, beam_type=shape, dim=dims)
     if ndim is None:
         ndim = max(n - 10, 0)
     dims = _reals(card, 9, 9 + ndim, "DIM", None)
@@ -497,7 +507,7 @@ def _pbarl(card: Card) -> Prop:
         rows.append([dims[m] if v is None else v for m, v in enumerate(d)])
         nsms.append(real_or_blank(card, k + 2 + ndim, "NSM", nsms[0]))
         k += 3 + ndim
-    return Prop("PBEAML", pid, mid, nsm=np.array(nsms), extra={"beam_type": shape, "dim": np.array(rows)})
+    return Prop("PBEAML", pid, mid, nsm=np.array(nsms), beam_type=shape, dim=np.array(rows))
 
 
 def _pbush(card: Card) -> Prop:
@@ -535,7 +545,7 @@ def _properties(card: Card) -> list:
         t = real_or_blank(card, 4, "T")
         od2 = real_or_blank(card, 6, "OD2", od1)
         return [Prop("PTUBE", integer(card, 1, "PID"), integer(card, 2, "MID"),
-                     nsm=real_or_blank(card, 5, "NSM", 0.0), extra={"OD1": od1, "OD2": od2, "t": t})]
+                     nsm=real_or_blank(card, 5, "NSM", 0.0), OD1=od1, OD2=od2, t=t)]
     if name == "PELAS":
         out = []
         for base in (1, 5):
