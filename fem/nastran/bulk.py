@@ -11,7 +11,8 @@ here into origins and axes in the basic system, and the grids' positions into ba
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -24,8 +25,7 @@ __all__ = ["Bulk", "build_bulk", "Coord"]
 _SO = ("YES", "YESA", "NO")
 
 
-@dataclass(frozen=True, slots=True)
-class Grid:
+class Grid(NamedTuple):
     nid: int
     cp: int
     xyz: tuple
@@ -65,9 +65,10 @@ class Coord:
 BASIC = Coord(0, "R", np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0]))
 
 
-@dataclass(frozen=True, slots=True)
-class Bar:
-    """CBAR or CBEAM (BAROR/BEAMOR defaults applied)."""
+class Bar(NamedTuple):
+    """CBAR or CBEAM (BAROR/BEAMOR defaults applied). Grid, Bar and Scalar, the entries a
+    large deck has by the hundred thousand, are named tuples: immutable, and three times
+    faster to build than frozen dataclasses."""
 
     type: str
     eid: int
@@ -104,8 +105,7 @@ class Rod:
     nsm: float = 0.0
 
 
-@dataclass(frozen=True, slots=True)
-class Scalar:
+class Scalar(NamedTuple):
     """CELAS1/2 and CMASS1/2: ``value`` is K or M (1: from the property ``pid``)."""
 
     type: str
@@ -378,7 +378,23 @@ def _orientation(card: Card, i: int, default):
     return (real(card, i, "X1"), real_or_blank(card, i + 1, "X2", 0.0), real_or_blank(card, i + 2, "X3", 0.0)), None
 
 
+_ZERO3 = (0.0, 0.0, 0.0)
+
+
 def _bar(card: Card, orient: dict) -> Bar:
+    f = card.fields
+    if len(f) == 9 and not f[8] and card.name not in orient:
+        # fast path: one line, no pin flags or offsets (the bulk of a large deck); anything
+        # unusual (implicit exponents, G0 forms...) falls through to the general path
+        try:
+            eid, ga, gb = int(f[1]), int(f[3]), int(f[4])
+            pid = int(f[2]) if f[2] else eid
+            x1, x2, x3 = f[5], f[6], f[7]
+            x = (_to_real(x1) if x1 else None, _to_real(x2) if x2 else 0.0, _to_real(x3) if x3 else 0.0)
+            if None not in x:
+                return Bar(card.name, eid, pid, ga, gb, x, None, "GGG", "", "", _ZERO3, _ZERO3, 0, 0, None)
+        except ValueError:
+            pass
     eid = integer(card, 1, "EID")
     d = orient.get(card.name)
     pid = integer_or_blank(card, 2, "PID", d["pid"] if d and d["pid"] else eid)
@@ -564,6 +580,15 @@ def _properties(card: Card) -> list:
 
 
 def _scalar(card: Card) -> Scalar:
+    f = card.fields
+    if len(f) <= 9 and card.name in ("CELAS2", "CMASS2"):
+        try:  # fast path, as in _bar
+            v = _to_real(f[2]) if len(f) > 2 and f[2] else None
+            if v is not None:
+                g = [int(t) if t else 0 for t in f[3:7]] + [0] * (7 - max(len(f), 3))
+                return Scalar(card.name, int(f[1]), 0, v, (g[0], g[2]), g[1], g[3])
+        except ValueError:
+            pass
     eid = integer(card, 1, "EID")
     if card.name in ("CELAS1", "CMASS1"):
         pid, value = integer_or_blank(card, 2, "PID", eid), None
