@@ -358,9 +358,18 @@ def _ints_thru(card: Card, start: int, what: str, stop: int | None = None) -> li
     return out
 
 
+_COMP_CHARS = frozenset("0123456 ")
+
+
 def _comp(card: Card, i: int, default: str = "") -> str:
-    """A component field: digits 0-6 (checked by the reader, which names the entry)."""
+    """A component field: digits 0-6 (checked by the reader, which names the entry).
+
+    Written with embedded blanks (``12 4 6``, as MYSTRAN writes them) it is the digits
+    together (``1246``), as MYSTRAN and NASTRAN read it.
+    """
     t = card.get(i)
+    if " " in t and _COMP_CHARS.issuperset(t):
+        t = t.replace(" ", "")
     return t if t else default
 
 
@@ -414,7 +423,7 @@ def _bar(card: Card, orient: dict) -> Bar:
     wb = tuple(real_or_blank(card, k, "offset", 0.0) for k in (14, 15, 16))
     sa = integer_or_blank(card, 17, "SA", 0) if card.name == "CBEAM" else 0
     sb = integer_or_blank(card, 18, "SB", 0) if card.name == "CBEAM" else 0
-    pa, pb = card.get(9), card.get(10)
+    pa, pb = _comp(card, 9), _comp(card, 10)
     return Bar(card.name, eid, pid, integer(card, 3, "GA"), integer(card, 4, "GB"), x, g0, offt,
                pa, pb, wa, wb, sa, sb, bit)
 
@@ -604,7 +613,7 @@ def _scalar(card: Card) -> Scalar:
 def _rbe3(card: Card) -> Rigid:
     eid = integer(card, 1, "EID")
     ref = integer(card, 3, "REFGRID")
-    refc = card.get(4)
+    refc = _comp(card, 4)
     weights, comps, grids, um = [], [], [], []
     k, n = 5, len(card.fields)
     mode = "w"
@@ -618,7 +627,7 @@ def _rbe3(card: Card) -> Rigid:
             k += 1
             continue
         if mode == "UM":
-            um.extend([integer(card, k, "GM"), card.get(k + 1)])
+            um.extend([integer(card, k, "GM"), _comp(card, k + 1)])
             k += 2
             continue
         if mode in ("ALPHA", "TREF"):
@@ -627,7 +636,7 @@ def _rbe3(card: Card) -> Rigid:
         w = _to_real(t)
         if w is not None:
             weights.append(w)
-            comps.append(card.get(k + 1))
+            comps.append(_comp(card, k + 1))
             grids.append([])
             k += 2
             continue
@@ -654,10 +663,10 @@ def _rigid(card: Card) -> Rigid:
                 gm.extend(range(gm[-1] + 1, hi + 1))
                 break
             gm.append(integer(card, k, "GM"))
-        return Rigid("RBE2", eid, gn=integer(card, 2, "GN"), cm=card.get(3), Gmi=tuple(gm))
+        return Rigid("RBE2", eid, gn=integer(card, 2, "GN"), cm=_comp(card, 3), Gmi=tuple(gm))
     if card.name == "RBAR":
         return Rigid("RBAR", integer(card, 1, "EID"), ga=integer(card, 2, "GA"), gb=integer(card, 3, "GB"),
-                     cna=card.get(4), cnb=card.get(5), cma=card.get(6), cmb=card.get(7))
+                     cna=_comp(card, 4), cnb=_comp(card, 5), cma=_comp(card, 6), cmb=_comp(card, 7))
     return _rbe3(card)
 
 
@@ -666,7 +675,7 @@ def _pairs(card: Card, start: int, what: str) -> tuple:
     for k in range(start, len(card.fields), 2):
         if card.get(k):
             ids.append(integer(card, k, what))
-            comps.append(card.get(k + 1))
+            comps.append(_comp(card, k + 1))
     return tuple(ids), comps
 
 
@@ -692,7 +701,7 @@ def build_bulk(parsed: ParsedDeck, typed: frozenset) -> Bulk:
             orient["CBAR" if card.name == "BAROR" else "CBEAM"] = _baror(card)
         if card.name == "GRDSET" and "GRDSET" in typed:
             grdset = GrdSet(integer_or_blank(card, 2, "CP", 0), integer_or_blank(card, 6, "CD", 0),
-                            card.get(7), integer_or_blank(card, 8, "SEID", 0))
+                            _comp(card, 7), integer_or_blank(card, 8, "SEID", 0))
 
     def unique(table, key, entry, card):
         if key in table:
@@ -842,7 +851,7 @@ def _grids(cards: list, grdset: GrdSet | None) -> tuple:
                  real_or_blank(card, 5, "X3", 0.0))
             cd = integer_or_blank(card, 6, "CD", cd0)
         seid = integer_or_blank(card, 8, "SEID", se0) if len(f) > 8 and f[8] else se0
-        ps = card.get(7) or ps0
+        ps = _comp(card, 7) or ps0
         if nid in nodes:
             raise card.error(1, f"duplicate id {nid} (another GRID has it)")
         nodes[nid] = Grid(nid, cp, x, cd, ps, seid)

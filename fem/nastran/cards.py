@@ -422,16 +422,29 @@ def _case_control(lines: list) -> CaseControl:
     return CaseControl(tuple(statements), "\n".join(text))
 
 
+_COMPONENT_FIRST = ("OMIT1", "ASET1", "BSET1", "QSET1")  # entries whose field 2 is a component
+_COMPONENT_CHARS = frozenset("0123456 ")
+
+
 def _free_fields(body: str, card_name: str, file: str, lineno: int) -> list:
     parts = body.split(",")
-    for p in parts[1:]:
+    # NASTRAN-95's free field puts blank-separated values after the first comma. Elsewhere a
+    # field with blanks is a component field written with spaces (12 4 6), read by bulk.py:
+    # on a first line field 2 is an id (but for the *SET1 entries), on a continuation it
+    # is taken as components when it holds only component digits.
+    head = parts[0].strip().upper()
+    first_line = bool(head) and head[0] not in "+*"
+    for p in parts[1:2]:
         q = p.strip()
-        if " " in q and not q.startswith("'"):
-            head = parts[0].strip().upper() or card_name
-            ident = parts[1].split()[0] if len(parts) > 1 and parts[1].split() else ""
-            raise ModelError(f"{file}, line {lineno}: NASTRAN-95 free-field input ({head} {ident} with "
-                             f"blank-separated fields: {body.strip()[:40]!r}) is not supported: write the "
-                             f"entries with commas or in fixed fields")
+        if " " not in q or q.startswith("'"):
+            continue
+        name = head.rstrip("*") if first_line else card_name
+        if _COMPONENT_CHARS.issuperset(q) and (not first_line or name in _COMPONENT_FIRST):
+            continue
+        ident = parts[1].split()[0] if first_line else ""
+        raise ModelError(f"{file}, line {lineno}: NASTRAN-95 free-field input ({name} {ident} with "
+                         f"blank-separated fields: {body.strip()[:40]!r}) is not supported: write the "
+                         f"entries with commas or in fixed fields".replace("  with", " with"))
     return parts
 
 

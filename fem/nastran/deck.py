@@ -13,7 +13,7 @@ from pathlib import Path
 from trussid.fem.errors import ModelError
 from trussid.fem.nastran.bulk import Bulk, build_bulk
 from trussid.fem.nastran.cards import nastran_value, parse_deck
-from trussid.fem.nastran.entries import (HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS, RAW_CARDS,
+from trussid.fem.nastran.entries import (HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS, NOTED_CARDS, RAW_CARDS,
                                          SUPPORTED_CARDS, THERMAL_CARDS)
 
 __all__ = ['EigenRequest', 'BdfInfo']
@@ -178,7 +178,11 @@ def _check_cards(bdf: Bulk, path: Path, info: BdfInfo) -> None:
     for name, n in counts.items():
         if name in SUPPORTED_CARDS:
             continue
-        if name in IGNORED_CARDS or (name in THERMAL_CARDS and not thermal_on):
+        if name in NOTED_CARDS:
+            _check_selected(bdf, path, name)
+            ignored[name] = n
+            info.notes.append(f"{name} ({n}): {NOTED_CARDS[name]}: ignored")
+        elif name in IGNORED_CARDS or (name in THERMAL_CARDS and not thermal_on):
             ignored[name] = n
         else:
             bad[name] = n
@@ -205,6 +209,19 @@ def _check_cards(bdf: Bulk, path: Path, info: BdfInfo) -> None:
     listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items())) + first
     raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
                      f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")
+
+
+def _check_selected(bdf: Bulk, path: Path, name: str) -> None:
+    """Refuse the noted entries that the case control makes count (rotordynamics, TFL)."""
+    first = bdf.raw[name][0].label() if bdf.raw.get(name) else name
+    if name.startswith("ROTOR") and _case_values(bdf, "RGYRO"):
+        raise ModelError(f"{path}: {first}: RGYRO = {_case_values(bdf, 'RGYRO')[0]} in the case control asks for "
+                         f"rotordynamics (gyroscopic and spin terms), which trussid does not compute")
+    if name == "TF":
+        tfl = _case_values(bdf, "TFL")
+        if tfl:
+            raise ModelError(f"{path}: {first}: TFL = {tfl[0]} in the case control selects transfer functions, "
+                             f"which add terms to the equations of motion that trussid does not translate")
 
 
 def _first_ids(bdf: Bulk, bad: dict) -> str:

@@ -868,7 +868,8 @@ def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
         if e.type == "RBE2":
             nodes.index([e.gn], "RBE2", [eid])
             nodes.index(np.asarray(e.Gmi, dtype=np.int64), "RBE2", [eid] * len(e.Gmi))
-            model.add_rigid_body(eid, e.gn, e.Gmi, dofs=str(e.cm), mass=0.0, label=card)
+            dofs = "".join(str(c + 1) for c in _comps(e.cm, card))
+            model.add_rigid_body(eid, e.gn, e.Gmi, dofs=dofs, mass=0.0, label=card)
         elif e.type == "RBAR":
             ind = [(e.ga, c) for c in _comps(e.cna, card)] + [(e.gb, c) for c in _comps(e.cnb, card)]
             cma, cmb = _comps(e.cma, card), _comps(e.cmb, card)

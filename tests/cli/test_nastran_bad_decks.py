@@ -37,7 +37,7 @@ BAD_DECKS = [
     ("SPC1 on an undefined grid", BEAM + CBAR + "SPC1,90,123456,5\n", "SPC1 90"),
     ("CMASS3 without its SPOINT", BEAM + CBAR + "CMASS3,100,1,5\n", "scalar point 5"),
     ("CMASS3 without its PMASS", BEAM + CBAR + "SPOINT,5\nCMASS3,100,1,5\n", "CMASS3 100"),
-    ("EIGP", BEAM + CBAR + "EIGP,90,1.,2.,1\n", "EIGP 90"),
+    ("component field with a letter", BEAM + CBAR + "RBE2,40,2,12 X,1\n", "RBE2 40: components"),
     ("DMIG with text in a term", BEAM + CBAR + "DMIG,KX,0,6,1,0\nDMIG,KX,1,1,,1,abc,1.\n", "DMIG KX"),
     ("matrix scale factor", BEAM + CBAR + "PARAM,CK1,2.\n", "PARAM,CK1"),
     ("boundary set alone", BEAM + CBAR + "BSET1,123456,1\n", "BSET1 (grid 1)"),
