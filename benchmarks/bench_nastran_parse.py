@@ -34,7 +34,10 @@ Each reader runs in a subprocess of its own (imports not timed) over the same de
 refused, counts) and the 1e5-element deck; the CPU time of each ``read_bdf`` is summed. The
 old reader needs pyNastran importable: pyNastran 1.4.1 uses ``np.in1d``, removed in numpy 2.4,
 so its subprocess aliases ``np.in1d`` to ``np.isin`` (and ``np.chararray`` to numpy's
-``char.chararray``) when they are missing; the comparator only, never the package. A cProfile of one read_bdf call lists the functions where the
+``char.chararray``) when they are missing; the comparator only, never the package. pyNastran
+is no dependency of any extra (every release declares ``numpy<2``, which no extra of a numpy-2
+project can resolve): for ``--baseline`` install it beside the project by hand,
+``.venv/bin/python -m pip install --no-deps pyNastran==1.4.1 cpylog docopt-ng colorama``. A cProfile of one read_bdf call lists the functions where the
 time goes (top 12 by cumulative time) so that what is trussid's can be told from pyNastran's.
 """
 
