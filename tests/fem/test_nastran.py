@@ -172,7 +172,11 @@ ENDDATA
 
 
 def test_pbarl_sections_match_pyNastrans_own_section_properties(tmp_path):
-    from pyNastran.bdf.bdf import BDF
+    # pyNastran is an independent oracle here only; 1.4 fails at import on numpy >= 2.4
+    try:
+        from pyNastran.bdf.bdf import BDF
+    except Exception as exc:  # ImportError, or AttributeError (np.in1d) on numpy >= 2.4
+        pytest.skip(f"pyNastran is not importable here ({type(exc).__name__})")
 
     deck = """BEGIN BULK
 MAT1,1,70.+9,,0.3,2700.
@@ -500,11 +504,11 @@ def test_writer_refuses_a_spring_nastran_cannot_express_and_leaves_no_file(tmp_p
 
 # ----------------------------------------------------------------- bad input
 def test_unsupported_cards_are_all_listed_with_counts(tmp_path):
-    deck = cantilever_deck(n_el=2, extra="CTUBE,5,1,1,2\nEIGP,90,1.,2.,1\nPARAM,CK1,2.0")
+    deck = cantilever_deck(n_el=2, extra="CTUBE,5,1,1,2\nNSM,90,PBAR,1,0.5\nPARAM,CK1,2.0")
     with pytest.raises(ModelError) as exc:
         read_bdf(write(tmp_path, deck))
     msg = str(exc.value)
-    for item in ("CTUBE (1)", "EIGP (1)", "PARAM,CK1"):
+    for item in ("CTUBE (1)", "NSM (1)", "PARAM,CK1"):
         assert item in msg
     assert "\n" not in msg
 
@@ -558,7 +562,9 @@ def test_tapered_and_unsupported_sections_are_refused(tmp_path):
 def test_missing_and_unreadable_files_are_user_errors(tmp_path):
     with pytest.raises(ModelError, match="no such file"):
         read_bdf(tmp_path / "nope.bdf")
-    with pytest.raises(ModelError, match="not a readable bulk-data deck"):
+    # NASTRAN's reals have a decimal point: an integer there is refused, naming file, line,
+    # entry and field
+    with pytest.raises(ModelError, match=r"deck.bdf, line 2: GRID 1: field 4: X1 must be a real number"):
         read_bdf(write(tmp_path, "BEGIN BULK\nGRID,1,,0,0,0\nENDDATA\n"))
 
 
