@@ -39,6 +39,23 @@ if ! new_enough "$python"; then
 fi
 pyver="$("$python" -c 'import sys; print(f"{sys.version_info[0]}.{sys.version_info[1]}")')"
 
+# An existing .venv is checked before anything is installed.
+venv=".venv"
+reuse=0
+if [ -e "$venv" ] || [ -L "$venv" ]; then
+    reuse=1
+    # reused as it is (a rerun adds extras and updates the package); one that does not run or
+    # is too old is the user's to remove: this script deletes nothing it did not make now
+    if ! [ -x "$venv/bin/python" ] || ! "$venv/bin/python" -c 'import pip' >/dev/null 2>&1; then
+        echo "setup: $venv exists but $venv/bin/python does not run with pip (its interpreter moved or was removed?); delete $venv and rerun" >&2
+        exit 2
+    fi
+    if ! new_enough "$venv/bin/python"; then
+        echo "setup: $venv runs $("$venv/bin/python" -V 2>&1), trussid needs >= 3.11; delete $venv and rerun" >&2
+        exit 2
+    fi
+fi
+
 if command -v apt-get >/dev/null 2>&1 && command -v dpkg >/dev/null 2>&1; then
     sudo=""
     [ "$(id -u)" -eq 0 ] || sudo="sudo"
@@ -70,18 +87,7 @@ if command -v apt-get >/dev/null 2>&1 && command -v dpkg >/dev/null 2>&1; then
     fi
 fi
 
-venv=".venv"
-if [ -e "$venv" ] || [ -L "$venv" ]; then
-    # reused as it is (a rerun adds extras and updates the package); one that does not run or
-    # is too old is the user's to remove: this script deletes nothing it did not make now
-    if ! [ -x "$venv/bin/python" ] || ! "$venv/bin/python" -c 'import pip' >/dev/null 2>&1; then
-        echo "setup: $venv exists but $venv/bin/python does not run with pip (its interpreter moved or was removed?); delete $venv and rerun" >&2
-        exit 2
-    fi
-    if ! new_enough "$venv/bin/python"; then
-        echo "setup: $venv runs $("$venv/bin/python" -V 2>&1), trussid needs >= 3.11; delete $venv and rerun" >&2
-        exit 2
-    fi
+if [ "$reuse" = 1 ]; then
     echo "setup: reusing $venv ($("$venv/bin/python" -V 2>&1))"
 else
     echo "setup: creating $venv with $("$python" -V 2>&1) ($(command -v "$python"))"
