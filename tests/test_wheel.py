@@ -175,7 +175,11 @@ def test_the_wheel_installs_and_runs_in_a_fresh_environment(wheel, minor, tmp_pa
     out = work / "report"
     _run([tool, "demo", "--quick", "--out", out], cwd=work)
     summary = json.loads((out / "summary.json").read_text())
-    assert summary and (out / "report.md").exists()
+    prov = summary["provenance"]
+    assert prov["trussid_version"] == __version__ and prov["python"].startswith(f"3.{minor}.")
+    assert prov["commit"] is None  # an installed wheel, not a checkout
+    nominal = summary["control"]["rows"]["nominal"]  # the closed loop: slycot, numpy 2
+    assert nominal["stable"] and nominal["margins"]["mimo"]["gain_db"] > 0
 
     if INTERIM_PYNASTRAN:
         _interim_pynastran(py, work)
