@@ -333,3 +333,10 @@ def test_three_inertia_numbers_are_the_principal_moments():
 def test_wrong_shapes_of_beam_arguments_are_named(kw, match):
     with pytest.raises(ModelError, match=match):
         two_beams(**kw)
+
+
+def test_a_negative_point_mass_is_printed_as_a_number():
+    m = Model()
+    m.add_nodes([1], [[0.0, 0.0, 0.0]])
+    with pytest.raises(ModelError, match=r"point mass at node 1: mass must be >= 0, got -2\.0$"):
+        m.add_point_masses([1], np.array([-2.0]))
