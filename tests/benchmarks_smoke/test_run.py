@@ -36,4 +36,4 @@ def test_a_new_unregistered_script_is_found_and_stops_the_runner(tmp_path, monke
 
 
 def test_ci_runs_the_quick_form_of_all_of_them():
-    assert "python3 benchmarks/run.py --quick\n" in (ROOT / ".ci" / "run").read_text()
+    assert ".venv/bin/python benchmarks/run.py --quick\n" in (ROOT / ".ci" / "run").read_text()
