@@ -158,3 +158,13 @@ def test_closed_loop_margins_equal_a_frequency_by_frequency_computation_on_numpy
     ref = reference_disk_margins(plant, ctrl, f)
     assert m["mimo"]["alpha"] == pytest.approx(ref["mimo_alpha"], rel=1e-7)
     assert [lp["alpha"] for lp in m["loops"]] == pytest.approx(ref["loop_alpha"], rel=1e-9)
+
+
+def test_closed_loop_given_a_model_says_it_may_not_be_a_controller(files, capsys):
+    """Newcomer audit 3: `closed-loop MODEL.npz` ended in "controller input 'ch1' is not a
+    plant output", which names the wrong cause."""
+    d = files
+    res = run_here(capsys, "closed-loop", d / "model.npz", d / "model.npz", "--out", d / "x")
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1
+    assert "is it a model rather than a controller?" in res.stderr
+    assert not (d / "x").exists()

@@ -98,7 +98,16 @@ def run(args) -> int:
         plants = truths(stretch=args.stretch)
         settings = LoopSettings.for_lab(Testbed().lab, n_samples=args.samples)
     for label, plant in plants:  # every mismatch before any work
-        check_pair(plant, ctrl, label)
+        try:
+            check_pair(plant, ctrl, label)
+        except UserError as exc:
+            if design:
+                raise
+            # the newcomer's mistake (audit 3): an identified model given as the controller
+            # read "controller input 'ch1' is not a plant output", naming the wrong cause
+            raise UserError(f"{exc}; {args.controller} has no design record of `trussid "
+                            "control`: is it a model rather than a controller? (make one with "
+                            "trussid control MODEL.npz --data ID.npz --out CONTROLLER.npz)") from None
     if args.plant and lab is None:  # a plant file that records no lab (a model, a deck's)
         print(f"trussid closed-loop: note: {args.plant} records no lab; its loop runs behind "
               "ideal converters", file=sys.stderr)
