@@ -111,6 +111,10 @@ def test_the_wheel_holds_every_module_of_the_sources(wheel):
     from trussid import __version__
 
     assert wheel.name.startswith(f"trussid-{__version__}-py3-none-any")
+    meta = zipfile.ZipFile(wheel).read(f"trussid-{__version__}.dist-info/METADATA").decode()
+    assert "\nLicense-Expression: MIT\n" in meta  # SPDX (PEP 639), setuptools >= 77
+    requires = re.findall(r"^Requires-Dist: ([A-Za-z0-9_.-]+)", meta, re.M)
+    assert "slycot" in requires and "pyNastran" not in requires
 
 
 def _deck(folder: Path) -> tuple[Path, list[float]]:
