@@ -4,6 +4,7 @@ never deletes a virtual environment it did not make (issue 30). The install itse
 wheel outside the source tree is tests/test_wheel.py."""
 
 import os
+import re
 import shutil
 import stat
 import subprocess
@@ -69,8 +70,10 @@ def test_an_unusable_venv_is_named_and_kept(clone, venv_python):
 
 
 def test_setup_never_breaks_system_packages():
-    text = (ROOT / "scripts" / "setup.sh").read_text()
-    assert "--break-system-packages" not in text.replace("(never --break-system-packages)", "")
-    # pip runs only as the venv's: "$venv/bin/python" -m pip
-    assert all('"$venv/bin/python" -m pip' in line or "pip install" not in line
-               for line in text.splitlines() if not line.lstrip().startswith("#"))
+    """pip runs only as the venv's ("$venv/bin/python" -m pip), never as a bare pip or the
+    starting interpreter's, and never with --break-system-packages."""
+    code = [ln for ln in (ROOT / "scripts" / "setup.sh").read_text().splitlines()
+            if not ln.lstrip().startswith("#")]
+    assert not any("--break-system-packages" in ln for ln in code)
+    assert all('"$venv/bin/python" -m pip' in ln for ln in code if "-m pip" in ln)
+    assert not any(re.match(r"\s*(\$sudo\s+|sudo\s+)?pip3?\s", ln) for ln in code)
