@@ -266,7 +266,7 @@ def check_beam_properties(beams, theory: str = "euler-bernoulli") -> None:
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): {key} must be positive "
-                             f"and finite, got {value[i]!r}")
+                             f"and finite, got {float(value[i])!r}")
     # Zero density (a massless element: all mass in point masses, as in aeroelastic stick
     # models), zero second moments and J = 0 (NASTRAN's default: no torsional stiffness)
     # are legal: they leave DOFs without mass or stiffness, which AUTOSPC, the modal solver
@@ -278,18 +278,18 @@ def check_beam_properties(beams, theory: str = "euler-bernoulli") -> None:
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): {key} must be >= 0 "
-                             f"and finite, got {value[i]!r}")
+                             f"and finite, got {float(value[i])!r}")
     all_j = np.asarray(beams.J, float)
     bad = ~(np.isfinite(all_j) & (all_j >= 0))
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): J must be >= 0, got {beams.J[i]!r}")
+        raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): J must be >= 0, got {float(all_j[i])!r}")
     nsm = np.asarray(beams.nsm, float)
     bad = ~(np.isfinite(nsm) & (nsm >= 0))
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): non-structural mass must be >= 0, "
-                         f"got {nsm[i]!r}")
+                         f"got {float(nsm[i])!r}")
     if theory == "timoshenko":
         for key in ("Asy", "Asz"):
             value = np.asarray(getattr(beams, key), float)
@@ -297,4 +297,4 @@ def check_beam_properties(beams, theory: str = "euler-bernoulli") -> None:
             if bad.any():
                 i = int(np.flatnonzero(bad)[0])
                 raise ModelError(f"element {beams.ids[i]} ({beams.labels[i]}): {key} must be positive "
-                                 f"(inf for no shear deformation), got {value[i]!r}")
+                                 f"(inf for no shear deformation), got {float(value[i])!r}")

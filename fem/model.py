@@ -546,7 +546,7 @@ class Model:
                              f"3-vector or ({n}, 3) ({exc})") from None
         bad = (chunk["mass"] < 0) | ~np.isfinite(chunk["mass"])
         if bad.any():
-            raise ModelError(f"point mass at node {nodes[bad][0]}: mass must be >= 0, got {chunk['mass'][bad][0]!r}")
+            raise ModelError(f"point mass at node {nodes[bad][0]}: mass must be >= 0, got {float(chunk['mass'][bad][0])!r}")
         self._masses.append(chunk)
 
     @property

@@ -57,10 +57,21 @@ def _interrupt():
     os.kill(os.getpid(), signal.SIGINT)  # a real SIGINT: Python raises KeyboardInterrupt
 
 
+@pytest.fixture
+def python_sigint():
+    """Python's own SIGINT handler (KeyboardInterrupt) while the test runs, whatever the
+    suite was started with: a shell without job control starts a background job (``&``,
+    nohup, a batch script) with SIGINT ignored, and then no SIGINT would reach the code
+    under test (issue 30; tests/test_started_anyhow.py runs this file so)."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
 @pytest.mark.parametrize("point", ["before_any_file", "after_some_files", "after_all_files"])
 @pytest.mark.parametrize("previous", [False, True])
 def test_an_interrupted_report_leaves_the_previous_directory_or_none(tmp_path, point,
-                                                                     previous):
+                                                                     previous, python_sigint):
     out = tmp_path / "report"
     if previous:
         out.mkdir()
@@ -106,7 +117,7 @@ def test_run_demo_refuses_an_existing_directory_before_computing(tmp_path, monke
 
 @pytest.mark.parametrize("stage", ["build_plant", "write_files", "write_figures"])
 def test_run_demo_interrupted_at_a_stage_leaves_the_previous_report(tmp_path, monkeypatch,
-                                                                    stage):
+                                                                    stage, python_sigint):
     """SIGINT while the plant is built, while the data/model files are written, and while
     the figures are drawn. The stages before are replaced by stand-ins (this tests the
     writing, not the campaign)."""

@@ -188,6 +188,12 @@ def test_help_descriptions_show_a_single_percent_sign(capsys):
 def test_b35_a_slow_sample_rate_is_told_which_filters_it_cannot_show(tmp_path, capsys):
     assert main(["plant", "--fs", "100", "--out", str(tmp_path / "p100.npz")]) == 0
     err = capsys.readouterr().err
-    assert ("corners of the smoothing filter (1300 Hz) and the low-pass (120 Hz) lie above the "
-            "Nyquist "
-            "frequency (50 Hz)") in err
+    assert "corner of the low-pass (120 Hz) lies above the Nyquist frequency (50 Hz)" in err
+
+
+def test_the_default_plant_does_not_warn_about_its_own_lab(tmp_path, capsys):
+    """Issue 30 (newcomer D7): `trussid plant --out P.npz` warned that the thesis lab's
+    1300 Hz smoothing filter lies above the 800 Hz Nyquist frequency, where a D/A smoother
+    belongs."""
+    assert main(["plant", "--out", str(tmp_path / "p.npz")]) == 0
+    assert capsys.readouterr().err == ""

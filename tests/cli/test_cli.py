@@ -32,3 +32,20 @@ def test_no_command_prints_help_and_fails():
     res = run()
     assert res.returncode == 2
     assert "usage:" in res.stdout
+
+
+def test_version_has_one_home(capsys):
+    """`trussid --version`, the installed distribution's metadata and the package's
+    __version__ agree: pyproject.toml reads the version from trussid.__version__ (issue 30).
+    (tests/test_wheel.py checks the same on installed wheels.)"""
+    from importlib.metadata import version
+
+    from trussid import __version__
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out == f"trussid {__version__}\n"
+    assert version("trussid") == __version__
+    text = (__import__("pathlib").Path(__file__).resolve().parents[2] / "pyproject.toml").read_text()
+    assert 'dynamic = ["version"]' in text and '\nversion = "' not in text

@@ -131,3 +131,40 @@ def test_closed_loop_refuses_a_plant_whose_names_do_not_match(files, tmp_path, c
     assert "other: controller output 'ch1' is not a plant input" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "rep").exists()
+
+
+def test_closed_loop_margins_equal_a_frequency_by_frequency_computation_on_numpy_2(files,
+                                                                                   capsys):
+    """Issue 30: the `closed-loop` command's disk margins failed on numpy 2. Its MIMO and
+    loop-at-a-time margins (summary.json) against 2-D numpy at each frequency and a
+    D-scaled mu (tests/lqg/conftest.py), on the command's own frequency grid."""
+    from conftest import reference_disk_margins
+
+    from trussid.lqg.evaluate import margin_grid
+
+    assert int(np.__version__.split(".")[0]) >= 2
+    d = files
+    assert run_here(capsys, "control", d / "model.npz", "--data", d / "id.npz", "--out",
+                    d / "c_np2.npz", "--no-baselines").returncode == 0
+    res = run_here(capsys, "closed-loop", d / "c_np2.npz", d / "model.npz", "--out",
+                   d / "rep_np2", "--samples", 1000)
+    assert res.returncode == 0, res.stderr
+    (row,) = json.loads((d / "rep_np2" / "summary.json").read_text())["rows"].values()
+    m = row["margins"]
+    plant, _ = load_model(d / "model.npz")
+    ctrl, _ = load_model(d / "c_np2.npz")
+    f = margin_grid([plant, ctrl], plant.dt)  # the grid is the command's; the margins are not
+    assert m["n_frequencies"] == f.size
+    ref = reference_disk_margins(plant, ctrl, f)
+    assert m["mimo"]["alpha"] == pytest.approx(ref["mimo_alpha"], rel=1e-7)
+    assert [lp["alpha"] for lp in m["loops"]] == pytest.approx(ref["loop_alpha"], rel=1e-9)
+
+
+def test_closed_loop_given_a_model_says_it_may_not_be_a_controller(files, capsys):
+    """Newcomer audit 3: `closed-loop MODEL.npz` ended in "controller input 'ch1' is not a
+    plant output", which names the wrong cause."""
+    d = files
+    res = run_here(capsys, "closed-loop", d / "model.npz", d / "model.npz", "--out", d / "x")
+    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1
+    assert "is it a model rather than a controller?" in res.stderr
+    assert not (d / "x").exists()

@@ -152,13 +152,34 @@ def test_identify_draws_the_stabilisation_diagram_and_the_modal_table(tmp_path, 
     found = sorted(round(m["frequency_hz"]) for m in stab["stable_at_highest_order"])
     assert found == [31, 87]  # 195 and 547 rad/s
     assert (tmp_path / "stab.png").read_bytes()[:4] == b"\x89PNG"
-    (m1, m2) = summary["modes"]
+    (m1, m2) = summary["modal_table"]
     assert m1["frequency_hz"] == pytest.approx(195 / (2 * np.pi), rel=1e-3)
     assert m2["damping"] == pytest.approx(0.02, rel=0.05)
     assert m1["shape"]["acc"][0] == pytest.approx(1.0)
     code, _, err = run(capsys, "identify", tmp_path / "d.uff", "--order", 4, "--out",
                        tmp_path / "m.npz", "--stabilisation", tmp_path / "stab.pdf")
     assert code == 2 and "the diagram is a .png" in err[0]
+
+
+def test_identify_prints_the_modal_table_beside_the_intervals_without_json(tmp_path, capsys,
+                                                                           two_modes):
+    """The README's modal-analysis command, printed (the newcomer's D4: the table was written
+    over the 95 % intervals, and the printed summary ended in KeyError 'frequency_ci95_hz')."""
+    fs, u, y = two_modes
+    write_data(IOData(u=u, y=y, fs=fs, input_names=["force"], output_names=["acc"]),
+               tmp_path / "d.npz")
+    code, out, err = run(capsys, "identify", tmp_path / "d.npz", "--order", 4, "--out",
+                         tmp_path / "m.npz", "--modal-table")
+    assert code == 0, err
+    lines = out.splitlines()
+    k = lines.index(next(ln for ln in lines if ln.startswith("modes with 95 % intervals")))
+    f_ci = sorted(float(ln.split()[0]) for ln in lines[k + 2:k + 4])
+    # the structure's two modes: 195 and 547 rad/s
+    assert f_ci == pytest.approx([195 / (2 * np.pi), 547 / (2 * np.pi)], rel=2e-3)
+    t = lines.index(next(ln for ln in lines if ln.startswith("modal parameters")))
+    rows = [ln.split() for ln in lines[t + 2:t + 4]]  # mode, f [Hz], damping [%], ...
+    assert [float(r[1]) for r in rows] == pytest.approx(f_ci, abs=1e-3)
+    assert [float(r[2]) for r in rows] == pytest.approx([1.0, 2.0], rel=0.05)
 
 
 def test_demo_refuses_a_missing_parent_before_any_work(tmp_path, capsys):

@@ -64,8 +64,20 @@ def test_non_positive_material_array_is_named_at_assembly_by_element(key):
 
 
 def test_negative_density_array_is_named_at_assembly_by_element():
-    with pytest.raises(ModelError, match=r"element 12 \(.*\): rho must be >= 0"):
+    with pytest.raises(ModelError, match=r"element 12 \(.*\): rho must be >= 0 and finite, "
+                                         r"got -1\.0$"):
         assemble(two_beams(material=dict(GOOD_MATERIAL, rho=-1.0)))
+
+
+@pytest.mark.parametrize("key, value, shown", [("E", -2.0, "-2.0"), ("J", -1e-9, "-1e-09"),
+                                               ("A", float("nan"), "nan")])
+def test_the_offending_value_is_printed_as_a_number(key, value, shown):
+    """numpy 2 prints a numpy scalar's repr as np.float64(-2.0): the message shows the
+    number as the user wrote it."""
+    kw = ({"material": dict(GOOD_MATERIAL, **{key: value})} if key == "E"
+          else {"section": dict(GOOD_SECTION, **{key: value})})
+    with pytest.raises(ModelError, match=rf"element 12 \(.*\): {key} must be .*, got {shown}$"):
+        assemble(two_beams(**kw))
 
 
 @pytest.mark.parametrize("key", ["A", "Iy", "Iz", "J"])
@@ -321,3 +333,10 @@ def test_three_inertia_numbers_are_the_principal_moments():
 def test_wrong_shapes_of_beam_arguments_are_named(kw, match):
     with pytest.raises(ModelError, match=match):
         two_beams(**kw)
+
+
+def test_a_negative_point_mass_is_printed_as_a_number():
+    m = Model()
+    m.add_nodes([1], [[0.0, 0.0, 0.0]])
+    with pytest.raises(ModelError, match=r"point mass at node 1: mass must be >= 0, got -2\.0$"):
+        m.add_point_masses([1], np.array([-2.0]))

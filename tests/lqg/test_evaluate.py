@@ -174,3 +174,37 @@ def test_mismatched_controller_and_plant_are_named(structure, record):
                           inputs=["ch1", "ch2", "ch3"], outputs=["acc1", "acc2", "acc3"])
     with pytest.raises(ControlError, match="sample interval"):
         disk_margins(other_dt, c)
+
+
+def test_disk_margins_equal_a_frequency_by_frequency_computation_on_numpy_2(structure, record):
+    """Issue 30: disk_margins' loop-at-a-time solve over a stack of frequencies failed on
+    numpy 2 (a stack of vectors as b). Against 2-D numpy at each frequency and, for the MIMO
+    margin, mu from a D-scaled singular value bound (not slycot), on every loop; and with
+    slycot's ab13md called directly at every frequency of the grid (no bound pruning)."""
+    from slycot import ab13md
+
+    from trussid.lqg import design_lqg
+
+    from .conftest import reference_disk_margins
+
+    assert int(np.__version__.split(".")[0]) >= 2
+    c = design_lqg(structure, *record).controller
+    # a plain grid plus +-3 Hz around each mode at 0.05 Hz (0.25 % damping: 0.8 Hz wide)
+    f = np.unique(np.r_[np.linspace(1.0, 799.0, 400),
+                        np.concatenate([np.arange(-3, 3.01, 0.05) + fm for fm in
+                                        (120.0, 166.0, 194.0, 220.0)])])
+    ours = disk_margins(structure, c, f)
+    ref = reference_disk_margins(structure, c, f)
+    assert [lp["alpha"] for lp in ours["loops"]] == pytest.approx(ref["loop_alpha"], rel=1e-9)
+    assert ours["mimo"]["alpha"] == pytest.approx(ref["mimo_alpha"], rel=1e-7)
+    assert ours["mimo"]["frequency_hz"] == ref["mimo_frequency_hz"]
+    a = ours["mimo"]["alpha"]  # balanced disk: gain (1 + a/2)/(1 - a/2), phase 2 atan(a/2)
+    assert ours["mimo"]["gain_db"] == pytest.approx(20 * np.log10((2 + a) / (2 - a)), rel=1e-12)
+    assert ours["mimo"]["phase_deg"] == pytest.approx(np.degrees(2 * np.arctan(a / 2)), rel=1e-12)
+    assert min(lp["alpha"] for lp in ours["loops"]) > a  # one loop at a time: no less margin
+    # slycot directly at every frequency: the bound pruning in disk_margins loses nothing
+    z = np.exp(2j * np.pi * f * structure.dt)
+    H = [np.asarray(c(zk)) @ np.asarray(structure(zk)) for zk in z]  # K P
+    mu = [ab13md(np.linalg.inv(np.eye(3) - KP) - 0.5 * np.eye(3), np.ones(3, int),
+                 2 * np.ones(3, int))[0] for KP in H]
+    assert ours["mimo"]["alpha"] == pytest.approx(1 / max(mu), rel=1e-9)

@@ -466,7 +466,7 @@ class WallBasis:
         bad = ~((w > 0) & (w < self.r_out))
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
-            raise ModelError(f"strut {i} wall thickness {w[i]!r} m must be in (0, {self.r_out:.5g} m)")
+            raise ModelError(f"strut {i} wall thickness {float(w[i])!r} m must be in (0, {self.r_out:.5g} m)")
         return w
 
     def coefficients(self, walls) -> tuple[np.ndarray, np.ndarray]:

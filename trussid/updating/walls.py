@@ -54,7 +54,7 @@ def _vector(name, value, k, positive=True):
         raise UpdateError(f"{name} has {a.size} entries for {k} measured modes")
     bad = np.flatnonzero(~np.isfinite(a) | ((a <= 0) if positive else (a < 0)))
     if bad.size:
-        raise UpdateError(f"{name}[{bad[0]}] = {a[bad[0]]!r} must be finite and "
+        raise UpdateError(f"{name}[{bad[0]}] = {float(a[bad[0]])!r} must be finite and "
                           f"{'positive' if positive else 'non-negative'}")
     return a
 

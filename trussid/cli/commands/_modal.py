@@ -59,7 +59,9 @@ def modal_outputs(args, data, model, start: str, form: str, summary: dict) -> li
         from trussid.plid.modal import format_modal_table, modal_table
 
         modes = modal_table(model, physical_only=True)
-        summary["modes"] = [
+        # its own key: "modes" holds the 95 % intervals, which the text summary prints too
+        # (writing the table over them was the KeyError of issue 30's newcomer, D4)
+        summary["modal_table"] = [
             {"frequency_hz": float(modes.frequencies_hz[k]), "damping": float(modes.damping[k]),
              "shape": {name: [float(abs(v)), float(np.degrees(np.angle(v)))]
                        for name, v in zip(modes.labels, modes.shapes[:, k])},

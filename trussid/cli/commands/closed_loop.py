@@ -51,6 +51,24 @@ def add_parser(subparsers):
     return p
 
 
+def _check_pairs(plants, ctrl, designed: bool, path) -> None:
+    """Refuse a controller that does not fit a plant; without a design record of `trussid
+    control` say that it may be a model (the newcomer's mistake in audit 3 read "controller
+    input 'ch1' is not a plant output", naming the wrong cause)."""
+    from trussid._util.errors import UserError
+    from trussid.lqg.evaluate import check_pair
+
+    for label, plant in plants:
+        try:
+            check_pair(plant, ctrl, label)
+        except UserError as exc:
+            if designed:
+                raise
+            raise UserError(f"{exc}; {path} has no design record of `trussid control`: is it a "
+                            "model rather than a controller? (make one with trussid control "
+                            "MODEL.npz --data ID.npz --out CONTROLLER.npz)") from None
+
+
 def run(args) -> int:
     import numpy as np
     from tqdm import tqdm
@@ -69,7 +87,7 @@ def run(args) -> int:
         raise UserError(f"--samples must be at least 100, got {args.samples}")
     import json
 
-    from trussid.lqg.evaluate import check_pair, match_names
+    from trussid.lqg.evaluate import match_names
 
     ctrl, meta = load_model(args.controller, which="discrete")
     ex = meta["extra"]
@@ -97,8 +115,7 @@ def run(args) -> int:
                             f"{1 / ctrl.dt:g} Hz: give the plant file it was designed for")
         plants = truths(stretch=args.stretch)
         settings = LoopSettings.for_lab(Testbed().lab, n_samples=args.samples)
-    for label, plant in plants:  # every mismatch before any work
-        check_pair(plant, ctrl, label)
+    _check_pairs(plants, ctrl, bool(design), args.controller)  # every mismatch before any work
     if args.plant and lab is None:  # a plant file that records no lab (a model, a deck's)
         print(f"trussid closed-loop: note: {args.plant} records no lab; its loop runs behind "
               "ideal converters", file=sys.stderr)
