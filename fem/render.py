@@ -49,7 +49,7 @@ from trussid._util.files import atomic_path
 __all__ = ["DEFAULT_AMPLITUDE", "DEFAULT_WINDOW", "GHOST_COLOR", "GHOST_OPACITY", "SUPPORT_COLOR",
            "SCALAR_NAME", "RenderError", "Decoration", "FIXED_PART_COLOUR",
            "decorations_from_solids", "hermite_beam_displacements", "equivalent_radius",
-           "check_mode_number", "ModeScene", "mode_scene", "offscreen_backend", "render_mode",
+           "check_mode_number", "node_displacements", "ModeScene", "mode_scene", "offscreen_backend", "render_mode",
            "render_mode_gif", "render_mode_grid", "default_cmap"]
 
 #: Default drawn amplitude: the largest displacement is this fraction of the diagonal of the
@@ -231,7 +231,7 @@ def equivalent_radius(A, Iy, Iz, J=None, rod=None):
     return np.where(np.isfinite(r) & (r > 0), r, fallback)
 
 
-def _node_displacements(model: Model, modes, mode: int) -> np.ndarray:
+def node_displacements(model: Model, modes, mode: int) -> np.ndarray:
     """(n_nodes, 6) shape of ``mode`` (1-based) in the model's node order, sign-normalised."""
     shapes = np.asarray(modes.shapes_full, float)
     n_modes = shapes.shape[1]
@@ -443,7 +443,7 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
         raise RenderError(f"scale must be a finite number >= 0, got {scale!r}")
     if not (np.isfinite(amplitude) and amplitude >= 0):
         raise RenderError(f"amplitude must be a finite number >= 0, got {amplitude!r}")
-    u_nodes = _node_displacements(model, modes, mode)
+    u_nodes = node_displacements(model, modes, mode)
     title = _mode_title(modes, mode, label, labels)
     xyz = model.xyz
     decorations = [_as_decoration(d) for d in decorations]
