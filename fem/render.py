@@ -604,8 +604,9 @@ def _groups(scene: ModeScene, meshes: dict[str, Any]) -> dict[tuple, Any]:
 
 
 def _add_scene(plotter, scene: ModeScene, factor: float, cmap, show_ghost: bool,
-               scalar_bar: bool, font_size: int) -> dict[tuple, Any]:
-    """Add the ghost and the deformed meshes to the active subplot.
+               scalar_bar: bool, font_size: int, width: int | None = None) -> dict[tuple, Any]:
+    """Add the ghost and the deformed meshes to the active subplot (``width``: its width in
+    pixels, so that a long title is set smaller rather than cut at the frame).
 
     Returns the datasets the actors draw, by group (:func:`_groups`), for animation.
     """
@@ -637,7 +638,13 @@ def _add_scene(plotter, scene: ModeScene, factor: float, cmap, show_ghost: bool,
         # The actor draws this mesh through a pipeline (normals), so updating it in place
         # (copy_from) re-executes the pipeline on the next render.
         handles[key] = mesh
-    plotter.add_text(scene.title, position="upper_left", font_size=font_size, color="black")
+    # Inside the frame: "upper_left" puts the text against the window's top and left edges,
+    # where its first pixels were cut; a long title (a mode label) is set smaller to fit.
+    size = font_size
+    if width:
+        size = max(7, min(font_size, int(0.9 * width / (0.62 * max(len(scene.title), 1)))))
+    plotter.add_text(scene.title, position=(0.02, 0.93), viewport=True, font_size=size,
+                     color="black")
     return handles
 
 
@@ -714,7 +721,7 @@ def render_mode(model: Model, modes, mode: int = 1, out=None, *, window_size=DEF
     with offscreen_backend():
         p = _new_plotter(size, antialias=antialias)
         try:
-            _add_scene(p, scene, 1.0, cmap, show_ghost, True, _font_size(size))
+            _add_scene(p, scene, 1.0, cmap, show_ghost, True, _font_size(size), size[0])
             _frame_camera(p, scene, view)
             image = np.asarray(p.screenshot(return_img=True))
         finally:
@@ -771,7 +778,8 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
     with offscreen_backend():
         p = _new_plotter(size, antialias=antialias)
         try:
-            drawn = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size))
+            drawn = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size),
+                               size[0])
             _frame_camera(p, scene, view)
             for c in factors:
                 for key, mesh in _groups(scene, scene.meshes(c)).items():
@@ -843,7 +851,7 @@ def render_mode_grid(model: Model, modes, n: int = 6, out=None, *, ncols: int | 
             for k, scene in enumerate(scenes):
                 p.subplot(k // ncols, k % ncols)
                 p.set_background("white")
-                _add_scene(p, scene, 1.0, cmap, show_ghost, k == n - 1, _font_size(cell))
+                _add_scene(p, scene, 1.0, cmap, show_ghost, k == n - 1, _font_size(cell), cell[0])
                 _frame_camera(p, scene, view)
             image = np.asarray(p.screenshot(return_img=True))
         finally:

@@ -712,7 +712,7 @@ def write_files(out: Path, records: dict, fits: dict, truth, lab) -> ReportFiles
 
 
 def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
-                  settings: DemoSettings, keep: dict | None = None) -> list:
+                  settings: DemoSettings, keep: dict | None = None, unit: str = "V/V") -> list:
     """Bode overlays, pole maps, traces and the convergence plot; their file names. ``keep``:
     a dict that receives each figure by file name (for ``report.html``)."""
     written = []
@@ -728,7 +728,7 @@ def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
         in_names = [rid.data.input_names[c] for c in cols]
         figs = plots.bode_overlay(truth[:, cols], h1s[name], fits[name].model, in_names,
                                   rid.data.output_names, settings.plot_band, f"{name}",
-                                  excited=settings.excitation_band)
+                                  excited=settings.excitation_band, unit=unit)
         for fig, nm in zip(figs, in_names):
             save(fig, f"bode_{name}_{nm}.png" if name == "mimo" else f"bode_{name}.png")
         save(plots.pole_zero_figure(fits[name].model, truth[:, cols], settings.plot_band,
@@ -851,8 +851,8 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     with atomic_directory(out, force=force) as tmp:
         summary = _write_report(tmp, tp, records, fits, h1s, truth, settings, models, timings,
                                 prov, t0, t_start, control, adapted)
-    say(f"      done in {timings['total']:.1f} s (report.html written "
-        f"{timings.get('report_html', 0.0):.1f} s after that)")
+    say(f"      done in {timings['total']:.1f} s, then report.html in "
+        f"{timings.get('report_html', 0.0):.1f} s")
     return summary
 
 
@@ -891,7 +891,8 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
     ``adapted``: :func:`trussid.campaign.adapt.demo_section`'s result or None."""
     files = write_files(out, records, fits, truth, tp.lab)
     figures = {}  # file name -> Figure, drawn again interactively in report.html
-    files.figures = write_figures(out, records, fits, h1s, truth, settings, keep=figures)
+    files.figures = write_figures(out, records, fits, h1s, truth, settings, keep=figures,
+                                  unit="V/V" if hasattr(tp, "tbm") else "IO-file units")
     if control is not None:
         for fname, fig in control[1].items():
             save_figure(fig, out / fname)
