@@ -31,6 +31,7 @@ import base64
 import html
 import json
 from dataclasses import dataclass
+from html.parser import HTMLParser
 from typing import Sequence
 
 import numpy as np
@@ -42,7 +43,8 @@ from trussid.fem.render import (DEFAULT_AMPLITUDE, RenderError, check_mode_numbe
                                 default_cmap, equivalent_radius, hermite_beam_displacements, node_displacements)
 
 __all__ = ["SensorAxis", "IdentifiedMode", "mode_viewer_data", "viewer_fragment",
-           "plotly_script", "html_page", "write_mode_viewer", "VIEWER_JS"]
+           "plotly_script", "html_page", "write_mode_viewer", "external_references",
+           "VIEWER_JS"]
 
 
 @dataclass(frozen=True)
@@ -264,6 +266,7 @@ window.trussidModeViewer = function (id, D) {
   var sets = D.sets.map(function (s) {
     return {s: s, x0: dec(s.x0), u: s.u.map(dec)};
   });
+  window.trussidModeCount = D.modes.length;
   var mode = 0, phase = 0.25, playing = true, gain = 1.0, t0 = performance.now(), last = 0;
   function xyz(k, f) {
     var s = sets[k], u = s.u[mode], n = s.x0.length / 3, X = [], Y = [], Z = [];
@@ -357,6 +360,7 @@ window.trussidModeViewer = function (id, D) {
   btn.addEventListener('click', function () {
     playing = !playing; btn.textContent = playing ? 'pause' : 'play';
     t0 = performance.now() - phase * D.period_s * 1000;
+    if (root.trussidStart) root.trussidStart();
   });
   ampIn.addEventListener('input', function () { gain = parseFloat(ampIn.value); draw(); });
   function fromHash() {
@@ -367,16 +371,52 @@ window.trussidModeViewer = function (id, D) {
   window.addEventListener('hashchange', fromHash);
   setMode(0);
   fromHash();
+  // The loop runs only while playing and while the viewer is on screen: a page of many
+  // figures stays responsive, and a paused view (#phase=...) is still for screenshots.
+  var visible = true, looping = false;
   function tick(now) {
-    if (playing && now - last > 50) {
+    if (!playing || !visible) { looping = false; return; }
+    if (now - last > 50) {
       last = now;
       phase = ((now - t0) / 1000 / D.period_s) % 1;
       draw();
     }
     requestAnimationFrame(tick);
   }
-  requestAnimationFrame(tick);
+  function start() {
+    if (!looping && playing && visible) { looping = true; requestAnimationFrame(tick); }
+  }
+  if (window.IntersectionObserver) {
+    new IntersectionObserver(function (entries) {
+      visible = entries[0].isIntersecting;
+      t0 = performance.now() - phase * D.period_s * 1000;
+      start();
+    }).observe(plot);
+  }
+  root.trussidStart = start;
+  start();
 };
+"""
+
+#: With ``probe`` in the URL's fragment, the page reports at its load event what it fetched
+#: (the browser's resource timing: an offline page lists nothing), its load time and where
+#: its plots are, in ``<pre id="probe">`` (JSON): tests read it with ``chromium --dump-dom``.
+PROBE_JS = r"""
+window.addEventListener('load', function () {
+  if (location.hash.indexOf('probe') < 0) return;
+  var nav = performance.getEntriesByType('navigation')[0];
+  function rect(el) { var r = el.getBoundingClientRect(); return [r.left, r.top, r.width, r.height]; }
+  var p = document.createElement('pre');
+  p.id = 'probe';
+  p.textContent = JSON.stringify({
+    resources: performance.getEntriesByType('resource').map(function (e) { return e.name; }),
+    load_ms: nav ? nav.loadEventStart : null,
+    viewer: Array.prototype.map.call(document.querySelectorAll('.tv-plot'), rect),
+    figures: Array.prototype.map.call(document.querySelectorAll('.fig'), rect),
+    modes: window.trussidModeCount || null
+  });
+  document.body.appendChild(p);
+});
 """
 
 VIEWER_CSS = """
@@ -411,7 +451,7 @@ def html_page(title: str, body: str, css: str = "") -> str:
     return ("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
             f"<title>{html.escape(title)}</title>\n<style>\nbody {{ font-family: sans-serif; "
             "margin: 1em 2em; max-width: 1400px; }}\n" + VIEWER_CSS + css + "</style>\n"
-            + plotly_script() + f"\n<script>{VIEWER_JS}</script>\n</head>\n<body>\n" + body
+            + plotly_script() + f"\n<script>{VIEWER_JS}{PROBE_JS}</script>\n</head>\n<body>\n" + body
             + "\n</body>\n</html>\n")
 
 
@@ -438,3 +478,27 @@ def write_mode_viewer(model: Model, modes, out, *, n_modes: int | None = None,
     with atomic_path(out) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return len(text.encode("utf-8"))
+
+
+class _Refs(HTMLParser):
+    """Collects every ``src``/``href``-like attribute of the page's elements (script
+    contents are not markup and are not parsed as such)."""
+
+    def __init__(self):
+        super().__init__()
+        self.refs = []
+
+    def handle_starttag(self, tag, attrs):
+        for name, value in attrs:
+            if name in ("src", "href", "srcset", "data", "poster", "action", "xlink:href") \
+                    and value:
+                self.refs.append((tag, name, value))
+
+
+def external_references(text: str) -> list:
+    """The ``(tag, attribute, value)`` of every reference in the page ``text`` that leaves
+    the file: anything but a fragment (``#...``) or inline data (``data:``). An offline page
+    has none."""
+    p = _Refs()
+    p.feed(text)
+    return [r for r in p.refs if not r[2].startswith(("#", "data:"))]

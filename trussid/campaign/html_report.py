@@ -254,9 +254,7 @@ def bode_explorer(summary: DemoSummary, out: Path) -> dict:
     lo, hi = st.excitation_band
     layout = {
         "height": 620, "hovermode": "x unified", "plot_bgcolor": "white",
-        "margin": {"l": 80, "r": 20, "t": 90, "b": 50},
-        "title": {"text": "Bode explorer: true plant, H1 estimates and identified models",
-                  "x": 0.01},
+        "margin": {"l": 80, "r": 20, "t": 70, "b": 50},
         "xaxis": {"domain": [0, 1], "anchor": "y", "matches": "x2", "showticklabels": False,
                   "range": list(st.plot_band)},
         "yaxis": {"domain": [0.42, 1.0], "type": "log", "exponentformat": "power",
@@ -269,9 +267,9 @@ def bode_explorer(summary: DemoSummary, out: Path) -> dict:
                     "x1": min(hi, st.plot_band[1]), "y0": 0, "y1": 1, "line": {"width": 0},
                     "fillcolor": "#2ca02c", "opacity": 0.06, "layer": "below"}
                    for ax, ay in (("x", "y"), ("x2", "y2"))],
-        "updatemenus": [{"buttons": buttons, "direction": "down", "x": 0.0, "y": 1.16,
-                         "xanchor": "left", "yanchor": "top", "showactive": True}],
-        "legend": {"orientation": "h", "x": 0.25, "y": 1.16, "yanchor": "top"},
+        "updatemenus": [{"buttons": buttons, "direction": "down", "x": 0.0, "y": 1.02,
+                         "xanchor": "left", "yanchor": "bottom", "showactive": True}],
+        "legend": {"orientation": "h", "x": 0.16, "y": 1.02, "yanchor": "bottom"},
     }
     for key in ("xaxis", "yaxis", "xaxis2", "yaxis2"):
         layout[key].update({"gridcolor": "#e5e5e5", "showline": True, "mirror": True,
