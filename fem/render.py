@@ -604,9 +604,9 @@ def _groups(scene: ModeScene, meshes: dict[str, Any]) -> dict[tuple, Any]:
 
 
 def _add_scene(plotter, scene: ModeScene, factor: float, cmap, show_ghost: bool,
-               scalar_bar: bool, font_size: int, width: int | None = None) -> dict[tuple, Any]:
-    """Add the ghost and the deformed meshes to the active subplot (``width``: its width in
-    pixels, so that a long title is set smaller rather than cut at the frame).
+               scalar_bar: bool, font_size: int, frame=None) -> dict[tuple, Any]:
+    """Add the ghost and the deformed meshes to the active subplot (``frame``: its (width,
+    height) in pixels, so that the title sits inside it and a long one is set smaller).
 
     Returns the datasets the actors draw, by group (:func:`_groups`), for animation.
     """
@@ -640,11 +640,14 @@ def _add_scene(plotter, scene: ModeScene, factor: float, cmap, show_ghost: bool,
         handles[key] = mesh
     # Inside the frame: "upper_left" puts the text against the window's top and left edges,
     # where its first pixels were cut; a long title (a mode label) is set smaller to fit.
-    size = font_size
-    if width:
-        size = max(7, min(font_size, int(0.9 * width / (0.62 * max(len(scene.title), 1)))))
-    plotter.add_text(scene.title, position=(0.02, 0.93), viewport=True, font_size=size,
-                     color="black")
+    if frame is None:
+        plotter.add_text(scene.title, position="upper_left", font_size=font_size, color="black")
+        return handles
+    w, h = frame
+    size = max(7, min(font_size, int(0.92 * w / (0.62 * max(len(scene.title), 1)))))
+    # pixels from the subplot's lower left corner to the text's: a margin of 2 % and a line
+    plotter.add_text(scene.title, position=(int(0.02 * w), int(h - 0.02 * h - 1.5 * size)),
+                     font_size=size, color="black")
     return handles
 
 
@@ -721,7 +724,7 @@ def render_mode(model: Model, modes, mode: int = 1, out=None, *, window_size=DEF
     with offscreen_backend():
         p = _new_plotter(size, antialias=antialias)
         try:
-            _add_scene(p, scene, 1.0, cmap, show_ghost, True, _font_size(size), size[0])
+            _add_scene(p, scene, 1.0, cmap, show_ghost, True, _font_size(size), size)
             _frame_camera(p, scene, view)
             image = np.asarray(p.screenshot(return_img=True))
         finally:
@@ -779,7 +782,7 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
         p = _new_plotter(size, antialias=antialias)
         try:
             drawn = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size),
-                               size[0])
+                               size)
             _frame_camera(p, scene, view)
             for c in factors:
                 for key, mesh in _groups(scene, scene.meshes(c)).items():
@@ -851,7 +854,7 @@ def render_mode_grid(model: Model, modes, n: int = 6, out=None, *, ncols: int | 
             for k, scene in enumerate(scenes):
                 p.subplot(k // ncols, k % ncols)
                 p.set_background("white")
-                _add_scene(p, scene, 1.0, cmap, show_ghost, k == n - 1, _font_size(cell), cell[0])
+                _add_scene(p, scene, 1.0, cmap, show_ghost, k == n - 1, _font_size(cell), cell)
                 _frame_camera(p, scene, view)
             image = np.asarray(p.screenshot(return_img=True))
         finally:
