@@ -317,7 +317,7 @@ window.trussidModeViewer = function (id, D) {
                           z: (r[2][1] - r[2][0]) / span},
             xaxis: {range: r[0], title: {text: 'x [m]'}}, yaxis: {range: r[1], title: {text: 'y [m]'}},
             zaxis: {range: r[2], title: {text: 'z [m]'}},
-            camera: {eye: {x: 1.25, y: -2.0, z: 1.1}}}
+            camera: {eye: {x: 0.95, y: -1.5, z: 0.8}}}
   };
   Plotly.newPlot(plot, traces, layout, {responsive: true, displaylogo: false});
   function draw() {

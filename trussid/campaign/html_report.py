@@ -228,7 +228,8 @@ def bode_explorer(summary: DemoSummary, out: Path) -> dict:
             for i, oname in enumerate(m.output_names):
                 ii = outs.index(oname)
                 curves[(ii, j)].append((f"H1, {m.name} record", est.f[keep], est.H[keep, i, jj],
-                                        {"color": "#ff7f0e", "width": 1.2, "dash": "dot"}))
+                                        {"color": palette[k % len(palette)], "width": 1.2,
+                                         "dash": "dot"}))
                 curves[(ii, j)].append((f"model {m.name} ({m.states} states)", f, Hm[:, i, jj],
                                         {"color": palette[k % len(palette)], "width": 1.4}))
     data, buttons, pairs = [], [], list(curves)
@@ -331,9 +332,7 @@ def interval_figure(summary: DemoSummary) -> dict | None:
     lo, hi = summary.settings.frf_band
     layout = {
         "height": 640, "plot_bgcolor": "white", "hovermode": "closest",
-        "margin": {"l": 150, "r": 20, "t": 60, "b": 50},
-        "title": {"text": "Identified modes with their 95 % intervals (dotted: true modes)",
-                  "x": 0.01},
+        "margin": {"l": 150, "r": 20, "t": 50, "b": 50},
         "xaxis": {"domain": [0, 1], "anchor": "y", "matches": "x2", "range": [lo, hi],
                   "showticklabels": False},
         "yaxis": {"domain": [0.62, 1.0], "type": "category", "title": {"text": "model"}},
