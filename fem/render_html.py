@@ -438,7 +438,10 @@ def viewer_fragment(data: dict, div_id: str = "modes3d") -> str:
             '<span>drag to rotate, scroll to zoom; <code>#mode=K</code> in the address picks '
             'mode K</span></div>\n'
             '<div class="tv-info"></div><div class="tv-plot"></div></div>\n'
-            f'<script>trussidModeViewer("{html.escape(div_id)}", {payload});</script>\n')
+            # drawn once the page has loaded: the text is readable at once, WebGL comes after
+            f'<script>(function () {{ var d = {payload}; window.addEventListener("load", '
+            f'function () {{ setTimeout(function () {{ trussidModeViewer("{html.escape(div_id)}", '
+            'd); }, 0); }); })();</script>\n')
 
 
 def plotly_script() -> str:

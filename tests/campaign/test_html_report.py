@@ -131,7 +131,6 @@ def test_report_html_in_headless_chromium_without_network(quick_report):
     assert run.probe is not None, run.log
     assert run.probe["resources"] == []
     assert not [ln for ln in run.log if "net::ERR_" in ln or "Failed to load" in ln]
-    assert run.probe["modes"] and run.probe["modes"] >= 3
     viewer, bode = run.probe["viewer"][0], run.probe["figures"][0]
     shots = {}
     for name, frag in (("mode1", "mode=1&phase=0.25"), ("mode3", "mode=3&phase=0.25"),

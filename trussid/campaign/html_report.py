@@ -16,7 +16,8 @@ table of ``report.md``), with each figure replaced by the same figure drawn inte
 
 One self-contained file (plotly.js inline, no ``src``/``href`` outside the file): it opens
 offline, from an e-mail attachment or a CI artefact. The figures are drawn when they
-scroll into view, so the page opens in about the time the browser needs to parse plotly.js.
+scroll into view, after the page's load event (the 3-D view too), so the page opens in about
+the time the browser needs to parse plotly.js and the data, and the figures follow.
 
 Why convert the report's own matplotlib figures (:func:`figure_data`) instead of drawing
 every figure twice: the page then shows exactly the curves of ``report.md``'s PNGs, the
@@ -398,10 +399,13 @@ _LAZY_JS = r"""
     var fig = JSON.parse(document.getElementById(el.dataset.src).textContent);
     Plotly.newPlot(el, fig.data, fig.layout, {responsive: true, displaylogo: false});
   }
-  var io = new IntersectionObserver(function (entries) {
-    entries.forEach(function (e) { if (e.isIntersecting) { draw(e.target); io.unobserve(e.target); } });
-  }, {rootMargin: '600px'});
-  document.querySelectorAll('.fig').forEach(function (el) { io.observe(el); });
+  // after the load event: the page (text and tables) opens first, the figures follow
+  window.addEventListener('load', function () {
+    var io = new IntersectionObserver(function (entries) {
+      entries.forEach(function (e) { if (e.isIntersecting) { draw(e.target); io.unobserve(e.target); } });
+    }, {rootMargin: '600px'});
+    document.querySelectorAll('.fig').forEach(function (el) { io.observe(el); });
+  });
   window.trussidDrawAll = function () { document.querySelectorAll('.fig').forEach(draw); };
 })();
 """
