@@ -79,14 +79,16 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
             if logx:
                 ax.set_xscale("log")
             ax.set_xlim(lo, hi)
-    # above the panels: inside, "best" still lands on a resonance peak of some output
-    axes[0, 0].legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=4, fontsize=8,
-                      frameon=False)
     axes[-1, 0].set_xlabel("frequency [Hz]")
     axes[-1, 1].set_xlabel("frequency [Hz]")
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
+    # one legend above the panels: inside, "best" still lands on a resonance peak
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    top = 1.0 - 0.55 / fig.get_figheight()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, top), ncol=4,
+               fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, top - 0.25 / fig.get_figheight()))
     return fig
 
 
@@ -177,15 +179,22 @@ def pole_zero_figure(model, truth, band, title, collocated: int = 0, excited=Non
             label=f"true zeros (ch{j + 1} to acc{j + 1})")
     ax.plot(zp_m.real, zp_m.imag, "x", color="C3", ms=7, label="identified poles")
     ax.plot(zz_m.real, zz_m.imag, "+", color="C0", ms=9, label="identified zeros")
-    # The lightly damped modes sit on the unit circle between 0 and the band's edge: zoom.
+    # The lightly damped modes sit on the unit circle between 0 and the band's edge: zoom,
+    # wide enough that no marker of the upper half near the circle is cut by the frame.
     a_hi = 2 * np.pi * band[1] * dt
-    ax.set_xlim(min(np.cos(a_hi), 0.2) - 0.15, 1.12)
-    ax.set_ylim(-0.12, np.sin(min(a_hi, np.pi / 2)) + 0.15)
+    pts = np.concatenate([zp_t, zz_t, zp_m, zz_m])
+    pts = pts[np.isfinite(pts) & (pts.imag >= -0.05) & (np.abs(pts) < 1.3)]
+    x_lo = min(min(np.cos(a_hi), 0.2) - 0.15, float(pts.real.min(initial=0.0)) - 0.08)
+    y_hi = max(np.sin(min(a_hi, np.pi / 2)) + 0.15, float(pts.imag.max(initial=0.0)) + 0.08)
+    ax.set_xlim(x_lo, max(1.12, float(pts.real.max(initial=0.0)) + 0.08))
+    ax.set_ylim(-0.12, y_hi)
     ax.set_aspect("equal")
     ax.set_xlabel("Re z")
     ax.set_ylabel("Im z")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower left", fontsize=8)
+    # below the plane: inside, the legend covered poles of the zoomed half-circle
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3, fontsize=8,
+              frameon=False)
     ax.set_title("z-plane, upper half near the unit circle")
     ft, zt, _ = modal_parameters(tcols)
     fm, zm, _ = modal_parameters(model)
@@ -299,12 +308,14 @@ def order_figure(rows):
     fig = Figure(figsize=(6, 5))
     ax = fig.subplots(2, 1, sharex=True)
     ax[0].plot(n, [r.prediction_db for r in rows], "o-")
-    ax[0].set_ylabel("one-step prediction [dB]")
+    ax[0].set_ylabel("one-step [dB]")
+    ax[0].set_title("one-step prediction ratio", fontsize=10)
     ax[0].grid(True, alpha=0.3)
     ch = [(r.order, r.frf_change_db) for r in rows if r.frf_change_db is not None]
     if ch:
         ax[1].plot([c[0] for c in ch], [c[1] for c in ch], "s-")  # dB: already logarithmic
-    ax[1].set_ylabel("FRF change from previous order [dB RMS]")
+    ax[1].set_ylabel("RMS change [dB]")
+    ax[1].set_title("FRF change from the previous order", fontsize=10)
     ax[1].set_xlabel("order")
     ax[1].grid(True, alpha=0.3)
     fig.tight_layout()
