@@ -52,7 +52,7 @@ def main(argv=None) -> int:
     from trussid.campaign.demo import demo_settings, run_demo
 
     st = stamp()
-    res = {"kind": "quick" if args.quick else "full"}
+    res = {"kind": f"report {args.report}" if args.report else ("quick" if args.quick else "full")}
     with tempfile.TemporaryDirectory() as tmp:
         out = args.report
         if out is None:
