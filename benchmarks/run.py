@@ -68,6 +68,9 @@ BENCHMARKS = {
                 ["bench_control.py", "--quick", "--samples", "3000", "--truths", "2", "--no-baselines",
                  "--out", "{out}/control.md"]),
     "render": (["bench_render.py"], ["bench_render.py", "--quick", "--out", "{out}/render.md"]),
+    # report.html: size, the demo's time writing it against its total, load time offline
+    "report_html": (["bench_report_html.py", "--json", "{json}"],
+                    ["bench_report_html.py", "--quick", "--opens", "1", "--json", "{json}"]),
     # study engine: serial loop vs local and `dask` command-line clusters (~4 min quiet); a
     # 1e5-design study uninterrupted, then interrupted and resumed (~30 min quiet; quick: 600)
     "study": (["bench_study.py"], ["bench_study.py", "--quick", "--out", "{out}"]),

@@ -49,7 +49,7 @@ from trussid._util.files import atomic_path
 __all__ = ["DEFAULT_AMPLITUDE", "DEFAULT_WINDOW", "GHOST_COLOR", "GHOST_OPACITY", "SUPPORT_COLOR",
            "SCALAR_NAME", "RenderError", "Decoration", "FIXED_PART_COLOUR",
            "decorations_from_solids", "hermite_beam_displacements", "equivalent_radius",
-           "check_mode_number", "ModeScene", "mode_scene", "offscreen_backend", "render_mode",
+           "check_mode_number", "node_displacements", "ModeScene", "mode_scene", "offscreen_backend", "render_mode",
            "render_mode_gif", "render_mode_grid", "default_cmap"]
 
 #: Default drawn amplitude: the largest displacement is this fraction of the diagonal of the
@@ -231,7 +231,7 @@ def equivalent_radius(A, Iy, Iz, J=None, rod=None):
     return np.where(np.isfinite(r) & (r > 0), r, fallback)
 
 
-def _node_displacements(model: Model, modes, mode: int) -> np.ndarray:
+def node_displacements(model: Model, modes, mode: int) -> np.ndarray:
     """(n_nodes, 6) shape of ``mode`` (1-based) in the model's node order, sign-normalised."""
     shapes = np.asarray(modes.shapes_full, float)
     n_modes = shapes.shape[1]
@@ -443,7 +443,7 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
         raise RenderError(f"scale must be a finite number >= 0, got {scale!r}")
     if not (np.isfinite(amplitude) and amplitude >= 0):
         raise RenderError(f"amplitude must be a finite number >= 0, got {amplitude!r}")
-    u_nodes = _node_displacements(model, modes, mode)
+    u_nodes = node_displacements(model, modes, mode)
     title = _mode_title(modes, mode, label, labels)
     xyz = model.xyz
     decorations = [_as_decoration(d) for d in decorations]
@@ -604,8 +604,9 @@ def _groups(scene: ModeScene, meshes: dict[str, Any]) -> dict[tuple, Any]:
 
 
 def _add_scene(plotter, scene: ModeScene, factor: float, cmap, show_ghost: bool,
-               scalar_bar: bool, font_size: int) -> dict[tuple, Any]:
-    """Add the ghost and the deformed meshes to the active subplot.
+               scalar_bar: bool, font_size: int, frame=None) -> dict[tuple, Any]:
+    """Add the ghost and the deformed meshes to the active subplot (``frame``: its (width,
+    height) in pixels, so that the title sits inside it and a long one is set smaller).
 
     Returns the datasets the actors draw, by group (:func:`_groups`), for animation.
     """
@@ -637,7 +638,16 @@ def _add_scene(plotter, scene: ModeScene, factor: float, cmap, show_ghost: bool,
         # The actor draws this mesh through a pipeline (normals), so updating it in place
         # (copy_from) re-executes the pipeline on the next render.
         handles[key] = mesh
-    plotter.add_text(scene.title, position="upper_left", font_size=font_size, color="black")
+    # Inside the frame: "upper_left" puts the text against the window's top and left edges,
+    # where its first pixels were cut; a long title (a mode label) is set smaller to fit.
+    if frame is None:
+        plotter.add_text(scene.title, position="upper_left", font_size=font_size, color="black")
+        return handles
+    w, h = frame
+    size = max(7, min(font_size, int(0.92 * w / (0.62 * max(len(scene.title), 1)))))
+    # pixels from the subplot's lower left corner to the text's: a margin of 2 % and a line
+    plotter.add_text(scene.title, position=(int(0.02 * w), int(h - 0.02 * h - 1.5 * size)),
+                     font_size=size, color="black")
     return handles
 
 
@@ -714,7 +724,7 @@ def render_mode(model: Model, modes, mode: int = 1, out=None, *, window_size=DEF
     with offscreen_backend():
         p = _new_plotter(size, antialias=antialias)
         try:
-            _add_scene(p, scene, 1.0, cmap, show_ghost, True, _font_size(size))
+            _add_scene(p, scene, 1.0, cmap, show_ghost, True, _font_size(size), size)
             _frame_camera(p, scene, view)
             image = np.asarray(p.screenshot(return_img=True))
         finally:
@@ -771,7 +781,8 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
     with offscreen_backend():
         p = _new_plotter(size, antialias=antialias)
         try:
-            drawn = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size))
+            drawn = _add_scene(p, scene, factors[0], cmap, show_ghost, True, _font_size(size),
+                               size)
             _frame_camera(p, scene, view)
             for c in factors:
                 for key, mesh in _groups(scene, scene.meshes(c)).items():
@@ -843,7 +854,7 @@ def render_mode_grid(model: Model, modes, n: int = 6, out=None, *, ncols: int | 
             for k, scene in enumerate(scenes):
                 p.subplot(k // ncols, k % ncols)
                 p.set_background("white")
-                _add_scene(p, scene, 1.0, cmap, show_ghost, k == n - 1, _font_size(cell))
+                _add_scene(p, scene, 1.0, cmap, show_ghost, k == n - 1, _font_size(cell), cell)
                 _frame_camera(p, scene, view)
             image = np.asarray(p.screenshot(return_img=True))
         finally:

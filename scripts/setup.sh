@@ -66,6 +66,9 @@ if command -v apt-get >/dev/null 2>&1 && command -v dpkg >/dev/null 2>&1; then
     # The documentation site serves MathJax itself (docs/conf.py), so that its formulas
     # render offline: Debian's MathJax 2.7 (docs and test build the site).
     case "$extras" in docs|test) pkgs="$pkgs libjs-mathjax" ;; esac
+    # The test suite opens the demo's report.html in a real browser, offline (headless
+    # Chromium in a network namespace: tests/campaign/test_html_report.py).
+    case "$extras" in test) pkgs="$pkgs chromium" ;; esac
     # Debian's and Ubuntu's own Python ships venv without ensurepip: python3.X-venv adds it.
     # Only for the system interpreter (a pyenv or conda Python has its own).
     if ! "$python" -c 'import ensurepip, venv' >/dev/null 2>&1; then

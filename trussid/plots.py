@@ -24,7 +24,7 @@ def save_figure(fig: Figure, path, dpi: int = 110) -> None:
 
 
 def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
-                logx: bool = False, excited=None):
+                logx: bool = False, excited=None, unit: str = ""):
     """Bode overlay of one input column: one row per output, magnitude and phase.
 
     Parameters
@@ -42,6 +42,8 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
         Logarithmic frequency axis (for bands spanning decades).
     excited : (float, float), optional
         The excited band [Hz], shaded; outside it a nonparametric estimate is noise.
+    unit : str
+        Unit of the magnitude (e.g. ``"V/V"``), on its axis; empty: "(model units)".
 
     Returns
     -------
@@ -66,7 +68,7 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
         for (label, f, H), st in zip(curves, styles):
             ax_m.semilogy(f, np.abs(H[:, i, j]), label=label, **st)
             ax_p.plot(f, np.degrees(np.angle(H[:, i, j])), **st)
-        ax_m.set_ylabel(f"|{output_names[i]}/{input_name}|")
+        ax_m.set_ylabel(f"|{output_names[i]}/{input_name}| [{unit or 'model units'}]")
         ax_p.set_ylabel("phase [deg]")
         ax_p.set_ylim(-190, 190)
         for ax in (ax_m, ax_p):
@@ -77,12 +79,16 @@ def bode_figure(curves, j: int, input_name: str, output_names, title: str = "",
             if logx:
                 ax.set_xscale("log")
             ax.set_xlim(lo, hi)
-    axes[0, 0].legend(loc="best", fontsize=8)
     axes[-1, 0].set_xlabel("frequency [Hz]")
     axes[-1, 1].set_xlabel("frequency [Hz]")
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
+    # one legend above the panels: inside, "best" still lands on a resonance peak
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    top = 1.0 - 0.55 / fig.get_figheight()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, top), ncol=4,
+               fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, top - 0.25 / fig.get_figheight()))
     return fig
 
 
@@ -110,7 +116,8 @@ def pole_map_figure(systems, title: str = "poles (z-plane)"):
     return fig
 
 
-def bode_overlay(truth, estimate, model, input_names, output_names, band, title, excited=None):
+def bode_overlay(truth, estimate, model, input_names, output_names, band, title, excited=None,
+                 unit: str = ""):
     """One Bode overlay figure per input: true plant, nonparametric estimate, model.
 
     Parameters
@@ -125,6 +132,8 @@ def bode_overlay(truth, estimate, model, input_names, output_names, band, title,
     title : str
     excited : (float, float), optional
         The excited band [Hz], shaded: outside it the estimate is noise.
+    unit : str
+        Unit of the magnitude (e.g. ``"V/V"``).
     """
     f = frf_grid(truth, band, 1500)
     Ht = frequency_response(truth, f)
@@ -137,7 +146,7 @@ def bode_overlay(truth, estimate, model, input_names, output_names, band, title,
                                           h1_est.f[keep], h1_est.H[keep]),
                   ("identified model", f, Hm)]
         figs.append(bode_figure(curves, j, name, output_names, title=f"{title}, input {name}",
-                                excited=excited))
+                                excited=excited, unit=unit))
     return figs
 
 
@@ -170,15 +179,22 @@ def pole_zero_figure(model, truth, band, title, collocated: int = 0, excited=Non
             label=f"true zeros (ch{j + 1} to acc{j + 1})")
     ax.plot(zp_m.real, zp_m.imag, "x", color="C3", ms=7, label="identified poles")
     ax.plot(zz_m.real, zz_m.imag, "+", color="C0", ms=9, label="identified zeros")
-    # The lightly damped modes sit on the unit circle between 0 and the band's edge: zoom.
+    # The lightly damped modes sit on the unit circle between 0 and the band's edge: zoom,
+    # wide enough that no marker of the upper half near the circle is cut by the frame.
     a_hi = 2 * np.pi * band[1] * dt
-    ax.set_xlim(min(np.cos(a_hi), 0.2) - 0.15, 1.08)
-    ax.set_ylim(-0.1, np.sin(min(a_hi, np.pi / 2)) + 0.15)
+    pts = np.concatenate([zp_t, zz_t, zp_m, zz_m])
+    pts = pts[np.isfinite(pts) & (pts.imag >= -0.05) & (np.abs(pts) < 1.3)]
+    x_lo = min(min(np.cos(a_hi), 0.2) - 0.15, float(pts.real.min(initial=0.0)) - 0.08)
+    y_hi = max(np.sin(min(a_hi, np.pi / 2)) + 0.15, float(pts.imag.max(initial=0.0)) + 0.08)
+    ax.set_xlim(x_lo, max(1.12, float(pts.real.max(initial=0.0)) + 0.08))
+    ax.set_ylim(-0.12, y_hi)
     ax.set_aspect("equal")
     ax.set_xlabel("Re z")
     ax.set_ylabel("Im z")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower left", fontsize=8)
+    # below the plane: inside, the legend covered poles of the zoomed half-circle
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3, fontsize=8,
+              frameon=False)
     ax.set_title("z-plane, upper half near the unit circle")
     ft, zt, _ = modal_parameters(tcols)
     fm, zm, _ = modal_parameters(model)
@@ -187,11 +203,15 @@ def pole_zero_figure(model, truth, band, title, collocated: int = 0, excited=Non
     sel_m = (fm > 1) & (fm <= nyq)
     if excited is not None:
         ax2.axvspan(*excited, color="C2", alpha=0.08, lw=0, label="excited band")
-    ax2.set_xlim(0, nyq)
-    ax2.semilogy(ft[sel_t], np.maximum(zt[sel_t], 1e-5), "o", mfc="none", color="0.35", ms=8,
-                 label="true modes")
-    ax2.semilogy(fm[sel_m], np.clip(zm[sel_m], 1e-5, None), "x", color="C3", ms=7,
-                 label="identified")
+    # a margin on each side: a marker at 0 Hz, at Nyquist or at the extreme damping would
+    # be cut in half by the frame
+    ax2.set_xlim(-0.02 * nyq, 1.02 * nyq)
+    zt_, zm_ = np.maximum(zt[sel_t], 1e-5), np.clip(zm[sel_m], 1e-5, None)
+    ax2.semilogy(ft[sel_t], zt_, "o", mfc="none", color="0.35", ms=8, label="true modes")
+    ax2.semilogy(fm[sel_m], zm_, "x", color="C3", ms=7, label="identified")
+    zs = np.concatenate([zt_, zm_])
+    if zs.size:
+        ax2.set_ylim(zs.min() / 2.0, zs.max() * 2.0)
     ax2.set_xlabel("frequency [Hz]")
     ax2.set_ylabel("damping ratio")
     ax2.grid(True, which="both", alpha=0.3)
@@ -233,11 +253,14 @@ def convergence_figure(fits: dict, fs: float, y_rms: dict):
             scale = max(np.linalg.norm(h[-1]), 1e-300)
             a2.semilogy(idx[1:] / fs, np.maximum(change / scale, 1e-18), color=f"C{k}",
                         lw=0.8, label=name)
-    a1.set_ylabel("innovation power / output power [dB]\n(0.1 s windows)")
+    a1.set_ylabel("innovation / output power [dB]")
     a1.grid(True, alpha=0.3)
     a1.legend(loc="upper right", fontsize=8)
-    a1.set_title("PLID convergence on the identification records")
-    a2.set_ylabel("|theta_k - theta_(k-10)| / 10 / |theta_final|\nper sample")
+    a1.set_title("PLID convergence on the identification records: innovation power in 0.1 s "
+                 "windows", fontsize=11)
+    a2.set_ylabel("parameter change per sample")
+    a2.set_title(r"relative change $\|\theta_k - \theta_{k-10}\| \,/\, (10\, \|\theta_{final}\|)$",
+                 fontsize=11)
     a2.set_xlabel("time in the record [s]")
     a2.grid(True, which="both", alpha=0.3)
     a2.legend(loc="upper right", fontsize=8)
@@ -266,7 +289,9 @@ def trace_figure(model, K, data, cols, title: str, seconds=(2.0, 2.25)):
                 label="prediction error x 10")
         ax.set_ylabel(f"{d.output_names[i]} [V]")
         ax.grid(True, alpha=0.3)
-    axes[0, 0].legend(loc="upper right", fontsize=8, ncol=3)
+    # above the first panel: inside it, the legend covered the signals
+    axes[0, 0].legend(loc="lower right", bbox_to_anchor=(1.0, 1.02), fontsize=8, ncol=3,
+                      frameon=False)
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(title)
     fig.tight_layout()
@@ -283,12 +308,14 @@ def order_figure(rows):
     fig = Figure(figsize=(6, 5))
     ax = fig.subplots(2, 1, sharex=True)
     ax[0].plot(n, [r.prediction_db for r in rows], "o-")
-    ax[0].set_ylabel("one-step prediction [dB]")
+    ax[0].set_ylabel("one-step [dB]")
+    ax[0].set_title("one-step prediction ratio", fontsize=10)
     ax[0].grid(True, alpha=0.3)
     ch = [(r.order, r.frf_change_db) for r in rows if r.frf_change_db is not None]
     if ch:
-        ax[1].semilogy([c[0] for c in ch], [c[1] for c in ch], "s-")
-    ax[1].set_ylabel("FRF change from previous order [dB RMS]")
+        ax[1].plot([c[0] for c in ch], [c[1] for c in ch], "s-")  # dB: already logarithmic
+    ax[1].set_ylabel("RMS change [dB]")
+    ax[1].set_title("FRF change from the previous order", fontsize=10)
     ax[1].set_xlabel("order")
     ax[1].grid(True, alpha=0.3)
     fig.tight_layout()

@@ -14,6 +14,7 @@ import pytest
 
 from trussid import fem
 from trussid.cli import main
+from trussid.fem.render_html import external_references
 from trussid.plid.modelfile import load_model
 
 IO = """
@@ -97,6 +98,10 @@ def test_demo_on_a_deck_then_control_damps_the_dominant_modes_on_the_true_plant(
     assert summary["plant"]["sample_rate_hz"] == 2000.0
     mimo = [m for m in summary["models"] if m["name"] == "mimo"][0]
     assert mimo["frf_rms_error_db"] < 1.0  # the identified model is the plant
+    # report.html for any structure: the deck's modes in 3-D, its sensors by name, one file
+    page = (out / "report.html").read_text()
+    assert 'trussidModeViewer("modes3d"' in page and external_references(page) == []
+    assert all(f'"{name}"' in page for name in ("acc_a", "acc_b", "acc_mid"))
 
     ctrl_file = tmp_path / "c.npz"
     assert main(["control", str(out / "model_mimo.npz"), "--data",

@@ -460,7 +460,8 @@ def figures(study: dict, prefix: str = "") -> dict:
     names_in = list(ctrl.output_labels)
     figs[f"{prefix}bode_{names_in[0]}.png"] = bode_figure(
         [("open loop", f, H_ol), ("LQG closed loop", f, H_cl)], 0, f"d_{names_in[0]}",
-        list(ctrl.input_labels), f"{label}: open vs closed loop")
+        list(ctrl.input_labels), f"{label}: open vs closed loop",
+        unit=f"{st.output_unit}/{st.input_unit}")
     n = int(1.5 / plant.dt)
     t = np.arange(1, n + 1) * plant.dt
     figs[f"{prefix}impulse.png"] = decay_figure(

@@ -65,6 +65,7 @@ from trussid._util.jsonio import json_safe
 from trussid.campaign.adapt import demo_section as adapt_demo_section
 from trussid.campaign.adapt import write_files as write_adapt_files
 from trussid.campaign.control import LoopSettings, demo_section
+from trussid.campaign.html_report import write_report_html
 from trussid.campaign.report import report_markdown
 from trussid.campaign.structure import DEFAULT_SNR_DB
 from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
@@ -711,20 +712,23 @@ def write_files(out: Path, records: dict, fits: dict, truth, lab) -> ReportFiles
 
 
 def write_figures(out: Path, records: dict, fits: dict, h1s: dict, truth,
-                  settings: DemoSettings) -> list:
-    """Bode overlays, pole maps, traces and the convergence plot; their file names."""
+                  settings: DemoSettings, keep: dict | None = None, unit: str = "V/V") -> list:
+    """Bode overlays, pole maps, traces and the convergence plot; their file names. ``keep``:
+    a dict that receives each figure by file name (for ``report.html``)."""
     written = []
 
     def save(fig, fname):
         plots.save_figure(fig, out / fname, dpi=100)
         written.append(fname)
+        if keep is not None:
+            keep[fname] = fig
 
     for name, (rid, rval) in records.items():
         cols = list(rid.channels)
         in_names = [rid.data.input_names[c] for c in cols]
         figs = plots.bode_overlay(truth[:, cols], h1s[name], fits[name].model, in_names,
                                   rid.data.output_names, settings.plot_band, f"{name}",
-                                  excited=settings.excitation_band)
+                                  excited=settings.excitation_band, unit=unit)
         for fig, nm in zip(figs, in_names):
             save(fig, f"bode_{name}_{nm}.png" if name == "mimo" else f"bode_{name}.png")
         save(plots.pole_zero_figure(fits[name].model, truth[:, cols], settings.plot_band,
@@ -847,7 +851,8 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
     with atomic_directory(out, force=force) as tmp:
         summary = _write_report(tmp, tp, records, fits, h1s, truth, settings, models, timings,
                                 prov, t0, t_start, control, adapted)
-    say(f"      done in {timings['total']:.1f} s")
+    say(f"      done in {timings['total']:.1f} s, then report.html in "
+        f"{timings.get('report_html', 0.0):.1f} s")
     return summary
 
 
@@ -885,15 +890,19 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
     ``control``: the closed-loop section ``(markdown, figures, summary)`` or None;
     ``adapted``: :func:`trussid.campaign.adapt.demo_section`'s result or None."""
     files = write_files(out, records, fits, truth, tp.lab)
-    files.figures = write_figures(out, records, fits, h1s, truth, settings)
+    figures = {}  # file name -> Figure, drawn again interactively in report.html
+    files.figures = write_figures(out, records, fits, h1s, truth, settings, keep=figures,
+                                  unit="V/V" if hasattr(tp, "tbm") else "IO-file units")
     if control is not None:
         for fname, fig in control[1].items():
             save_figure(fig, out / fname)
         files.figures += list(control[1])
+        figures.update(control[1])
     if adapted is not None:
         for fname, fig in adapted[1].items():
             save_figure(fig, out / fname)
         files.figures += list(adapted[1])
+        figures.update(adapted[1])
         files.adapt = write_adapt_files(out, adapted[3])
     summary = DemoSummary(
         format_version=1, provenance=prov, settings=settings, plant=plant_section(tp),
@@ -905,8 +914,12 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
     timings["total"] = time.perf_counter() - t_start
     with atomic_path(out / "summary.json") as tmp:
         tmp.write_text(json.dumps(summary.to_dict(), indent=2) + "\n")
+    markdown = report_markdown(summary)
     with atomic_path(out / "report.md") as tmp:
-        tmp.write_text(report_markdown(summary))
+        tmp.write_text(markdown)
+    t_html = time.perf_counter()  # timed apart: the page's cost on the demo (issue 36)
+    write_report_html(out, summary, markdown, figures, tp)
+    timings["report_html"] = time.perf_counter() - t_html
     return summary
 
 

@@ -47,6 +47,10 @@ class CampaignPlant:
     description : str
         One line for the report ("deck tower.bdf with io.toml").
     lab_source : str
+    model : fem.Model, optional
+        The deck's FE model (the 3-D view of ``report.html``).
+    sensors : tuple of fem.sensors.Sensor
+        The IO file's sensors (node, axis, name), in the plant's output order.
     """
 
     discrete: object
@@ -55,6 +59,8 @@ class CampaignPlant:
     damping: float
     description: str
     lab_source: str
+    model: object = None
+    sensors: tuple = ()
 
 
 def deck_campaign_plant(deck, io, lab_path=None, *, n_modes=None) -> CampaignPlant:
@@ -75,4 +81,4 @@ def deck_campaign_plant(deck, io, lab_path=None, *, n_modes=None) -> CampaignPla
                       modes.shapes_full[:, :n], modes.node_ids, modes.xyz, modes.n_dof,
                       modes.method)
     return CampaignPlant(sd, modes, lab, damping, f"deck {Path(deck).name} with "
-                         f"{Path(io).name}", source)
+                         f"{Path(io).name}", source, model, tuple(spec.sensors))

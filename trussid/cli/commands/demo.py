@@ -28,7 +28,9 @@ def add_parser(subparsers):
         "from its modes and sample rate): one "
         "SIMO PLID model (30 states) per actuator channel and one MIMO model (36 states), "
         "each compared with the true plant, the H1 estimate and validation data. Writes "
-        "report.md, PNG figures, summary.json and the data and model files into DIR. "
+        "report.md, report.html (the same report as one page to explore offline: the modes "
+        "in 3-D, interactive Bode plots), PNG figures, summary.json and the data and model "
+        "files into DIR. "
         "--quick keeps only the channel-1 SIMO model (30 states) and an 18-state MIMO "
         "model, on shorter records (6000 + 4000 samples instead of 16000 + 8000).")
     p.add_argument("model", nargs="?", metavar="MODEL",
@@ -145,7 +147,7 @@ def run(args) -> int:
                            shlex.quote(a) for a in getattr(args, "argv", sys.argv[1:])))
     print()
     print(f"report: {args.out}/report.md (figures, summary.json, data and model files "
-          f"beside it)")
+          f"beside it); to explore: {args.out}/report.html (open it in a browser, offline)")
     print(f"{'model':<10} {'kind':<5} {'states':>6} {'SPE [dB]':>9} {'per output [dB]':>17} "
           f"{'FRF max':>8} {'FRF RMS':>8} {'seconds':>8}")
     for m in summary.models:
