@@ -98,6 +98,8 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
 
     node_ids, xyz, frames = _nodes(bdf)
     scalar = _scalar_points(bdf, set(node_ids.tolist()), info)
+    if not len(node_ids) and not scalar:
+        raise ModelError("the deck has no GRID cards (and no scalar points)")
     if scalar:
         # Scalar points become nodes of their own with only component 1 free (position and
         # frame are irrelevant: only scalar elements and MPCs join them).
@@ -128,11 +130,13 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
         raise ModelError(f"beam_theory must be 'euler-bernoulli' or 'timoshenko', got {beam_theory!r}")
 
     model = Model(beam_theory=info.beam_theory, mass=info.mass, name=path.stem)
-    model.add_nodes(node_ids, xyz)
+    n_grid = len(node_ids) - len(scalar)
+    if n_grid:
+        model.add_nodes(node_ids[:n_grid], xyz[:n_grid])
+    if scalar:
+        model.add_scalar_points(scalar)
     if nodes.frames is not None:
         model.set_node_frames(node_ids, nodes.frames)
-    if scalar:
-        model.fix(scalar, "23456")
     _add_bars(bdf, model, nodes, props)
     _add_rods(bdf, model, nodes, props, mats, info.wtmass)
     _nastran_mass_conventions(bdf, model, nodes, props, info)
@@ -211,10 +215,8 @@ def _nodes(bdf):
     along that system's axes at the grid (for cylindrical and spherical systems these
     depend on the position): returned as frames whose rows are the axes in basic.
     """
-    if not bdf.nodes:
-        if getattr(bdf, "spoints", None):  # scalar points only: added by the caller
-            return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), None
-        raise ModelError("the deck has no GRID cards")
+    if not bdf.nodes:  # scalar points only (checked by the caller)
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), None
     grdset = getattr(bdf, "grdset", None)
     if grdset is not None:
         blank_cp, blank_cd = getattr(bdf, "trussid_blank_cp_cd", ({}, {}))
@@ -1225,8 +1227,12 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
 SCALAR_POINT_CARDS = ("CELAS3", "CELAS4", "CMASS3", "CMASS4")
 
 
-def _scalar_point_refs(bdf) -> set:
-    """Scalar points that scalar elements or selected MPCs reference (besides Q-set points)."""
+def _scalar_point_refs(bdf) -> tuple[set, set]:
+    """Scalar points that scalar elements, and selected MPCs, reference (besides Q-set points).
+
+    A scalar element's points need no SPOINT entry (QRG, CELASi/CMASSi remarks): they are
+    defined by the reference. An MPC's are not.
+    """
     refs = set()
     for e in list(bdf.elements.values()) + list(bdf.masses.values()):
         if e.type in ("CELAS1", "CELAS2", "CMASS1", "CMASS2"):
@@ -1236,10 +1242,11 @@ def _scalar_point_refs(bdf) -> set:
             for k in (3, 4, 7, 8):
                 if k < len(f) and f[k]:
                     refs.add(int(f[k]))
+    mpc_refs = set()
     for sid in _case_values(bdf, "MPC")[:1]:
         for c in bdf.mpcs.get(int(sid), []):
-            refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
-    return refs
+            mpc_refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
+    return refs, mpc_refs
 
 
 def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
@@ -1248,14 +1255,21 @@ def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
     qset = set()
     for q in getattr(bdf, "qsets", []):
         qset |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
-    refs = _scalar_point_refs(bdf) - qset
-    missing = sorted(refs - spoints - grids)
+    elem_refs, mpc_refs = _scalar_point_refs(bdf)
+    elem_refs, mpc_refs = elem_refs - qset, mpc_refs - qset
+    missing = sorted(mpc_refs - spoints - grids - elem_refs)
     if missing:
-        raise ModelError(f"scalar point {missing[0]} is referenced (component 0 or a CELAS3/4, CMASS3/4) but "
-                         f"no SPOINT defines it")
+        raise ModelError(f"scalar point {missing[0]} is referenced by an MPC (component 0) but no SPOINT "
+                         f"or scalar element defines it")
     clash = sorted(spoints & grids)
     if clash:
         raise ModelError(f"SPOINT {clash[0]}: the id is also a GRID")
+    implicit = sorted(elem_refs - spoints - grids)
+    if implicit:
+        info.notes.append(f"scalar point(s) {', '.join(map(str, implicit[:5]))}{' ...' if len(implicit) > 5 else ''} "
+                          f"defined by the scalar elements that reference them (no SPOINT needed, as NASTRAN)")
+    spoints = spoints | set(implicit)
+    refs = elem_refs | mpc_refs
     used = sorted(refs & spoints)
     idle = sorted(spoints - refs - qset)
     if idle:
