@@ -35,7 +35,7 @@ BAD_DECKS = [
     ("EIGR with text in ND", BEAM + CBAR + "EIGR,70,FEER,0.,10.,,abc\n", "EIGR 70"),
     ("EIGRL with text", BEAM + CBAR + "EIGRL,1,abc\n", "EIGRL 1"),
     ("SPC1 on an undefined grid", BEAM + CBAR + "SPC1,90,123456,5\n", "SPC1 90"),
-    ("CMASS3 without its SPOINT", BEAM + CBAR + "CMASS3,100,1,5\n", "scalar point 5"),
+    ("CMASS4 on a GRID", BEAM + CBAR + "CMASS4,100,1.,1\n", "CMASS4 100"),
     ("CMASS3 without its PMASS", BEAM + CBAR + "SPOINT,5\nCMASS3,100,1,5\n", "CMASS3 100"),
     ("EIGP", BEAM + CBAR + "EIGP,90,1.,2.,1\n", "EIGP 90"),
     ("DMIG with text in a term", BEAM + CBAR + "DMIG,KX,0,6,1,0\nDMIG,KX,1,1,,1,abc,1.\n", "DMIG KX"),
