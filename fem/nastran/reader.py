@@ -1172,12 +1172,18 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
         omitted = mask_of(omits, "OMIT")
         if asets:
             omitted |= ~mask_of(asets, "ASET")
+        qpoints = _qset_points(bdf) if _component_mode_reduction(bdf) else []
+        if qpoints:
+            omitted[nodes.index(qpoints, "QSET", np.zeros(len(qpoints), dtype=np.int64))] = False
+            model.add_generalized_coordinates(qpoints)
         for c in range(6):
             sel = omitted[:, c]
             if sel.any():
                 model.omit(nodes.ids[sel], str(c + 1))
-        info.notes.append(f"OMIT/ASET: {int(omitted.sum())} DOFs condensed by Guyan reduction, as "
-                          f"NASTRAN does (exact for DOFs without mass)")
+        info.notes.append(f"OMIT/ASET: {int(omitted.sum())} DOFs condensed by "
+                          + (f"Craig-Bampton reduction, the lowest {len(qpoints)} fixed-interface modes on the "
+                             f"QSET scalar points, as NASTRAN does" if qpoints else
+                             "Guyan reduction, as NASTRAN does (exact for DOFs without mass)"))
     spoints = set(getattr(bdf, "spoints", {}) or {})
     bsets, qsets = getattr(bdf, "bsets", []), getattr(bdf, "qsets", [])
     for c in qsets:
@@ -1249,12 +1255,25 @@ def _scalar_point_refs(bdf) -> tuple[set, set]:
     return refs, mpc_refs
 
 
+def _qset_points(bdf) -> list:
+    """Ids on QSET/QSET1 entries, in deck order (each once)."""
+    ids = []
+    for q in getattr(bdf, "qsets", []):
+        ids.extend(int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids))
+    return list(dict.fromkeys(ids))
+
+
+def _component_mode_reduction(bdf) -> bool:
+    """QSET with ASET/OMIT and no BSET: a Craig-Bampton reduction whose modes are solved (the
+    B-set case prints the fixed-interface modes instead, see :func:`_add_dof_sets`)."""
+    return bool(getattr(bdf, "qsets", [])) and bool(getattr(bdf, "asets", []) or getattr(bdf, "omits", [])) \
+        and not getattr(bdf, "bsets", [])
+
+
 def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
     """Ids of the SPOINTs that something connects (sorted); the others are noted and ignored."""
     spoints = set(getattr(bdf, "spoints", {}) or {})
-    qset = set()
-    for q in getattr(bdf, "qsets", []):
-        qset |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
+    qset = set(_qset_points(bdf))
     elem_refs, mpc_refs = _scalar_point_refs(bdf)
     elem_refs, mpc_refs = elem_refs - qset, mpc_refs - qset
     missing = sorted(mpc_refs - spoints - grids - elem_refs)
@@ -1270,6 +1289,8 @@ def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
                           f"defined by the scalar elements that reference them (no SPOINT needed, as NASTRAN)")
     spoints = spoints | set(implicit)
     refs = elem_refs | mpc_refs
+    if _component_mode_reduction(bdf):
+        refs |= qset  # the generalized coordinates of the reduction
     used = sorted(refs & spoints)
     idle = sorted(spoints - refs - qset)
     if idle:
