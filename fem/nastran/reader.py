@@ -14,6 +14,7 @@ import numpy as np
 from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transform
 from trussid.fem.elements import frame_matrices, local_axes, to_global
 from trussid.fem.errors import ModelError, UnitsWarning
+from trussid.fem.general_element import general_element_stiffness, lower_by_columns
 from trussid.fem.materials import wave_speed_problem
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
@@ -992,9 +993,13 @@ def _dof_matrix(nodes: _NodeTable, dofs: list, card: str, eid: int) -> tuple[lis
     """(grids, A): A maps the grids' 6-DOF vectors (basic) to the listed (grid, component) DOFs."""
     grids = list(dict.fromkeys(g for g, _ in dofs))
     pos = {g: i for i, g in enumerate(grids)}
+    spoints = getattr(nodes, "spoints", set())
+    dofs = [(g, 1 if g in spoints and c == 0 else c) for g, c in dofs]  # a scalar point's DOF
     for g, c in dofs:
+        if g in spoints and c != 1:
+            raise ModelError(f"{card}: scalar point {g} has component 0 only, got {c}")
         if not 1 <= c <= 6:
-            raise ModelError(f"{card}: component {c} of grid {g} must be 1-6 (scalar points are not supported)")
+            raise ModelError(f"{card}: component {c} of grid {g} must be 1-6 (0 or blank only on a scalar point)")
     vec = nodes.dof_vectors([g for g, _ in dofs], [c for _, c in dofs], card.split()[0], [eid] * len(dofs))
     A = np.zeros((len(dofs), 6 * len(grids)))
     for k, (g, _c) in enumerate(dofs):
@@ -1027,49 +1032,77 @@ def _add_conm1(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
         model.add_matrices([eid], [[g]], M=[M * wtmass], label="CONM1")
 
 
-def _add_genel(bdf, model: Model, nodes: _NodeTable) -> None:
-    """GENEL: a general element given by its stiffness K or flexibility Z with rigid-body matrix S.
+def _genel_fields(f: list, card: str) -> tuple[list, list, str, list, list | None]:
+    """``(ui, ud, kind, terms, s_terms)`` of a GENEL from its flat fields (``f[1]`` = EID).
 
-    UI (m DOFs) and UD (n DOFs) pairs, then K or Z (lower triangle by columns, m x m), then
-    optionally S (m x n, by rows). With Z, K = Z^-1; the element's stiffness on (UI, UD) is
-    ``[[K, -K S], [-S^T K, S^T K S]]`` (NASTRAN QRG, GENEL), so that the UD DOFs moving as
-    the rigid motion S leaves it unstrained.
+    Positional, as the QRG lays the entry out: (grid or scalar point, component) pairs from
+    field 4 of the first line and from field 2 of each continuation (a blank component is a
+    scalar point's 0, a pair of blanks is padding); the keywords UD, K or Z, and S start a
+    continuation (field 2, flat index 1 + 8 j); UD pairs start after one blank field, the
+    K/Z and S terms right after their keyword, running on over continuations. A term list
+    may end with blank padding, but a blank inside it is refused (not silently 0.0).
     """
+    f = [x.strip().upper() for x in f] + [""] * 2
+    keyword = lambda k, names: k < len(f) and f[k] in names and (k - 1) % 8 == 0
+
+    def pairs(k: int, stop: tuple) -> tuple[list, int]:
+        out = []
+        while k < len(f) - 2 and not keyword(k, stop):
+            g, c = f[k], f[k + 1]
+            if g:
+                out.append((int(g), int(c) if c else 0))
+            elif c:
+                raise ModelError(f"{card}: component {c} without a grid or scalar point")
+            k += 2
+        return out, k
+
+    def terms(seg: list, name: str) -> list:
+        while seg and not seg[-1]:
+            seg = seg[:-1]
+        if "" in seg:
+            raise ModelError(f"{card}: a blank field inside the {name} terms (write 0.0)")
+        return [float(_nastran_value(v)) for v in seg]
+
+    ui, k = pairs(3, ("UD", "K", "Z", "S"))
+    ud = []
+    if keyword(k, ("UD",)):
+        ud, k = pairs(k + 2, ("K", "Z", "S"))
+    if not keyword(k, ("K", "Z")):
+        raise ModelError(f"{card}: no K or Z matrix given (a continuation starting with K or Z)")
+    kind = f[k]
+    s_at = next((j for j in range(k + 1, len(f)) if keyword(j, ("S",))), None)
+    kz = terms(f[k + 1:s_at], kind)
+    s_terms = terms(f[s_at + 1:], "S") if s_at is not None else None
+    return ui, ud, kind, kz, s_terms
+
+
+def _add_genel(bdf, model: Model, nodes: _NodeTable) -> None:
+    """GENEL: a general element given by its stiffness K or flexibility Z with rigid-body
+    matrix S (:func:`trussid.fem.general_element.general_element_stiffness`), on grid
+    components or scalar points."""
     for eid, f in _raw_cards(bdf, "GENEL"):
         card = f"GENEL {eid}"
-        vals = [v for v in f[2:] if v]
         try:
-            keys = {k: vals.index(k) for k in ("UD", "K", "Z", "S") if k in vals}
-            mat_key = "K" if "K" in keys else "Z" if "Z" in keys else None
-            if mat_key is None:
-                raise ModelError(f"{card}: no K or Z matrix given")
-            end_ui = keys.get("UD", keys[mat_key])
-            ui = [(int(g), int(c or 0)) for g, c in zip(vals[0:end_ui:2], vals[1:end_ui:2])]
-            ud = ([(int(g), int(c or 0)) for g, c in zip(vals[end_ui + 1:keys[mat_key]:2],
-                                                          vals[end_ui + 2:keys[mat_key]:2])]
-                  if "UD" in keys else [])
-            end_m = keys.get("S", len(vals))
-            tri = [float(_nastran_value(v)) for v in vals[keys[mat_key] + 1:end_m]]
-            svals = [float(_nastran_value(v)) for v in vals[end_m + 1:]] if "S" in keys else []
+            ui, ud, kind, kz, s_terms = _genel_fields(f, card)
+        except ModelError:
+            raise
         except (ValueError, TypeError):
-            raise ModelError(f"{card}: malformed entry") from None
+            raise ModelError(f"{card}: malformed entry (a grid or component that is not an integer, "
+                             f"or a term that is not a number)") from None
         m, n = len(ui), len(ud)
-        if len(tri) != m * (m + 1) // 2:
-            raise ModelError(f"{card}: {mat_key} needs {m * (m + 1) // 2} terms for {m} UI DOFs, got {len(tri)}")
-        if "S" in keys and len(svals) != m * n:
-            raise ModelError(f"{card}: S needs {m * n} terms ({m} UI x {n} UD), got {len(svals)}")
-        KZ = np.zeros((m, m))
-        KZ[np.triu_indices(m)] = tri  # columns of the lower triangle = rows of the upper one
-        KZ = KZ + np.triu(KZ, 1).T
-        if mat_key == "Z":
-            try:
-                K = np.linalg.inv(KZ)
-            except np.linalg.LinAlgError:
-                raise ModelError(f"{card}: the flexibility matrix Z is singular") from None
-        else:
-            K = KZ
-        S = np.asarray(svals, float).reshape(m, n) if n and svals else np.zeros((m, n))
-        full = np.block([[K, -K @ S], [-S.T @ K, S.T @ K @ S]]) if n else K
+        if not m:
+            raise ModelError(f"{card}: no UI (independent) DOFs given")
+        matrix = lower_by_columns(kz, m, card, kind)
+        S = None
+        if n:
+            if s_terms is None:
+                raise ModelError(f"{card}: UD DOFs given without the S matrix")
+            if len(s_terms) != m * n:
+                raise ModelError(f"{card}: S needs {m * n} terms ({m} UI x {n} UD), got {len(s_terms)}")
+            S = np.asarray(s_terms, float).reshape(m, n)  # by rows: S11, S12, ..., S21, ...
+        elif s_terms:
+            raise ModelError(f"{card}: S given without UD DOFs")
+        full = general_element_stiffness(matrix, kind, S, card)
         grids, A = _dof_matrix(nodes, ui + ud, card, eid)
         Kg = A.T @ full @ A
         model.add_matrices([eid], [grids], K=[0.5 * (Kg + Kg.T)], label="GENEL")
@@ -1252,6 +1285,12 @@ def _scalar_point_refs(bdf) -> tuple[set, set]:
     for sid in _case_values(bdf, "MPC")[:1]:
         for c in bdf.mpcs.get(int(sid), []):
             mpc_refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
+    for eid, f in _raw_cards(bdf, "GENEL"):  # a GENEL's scalar points need their SPOINT, like an MPC's
+        try:
+            ui, ud, *_ = _genel_fields(f, f"GENEL {eid}")
+        except (ModelError, ValueError, TypeError):
+            continue  # reported, naming the entry, when the element is built
+        mpc_refs |= {g for g, c in ui + ud if c == 0}
     return refs, mpc_refs
 
 
@@ -1278,8 +1317,8 @@ def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
     elem_refs, mpc_refs = elem_refs - qset, mpc_refs - qset
     missing = sorted(mpc_refs - spoints - grids - elem_refs)
     if missing:
-        raise ModelError(f"scalar point {missing[0]} is referenced by an MPC (component 0) but no SPOINT "
-                         f"or scalar element defines it")
+        raise ModelError(f"scalar point {missing[0]} is referenced by an MPC or GENEL (component 0) but no "
+                         f"SPOINT or scalar element defines it")
     clash = sorted(spoints & grids)
     if clash:
         raise ModelError(f"SPOINT {clash[0]}: the id is also a GRID")
