@@ -15,6 +15,7 @@ from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transf
 from trussid.fem.elements import frame_matrices, local_axes, to_global
 from trussid.fem.errors import ModelError, UnitsWarning
 from trussid.fem.general_element import general_element_stiffness, lower_by_columns
+from trussid.fem.tapered import tapered_frame_matrices
 from trussid.fem.materials import wave_speed_problem
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
@@ -341,6 +342,7 @@ class _Prop:
     mat: dict
     nsm: float
     shear: bool
+    taper: tuple | None = None  # (stations x/L, section_at(xi) -> dict): a tapered PBEAM/PBEAML
 
 
 def _material(mats: dict, mid: int, label: str) -> dict:
@@ -397,11 +399,6 @@ def _properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict
             props[pid] = _Prop(label, "bar", sec, mat, float(p.nsm) * wtmass,
                                math.isfinite(k1) or math.isfinite(k2))
         elif p.type == "PBEAM":
-            for key in ("A", "i1", "i2", "j", "nsm"):
-                v = np.asarray(getattr(p, key), float)
-                if (v != v[0]).any():
-                    raise ModelError(f"{label}: tapered beam ({key} varies along the element) is not "
-                                     f"supported; give a constant section")
             if np.any(np.asarray(p.i12, float) != 0):
                 raise ModelError(f"{label}: I12 (non-principal axes) is not supported")
             for key in ("m1a", "m2a", "m1b", "m2b", "n1a", "n2a", "n1b", "n2b", "nsia", "nsib",
@@ -415,33 +412,23 @@ def _properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict
             A = float(p.A[0])
             sec = _sec(A, p.i2[0], p.i1[0], p.j[0], k1 * A, k2 * A)
             props[pid] = _Prop(label, "bar", sec, mat, float(p.nsm[0]) * wtmass,
-                               math.isfinite(k1) or math.isfinite(k2))
+                               math.isfinite(k1) or math.isfinite(k2), _pbeam_taper(p, k1, k2, wtmass, label))
         elif p.type in ("PBARL", "PBEAML"):
             shape = str(p.beam_type).strip().upper()
             if shape not in SECTION_TYPES:
                 raise ModelError(f"{label}: section type {shape} is not supported "
                                  f"(supported: {', '.join(SECTION_TYPES)})")
+            taper = None
             if p.type == "PBEAML":
                 dims = np.atleast_2d(np.asarray(p.dim, float))
                 nsm = np.atleast_1d(np.asarray(p.nsm, float))
                 if (dims != dims[0]).any() or (nsm != nsm[0]).any():
-                    raise ModelError(f"{label}: tapered beam (dimensions vary along the element) is "
-                                     f"not supported; give a constant section")
+                    taper = _pbeaml_taper(p, shape, _nu_for_shear(full), conventions, wtmass, label)
                 dims, nsm = dims[0], float(nsm[0])
             else:
                 dims, nsm = p.dim, float(p.nsm or 0.0)
-            s = _section_from_shape(shape, dims, _nu_for_shear(full), label)
-            asy, asz = s.Asy, s.Asz
-            if shape == "ROD":
-                # NASTRAN converts PBARL/PBEAML ROD to PBAR/PBEAM with K1 = K2 = 0.9 in the
-                # newest builds (Simcenter 2019.2, NX 2022 ~0.898, MSC 2012-13 OP2s); one
-                # MSC 2012 build used 6/7. Cowper's 6(1+nu)/(7+6nu) (0.886 at nu = 0.33)
-                # sits between them; 0.9 is what the recent decks of the corpus were run with.
-                asy = asz = ROD_SHEAR_FACTOR[conventions] * s.A
-            elif shape == "BAR":
-                asy = asz = BAR_SHEAR_FACTOR * s.A
-            props[pid] = _Prop(label, "bar", _sec(s.A, s.Iy, s.Iz, s.J, asy, asz), mat,
-                               nsm * wtmass, True)
+            props[pid] = _Prop(label, "bar", _shape_section(shape, dims, _nu_for_shear(full), conventions, label),
+                               mat, nsm * wtmass, True, taper)
         elif p.type == "PROD":
             props[pid] = _Prop(label, "rod", _rod_sec(p.A, p.j), mat, float(p.nsm) * wtmass, False)
         elif p.type == "PTUBE":
@@ -452,6 +439,60 @@ def _properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict
             s = Section.circle(r, name=label) if t >= r else Section.tube(r, t, name=label)
             props[pid] = _Prop(label, "rod", _rod_sec(s.A, s.J), mat, float(p.nsm) * wtmass, False)
     return props
+
+
+def _shape_section(shape: str, dims, nu: float, conventions: str, label: str) -> dict:
+    """Section arrays of a PBARL/PBEAML shape with NASTRAN's shear factors."""
+    s = _section_from_shape(shape, dims, nu, label)
+    asy, asz = s.Asy, s.Asz
+    if shape == "ROD":
+        # NASTRAN converts PBARL/PBEAML ROD to PBAR/PBEAM with K1 = K2 = 0.9 in the
+        # newest builds (Simcenter 2019.2, NX 2022 ~0.898, MSC 2012-13 OP2s); one
+        # MSC 2012 build used 6/7. Cowper's 6(1+nu)/(7+6nu) (0.886 at nu = 0.33)
+        # sits between them; 0.9 is what the recent decks of the corpus were run with.
+        asy = asz = ROD_SHEAR_FACTOR[conventions] * s.A
+    elif shape == "BAR":
+        asy = asz = BAR_SHEAR_FACTOR * s.A
+    return _sec(s.A, s.Iy, s.Iz, s.J, asy, asz)
+
+
+def _stations(xxb, label: str) -> np.ndarray:
+    """Station positions x/L of a tapered PBEAM/PBEAML: 0 (end A) ... 1 (end B), ascending."""
+    x = np.asarray(xxb, float).ravel()
+    if len(x) < 2 or x[0] != 0.0 or x[-1] != 1.0 or not (np.diff(x) > 0).all():
+        raise ModelError(f"{label}: stations X/XB must ascend from 0 to 1.0 (end B), got {x.tolist()}")
+    return x
+
+
+def _pbeam_taper(p, k1: float, k2: float, wtmass: float, label: str):
+    """``(stations, section_at)`` of a PBEAM whose properties vary (NASTRAN: linearly between
+    stations), or None for a uniform one. I2 bends about element y, I1 about z."""
+    cols = {key: np.asarray(getattr(p, key), float).ravel() for key in ("A", "i1", "i2", "j", "nsm")}
+    if all((v == v[0]).all() for v in cols.values()):
+        return None
+    x = _stations(p.xxb, label)
+
+    def at(xi):
+        f = {key: np.interp(xi, x, v) for key, v in cols.items()}
+        return {"A": f["A"], "Iy": f["i2"], "Iz": f["i1"], "J": f["j"], "Asy": k1 * f["A"],
+                "Asz": k2 * f["A"], "nsm": f["nsm"] * wtmass}
+    return x, at
+
+
+def _pbeaml_taper(p, shape: str, nu: float, conventions: str, wtmass: float, label: str):
+    """``(stations, section_at)`` of a PBEAML whose dimensions vary: dimensions and NSM linear
+    between stations, the section computed from the dimensions at each point."""
+    x = _stations(p.xxb, label)
+    dims = np.atleast_2d(np.asarray(p.dim, float))
+    nsm = np.asarray(p.nsm, float).ravel()
+
+    def at(xi):
+        d = np.stack([np.interp(xi, x, dims[:, k]) for k in range(dims.shape[1])], 1)
+        rows = [_shape_section(shape, di, nu, conventions, label) for di in d]
+        out = {key: np.array([r[key] for r in rows]) for key in ("A", "Iy", "Iz", "J", "Asy", "Asz")}
+        out["nsm"] = np.interp(xi, x, nsm) * wtmass
+        return out
+    return x, at
 
 
 def _nu_for_shear(mat: dict) -> float:
@@ -522,6 +563,9 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         if bad.any():
             raise ModelError(f"{card} {eids[bad][0]}: no orientation (give X1-X3 or G0)")
         mat, nsm = prop.mat, prop.nsm
+        if prop.taper is not None:
+            _add_tapered(model, group, ends, xyz, orient, prop, eids)
+            continue
         if prop.section["A"] == 0 or prop.mat["G"] == 0:
             _add_spring_bars(model, group, xyz, orient, prop, eids)
             continue
@@ -535,6 +579,21 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         pinned = np.array([bool(e.pa or e.pb) for e in group])
         if pinned.any():
             _add_pin_flags(model, [e for e, p in zip(group, pinned) if p], xyz[pinned], orient[pinned], prop)
+
+
+def _add_tapered(model: Model, elems: list, ends: np.ndarray, xyz: np.ndarray, orient: np.ndarray,
+                 prop: _Prop, eids: np.ndarray) -> None:
+    """CBEAMs of a tapered PBEAM/PBEAML, integrated along the element
+    (:func:`trussid.fem.tapered.tapered_frame_matrices`), added as element matrices."""
+    card = f"{elems[0].type} {eids[0]}"
+    if any(e.pa or e.pb for e in elems):
+        raise ModelError(f"{card}: pin flags on a tapered beam ({prop.label}) are not supported")
+    L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
+    breaks, at = prop.taper
+    K, M = tapered_frame_matrices(L, breaks, at, prop.mat["E"], prop.mat["G"], prop.mat["rho"],
+                                  theory=model.beam_theory, mass=model.mass_formulation,
+                                  torsion_lumped=elems[0].type == "CBEAM", label=prop.label)
+    model.add_matrices(eids, ends, K=to_global(K, R), M=to_global(M, R), label=f"{prop.label} (tapered)")
 
 
 def _add_spring_bars(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarray, prop: _Prop,

@@ -23,8 +23,12 @@ BAD_DECKS = [
     ("bad pin flag", BEAM + "CBAR,10,1,1,2,0.,0.,1.\n,7\n", "CBAR 10"),
     ("undefined material", BEAM.replace("PBAR,1,1,", "PBAR,1,9,") + CBAR, "PBAR 1"),
     ("unknown PBARL shape", BEAM + "PBARL,2,1,,HAT\n,1.,2.,3.,4.\nCBAR,10,2,1,2,0.,0.,1.\n", "PBARL 2"),
-    ("tapered PBEAM", BEAM + "PBEAM,3,1,1.-4,2.-9,2.-9,,4.-9\n,YES,1.,2.-4,3.-9,3.-9,,4.-9\n"
+    ("tapered PBEAM with no area at end B", BEAM + "PBEAM,3,1,1.-4,2.-9,2.-9,,4.-9\n,YES,1.,0.,3.-9,3.-9,,4.-9\n"
      "CBEAM,10,3,1,2,0.,0.,1.\n", "PBEAM 3"),
+    ("tapered PBEAML with a station beyond end B", BEAM + "PBEAML,3,1,,BAR\n,0.01,0.02,,NO,1.5,0.01,0.03\n"
+     ",,YES,1.,0.01,0.04\nCBEAM,10,3,1,2,0.,0.,1.\n", "PBEAML 3"),
+    ("tapered PBEAM with pin flags", BEAM + "PBEAM,3,1,1.-4,2.-9,2.-9,,4.-9\n,YES,1.,2.-4,3.-9,3.-9,,4.-9\n"
+     "CBEAM,10,3,1,2,0.,0.,1.\n,4\n", "CBEAM 10"),
     ("text in a GRID coordinate", "GRID,1,,0.,x,0.\n", "GRID 1"),
     ("CONM2 on an undefined grid", BEAM + CBAR + "CONM2,20,9,,1.\n", "CONM2 20"),
     ("negative CONM2 mass", BEAM + CBAR + "CONM2,20,2,,-1.\n", "CONM2 20"),

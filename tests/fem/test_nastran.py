@@ -547,9 +547,9 @@ def test_bad_deck_errors_name_the_card(tmp_path, extra, replace, match):
 
 def test_tapered_and_unsupported_sections_are_refused(tmp_path):
     base = "BEGIN BULK\nMAT1,1,70.+9,,0.3,2700.\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\n"
-    with pytest.raises(ModelError, match="PBEAM 4: tapered"):
+    with pytest.raises(ModelError, match="CBEAM 1: pin flags on a tapered beam"):
         read_bdf(write(tmp_path, base + "PBEAM,4,1,1.-4,1.-9,1.-9,,2.-9\n,YES,1.,2.-4,1.-9,1.-9,,2.-9\n"
-                                        "CBEAM,1,4,1,2,0.,0.,1.\nENDDATA\n"))
+                                        "CBEAM,1,4,1,2,0.,0.,1.\n,4\nENDDATA\n"))
     with pytest.raises(ModelError, match="PBARL 4: section type I "):
         read_bdf(write(tmp_path, base + "PBARL,4,1,,I\n,0.1,0.1,0.1,0.01,0.01,0.01\n"
                                         "CBAR,1,4,1,2,0.,0.,1.\nENDDATA\n", "i.bdf"))
