@@ -12,8 +12,8 @@ from pathlib import Path
 
 
 from trussid.fem.errors import ModelError
-from trussid.fem.nastran.entries import (HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS, RAW_CARDS,
-                                         SUPPORTED_CARDS, THERMAL_CARDS)
+from trussid.fem.nastran.entries import (CASE_SELECTED_CARDS, HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS,
+                                         RAW_CARDS, SUPPORTED_CARDS, THERMAL_CARDS)
 
 __all__ = ['EigenRequest', 'BdfInfo']
 
@@ -339,12 +339,18 @@ def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
     counts = bdf.card_count
     thermal_on = any(counts.get(c) for c in ("TEMPD", "TEMP")) or _case_values(bdf, "TEMPERATURE") \
         or _case_values(bdf, "TEMP")
-    bad, ignored = {}, {}
+    bad, ignored, selected = {}, {}, {}
     for name, n in counts.items():
         if name in SUPPORTED_CARDS:
             continue
         if name in IGNORED_CARDS or (name in THERMAL_CARDS and not thermal_on):
             ignored[name] = n
+        elif name in CASE_SELECTED_CARDS:
+            if _case_values(bdf, CASE_SELECTED_CARDS[name]):
+                bad[name] = n
+                selected[CASE_SELECTED_CARDS[name]] = True
+            else:
+                ignored[name] = n
         else:
             bad[name] = n
     for name in sorted(bdf.params):
@@ -367,7 +373,9 @@ def _check_cards(bdf, path: Path, info: BdfInfo) -> None:
                          f"spring, mass and rigid elements: CBAR, CBEAM, CROD, CONROD, CELAS1-4, "
                          f"CBUSH, GENEL, CONM1, CONM2, CMASS1-4, RBE2, RBE3, RBAR, CRIGD1/2/3/R){also}")
     listing = ", ".join(f"{k} ({v})" for k, v in sorted(bad.items())) + first
-    raise ModelError(f"{path}: unsupported bulk-data entries: {listing}; "
+    why = "".join(f"; the case control's {key} selects them (rotordynamics: gyroscopic and spin terms, not "
+                  f"computed by trussid)" for key in selected)
+    raise ModelError(f"{path}: unsupported bulk-data entries: {listing}{why}; "
                      f"supported cards are {', '.join(sorted(SUPPORTED_CARDS))}")
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 
 
-__all__ = ['SUPPORTED_CARDS', 'RAW_CARDS', 'IGNORED_CARDS', 'THERMAL_CARDS', 'HANDLED_PARAMS', 'MODE_PARAMS', 'OUTPUT_PARAMS', 'SECTION_TYPES']
+__all__ = ['SUPPORTED_CARDS', 'RAW_CARDS', 'IGNORED_CARDS', 'CASE_SELECTED_CARDS', 'THERMAL_CARDS', 'HANDLED_PARAMS', 'MODE_PARAMS', 'OUTPUT_PARAMS', 'SECTION_TYPES']
 
 
 #: Bulk-data cards :func:`read_bdf` translates.
@@ -56,7 +56,19 @@ IGNORED_CARDS = frozenset({
     "DEBUG", "PARVEC", "PARVEC1",
     # heat-transfer materials (structural SOL 103 does not use them)
     "MAT4", "MAT5",
+    # complex-eigenvalue poles (EIGP, for CEAD) and resequencing (SEQGP, SEQEP): the real
+    # eigenproblem and its answer do not depend on them
+    "EIGP", "SEQGP", "SEQEP",
 })
+
+#: Entries without effect unless the case control selects them, with the selecting request:
+#: ignored (and listed) when it is absent, refused when present. Rotordynamics (RGYRO)
+#: adds gyroscopic and spin-softening terms, which trussid does not compute; a real-modes run
+#: without RGYRO has the structure's modes (the rotor entries are then only data).
+CASE_SELECTED_CARDS = {
+    "ROTORD": "RGYRO", "ROTORG": "RGYRO", "ROTORB": "RGYRO", "RSPINR": "RGYRO", "RSPINT": "RGYRO",
+    "UNBALNC": "RGYRO",
+}
 
 
 #: Temperature-dependent material entries: ignored like the above unless the deck gives

@@ -1373,6 +1373,10 @@ def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
     spoints = set(getattr(bdf, "spoints", {}) or {})
     qset = set(_qset_points(bdf))
     elem_refs, mpc_refs = _scalar_point_refs(bdf)
+    if _component_mode_reduction(bdf) and (elem_refs | mpc_refs) & qset:
+        q = min((elem_refs | mpc_refs) & qset)
+        raise ModelError(f"QSET {q}: scalar point {q} holds a component mode's amplitude (Craig-Bampton with "
+                         f"ASET/OMIT), but a scalar element, MPC or GENEL also references it")
     elem_refs, mpc_refs = elem_refs - qset, mpc_refs - qset
     missing = sorted(mpc_refs - spoints - grids - elem_refs)
     if missing:

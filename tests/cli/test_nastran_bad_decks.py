@@ -41,7 +41,13 @@ BAD_DECKS = [
     ("SPC1 on an undefined grid", BEAM + CBAR + "SPC1,90,123456,5\n", "SPC1 90"),
     ("CMASS4 on a GRID", BEAM + CBAR + "CMASS4,100,1.,1\n", "CMASS4 100"),
     ("CMASS3 without its PMASS", BEAM + CBAR + "SPOINT,5\nCMASS3,100,1,5\n", "CMASS3 100"),
-    ("EIGP", BEAM + CBAR + "EIGP,90,1.,2.,1\n", "EIGP 90"),
+    ("GENEL with a blank inside its K terms", BEAM + CBAR + "GENEL,51,,1,1,2,1\n,K,1.,,3.\n", "GENEL 51"),
+    ("GENEL with UD and no S", BEAM + CBAR + "GENEL,52,,1,1\n,UD,,2,1\n,K,1.\n", "GENEL 52"),
+    ("GENEL with a singular Z", BEAM + CBAR + "GENEL,53,,1,1,2,1\n,Z,1.,1.,1.\n", "GENEL 53"),
+    ("GENEL on a component of a scalar point", BEAM + CBAR + "SPOINT,7\nGENEL,54,,7,3\n,K,1.\n", "GENEL 54"),
+    ("GENEL on an undefined scalar point", BEAM + CBAR + "GENEL,55,,8,0\n,K,1.\n", "scalar point 8"),
+    ("Q-set scalar point with an element", BEAM + CBAR + "SPOINT,9\nASET1,123456,2\nQSET1,0,9\n"
+     "CELAS4,56,1.,9\n", "QSET 9"),
     ("DMIG with text in a term", BEAM + CBAR + "DMIG,KX,0,6,1,0\nDMIG,KX,1,1,,1,abc,1.\n", "DMIG KX"),
     ("matrix scale factor", BEAM + CBAR + "PARAM,CK1,2.\n", "PARAM,CK1"),
     ("boundary set alone", BEAM + CBAR + "BSET1,123456,1\n", "BSET1 (grid 1)"),
@@ -58,14 +64,24 @@ BAD_DECKS = [
 INTERNALS = re.compile(r"uline=|allowed_methods=|allowed=|card=\[|Traceback|len\(\w+ card\)")
 
 
+#: Decks whose case control selects what makes them bad: (case, case control, bulk, named).
+CASE_BAD_DECKS = [
+    ("rotor entries selected by RGYRO", "RGYRO = 10\n",
+     BEAM + CBAR + "SPC1,1,123456,1\nROTORG,10,1,2\n", "ROTORG 10"),
+    ("MPC on an undefined scalar point", "MPC = 5\n", BEAM + CBAR + "MPC,5,77,0,1.,2,1,-1.\n", "scalar point 77"),
+]
+
+
 def test_at_least_twenty_bad_decks():
     assert len(BAD_DECKS) >= 20
 
 
-@pytest.mark.parametrize("bulk,named", [(b, n) for _c, b, n in BAD_DECKS], ids=[c for c, _b, _n in BAD_DECKS])
-def test_bad_deck_exits_2_naming_the_entry_and_writes_nothing(tmp_path, monkeypatch, capsys, bulk, named):
+@pytest.mark.parametrize("case,bulk,named", [("", b, n) for _c, b, n in BAD_DECKS]
+                         + [(cc, b, n) for _c, cc, b, n in CASE_BAD_DECKS],
+                         ids=[c for c, _b, _n in BAD_DECKS] + [c for c, *_ in CASE_BAD_DECKS])
+def test_bad_deck_exits_2_naming_the_entry_and_writes_nothing(tmp_path, monkeypatch, capsys, case, bulk, named):
     deck = tmp_path / "bad.bdf"
-    deck.write_text("BEGIN BULK\n" + bulk + "ENDDATA\n")
+    deck.write_text(("SOL 103\nCEND\n" + case if case else "") + "BEGIN BULK\n" + bulk + "ENDDATA\n")
     monkeypatch.chdir(tmp_path)  # pyNastran leaves crash files in the working directory
     before = sorted(p.name for p in tmp_path.iterdir())
     code = main(["modes", str(deck), "--op2", str(tmp_path / "out.op2")])
