@@ -248,6 +248,27 @@ def _check_unique_element_ids(model) -> None:
         raise ModelError(f"element {dup} is defined more than once ({' and '.join(kinds)})")
 
 
+def _stiffness_pairs(model) -> np.ndarray:
+    """(m, 2) node index pairs joined by an element stiffness: beams, two-node springs with a
+    stiffness, general elements with a nonzero K (each node to the first); from the element
+    lists, not from K (its entries are 150 per beam)."""
+    out = []
+    b = model.beams
+    if len(b):
+        out.append(model.index_of(b.nodes, what="a beam"))
+    s = model.springs
+    if len(s):
+        two = (s.nodes[:, 1] >= 0) & (s.k > 0).any(axis=1)
+        if two.any():
+            out.append(model.index_of(s.nodes[two], what="a spring"))
+    for g in model.general:
+        live = np.abs(g.K).max(axis=(1, 2), initial=0.0) > 0
+        if live.any() and g.nodes.shape[1] > 1:
+            idx = model.index_of(g.nodes[live], what=g.label or "a general element")
+            out.append(np.stack([np.repeat(idx[:, :1], idx.shape[1] - 1, axis=1).ravel(), idx[:, 1:].ravel()], 1))
+    return np.concatenate(out) if out else np.zeros((0, 2), np.int64)
+
+
 def assemble(model, autospc: bool = False) -> System:
     """Assemble and constrain a :class:`trussid.fem.Model`.
 
@@ -340,7 +361,8 @@ def assemble(model, autospc: bool = False) -> System:
     system = System(K=K, M=M, T=T, node_ids=node_ids, xyz=model.xyz, n_dof=K.shape[0], dofs=dofs,
                     autospc=removed, mass_formulation=model.mass_formulation,
                     beam_theory=model.beam_theory, has_supports=model.has_supports, name=model.name,
-                    inert=inert, components=node_components(len(node_ids), K_full, T), scalar=scalar)
+                    inert=inert, components=node_components(len(node_ids), _stiffness_pairs(model), T),
+                    scalar=scalar)
     if model.has_supports and zk.any():
         # A DOF with mass and no stiffness: a free body when moving it moves its whole
         # component rigidly (a point mass joined to nothing), else a mechanism.

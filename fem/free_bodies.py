@@ -35,25 +35,25 @@ __all__ = ["node_components", "component_rigid_fit", "RIGID_FIT_TOL"]
 RIGID_FIT_TOL = 1e-5
 
 
-def node_components(n_nodes: int, K_full: sp.spmatrix, T: sp.spmatrix) -> np.ndarray:
+def node_components(n_nodes: int, pairs: np.ndarray, T: sp.spmatrix) -> np.ndarray:
     """Component label of each node, (n_nodes,) int from 0.
 
     Parameters
     ----------
     n_nodes : int
-    K_full : (6 n_nodes, 6 n_nodes) sparse
-        Stiffness before constraints: a nonzero coupling term joins two nodes.
+    pairs : (m, 2) int
+        Node index pairs that an element stiffness joins (a star of pairs for an element
+        on more than two nodes).
     T : (6 n_nodes, n_red) sparse
         Constraint transformation: the nodes one reduced DOF drives are joined.
     """
-    K = sp.coo_matrix(K_full)
-    keep = K.data != 0
     Tc = sp.coo_matrix(T)
     tk = Tc.data != 0
     n_red = Tc.shape[1]
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     # Bipartite graph: nodes 0..n-1, reduced DOFs n..n+n_red-1.
-    rows = np.concatenate([K.row[keep] // 6, Tc.row[tk] // 6])
-    cols = np.concatenate([K.col[keep] // 6, n_nodes + Tc.col[tk]])
+    rows = np.concatenate([pairs[:, 0], Tc.row[tk] // 6])
+    cols = np.concatenate([pairs[:, 1], n_nodes + Tc.col[tk]])
     A = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n_nodes + n_red, n_nodes + n_red))
     _, labels = connected_components(A, directed=False)
     return np.unique(labels[:n_nodes], return_inverse=True)[1]
