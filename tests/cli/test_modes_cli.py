@@ -106,9 +106,9 @@ def test_bad_deck_exits_nonzero_with_one_line(tmp_path, cli, text, match):
 
 def test_bad_deck_from_the_shell_prints_one_line_and_no_traceback(tmp_path):
     deck = tmp_path / "bad.bdf"
-    deck.write_text("BEGIN BULK\nGRID,1,,0.,0.,0.\nCQUAD4,1,1,1,2,3,4\nEIGP,7,1.,2.,1\nENDDATA\n")
+    deck.write_text("BEGIN BULK\nGRID,1,,0.,0.,0.\nCQUAD4,1,1,1,2,3,4\nNSM,7,PBAR,1,0.5\nENDDATA\n")
     line = one_line_error(run(deck))
-    assert "CQUAD4 (1)" in line and "EIGP (1)" in line
+    assert "CQUAD4 (1)" in line and "NSM (1)" in line
 
 
 def test_missing_file_and_unknown_suffix_exit_with_one_line(tmp_path, cli):
