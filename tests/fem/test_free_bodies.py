@@ -94,6 +94,16 @@ def test_a_mass_moving_alone_inside_a_structure_is_still_a_mechanism():
         solve_modes(m, n_modes=2, autospc=True)
 
 
+def test_a_free_part_without_mass_has_no_mode_and_is_refused():
+    """A massless bar joined to nothing: its rigid motions have neither mass nor stiffness
+    (no frequency at all), which AUTOSPC does not remove DOF by DOF (each DOF has stiffness)."""
+    m = oscillator()
+    m.add_nodes([4, 5], [[3, 0, 0], [4, 0, 0]])
+    m.add_beams([9], [[4, 5]], Section.tube(0.01, 0.001), {"E": 70e9, "G": 26e9, "rho": 0.0}, orient=[0, 0, 1])
+    with pytest.raises(ModelError, match=r"mechanism: node [45] \w\w has neither mass nor a stiffness"):
+        solve_modes(m, n_modes=2, autospc=True)
+
+
 def test_components_follow_stiffness_and_constraints_not_mass():
     m = Model()
     m.add_nodes([1, 2, 3, 4], np.eye(4, 3))
