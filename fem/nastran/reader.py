@@ -1254,8 +1254,10 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
             ids = np.asarray(c.ids if hasattr(c, "ids") else c.node_ids, dtype=np.int64)
             comps = c.components if isinstance(c.components, list) else [c.components] * len(ids)
             idx = nodes.index(ids, what, np.zeros(len(ids), dtype=np.int64))
-            for i, cm in zip(np.atleast_1d(idx), comps):
-                mask[i, _comps(cm, what)] = True
+            for g, i, cm in zip(ids.tolist(), np.atleast_1d(idx), comps):
+                # component 0 (or blank) is a scalar point's only DOF
+                on_spoint = g in nodes.spoints and str(cm).strip() in ("0", "", "None")
+                mask[i, [0] if on_spoint else _comps(cm, what)] = True
         return mask
 
     omits = getattr(bdf, "omits", [])
