@@ -93,7 +93,8 @@ PBAR,1,1,1.-4,2.-9,3.-9,4.-9
     f"CBAR,{e},1,{e},{e + 1},0.,0.,1.\n" for e in range(1, 5)) + "SPC1,1,123456,1\nPARAM,COUPMASS,1\n"
 
 
-def test_deck_with_aset_and_qset_on_three_scalar_points_has_nine_modes(tmp_path):
+@pytest.mark.parametrize("aset_q", ["", "ASET1,0,101,THRU,103\n"], ids=["QSET only", "Q points also in ASET1"])
+def test_deck_with_aset_and_qset_on_three_scalar_points_has_nine_modes(tmp_path, aset_q):
     """The field's case: a BAR model with ASET plus QSET on three SPOINTs. Against the same
     deck without ASET/QSET, reduced by hand."""
     plain = tmp_path / "plain.bdf"
@@ -103,7 +104,7 @@ def test_deck_with_aset_and_qset_on_three_scalar_points_has_nine_modes(tmp_path)
     expected = hand_craig_bampton(full.K.toarray(), full.M.toarray(), (full.dofs // 6) == 4, 3)
 
     red = tmp_path / "cb.bdf"
-    red.write_text("SOL 103\nCEND\nBEGIN BULK\n" + BAR + "ASET1,123456,5\nSPOINT,101,THRU,103\n"
+    red.write_text("SOL 103\nCEND\nBEGIN BULK\n" + BAR + "ASET1,123456,5\n" + aset_q + "SPOINT,101,THRU,103\n"
                    "QSET1,0,101,THRU,103\nEIGRL,1,,,20\nENDDATA\n")
     model, info = read_bdf(red)
     modes = solve_modes(model, n_modes=20, autospc=info.autospc)
