@@ -442,11 +442,12 @@ def _zero_modes(system: System, lam, X, shapes_full, proven: bool) -> np.ndarray
     small = np.flatnonzero(~rigid & (lam < limit))
     free = np.zeros(len(lam), bool)
     if small.size:
-        ok, fitted = system.free_body(shapes_full[:, small]) if hasattr(system, "free_body") else (
-            _is_rigid(system.xyz, shapes_full[:, small]), None)
+        ok, fitted = system.free_body(shapes_full[:, small])
         free[small] = ok
-        if fitted is not None and ok.any():
-            lam[small[ok & _strain_free(system, fitted[:, ok])]] = 0.0
+        if ok.any():
+            snap = np.zeros(len(ok), bool)
+            snap[ok] = _strain_free(system, fitted[:, ok])
+            lam[small[snap]] = 0.0
     other = np.flatnonzero(~rigid & (lam < limit) & ~free)
     if system.has_supports and other.size and not proven:
         ok, j = factor_stiffness(system)
@@ -462,11 +463,8 @@ def _strain_free(system: System, Z: np.ndarray) -> np.ndarray:
     """Per column of full-DOF motions ``Z``: whether the constraints admit it (``T q = Z``
     with ``q`` its reduced coordinates) and its strain energy is round-off, judged as in
     :func:`rigid_null_dimension` (``eps |q|^T |K| |q|``)."""
-    n_full = system.T.shape[0]
-    if len(system.dofs) and system.dofs.max() >= n_full:
-        return np.zeros(Z.shape[1], bool)
     Q = Z[system.dofs]
-    free = system.free_dofs() if hasattr(system, "free_dofs") else np.zeros(n_full, bool)
+    free = system.free_dofs()
     D = np.where(free[:, None], 0.0, system.T @ Q - Z)
     admitted = np.linalg.norm(D, axis=0) <= 1e-9 * np.maximum(np.linalg.norm(Z, axis=0), 1e-300)
     absQ = np.abs(Q)
