@@ -211,3 +211,25 @@ def test_a_deck_without_grids_or_scalar_points_is_refused(tmp_path):
     p.write_text("BEGIN BULK\nMAT1,1,70.+9,,0.3,2700.\nENDDATA\n")
     with pytest.raises(ModelError, match="no GRID cards"):
         read_bdf(p)
+
+
+def test_a_softly_suspended_part_beside_a_supported_one_keeps_its_low_frequencies():
+    """Its suspension modes are nearly rigid shapes far below the zero threshold: their
+    component is rigid, but the nearest rigid motion strains the springs, so they keep their
+    frequencies (2 k / m for the translations), not 0 Hz."""
+    k, n = 10.0, 20
+    m = Model()
+    m.add_nodes(np.arange(n + 1), np.c_[np.linspace(0, 0.2, n + 1), np.zeros(n + 1), np.zeros(n + 1)])
+    m.add_beams(np.arange(1, n + 1), np.c_[np.arange(n), np.arange(1, n + 1)], Section.rectangle(0.0254, 0.0254),
+                ALUMINIUM, orient=(0, 0, 1))
+    m.add_point_masses([n // 2], 5.0, inertia=np.diag([0.01, 0.01, 0.01]))
+    m.add_springs([n + 1, n + 2], [0, n], [k, k, k, 0.1, 0.1, 0.1])
+    m.add_nodes([100, 101], [[1, 0, 0], [2, 0, 0]])           # a supported oscillator beside it
+    m.fix(100)
+    m.fix(101, "23456")
+    m.add_springs([200], [[100, 101]], [1000.0, 0, 0, 0, 0, 0])
+    m.add_point_masses([101], 1.0)
+    f = solve_modes(m, n_modes=8, method="dense").frequencies_hz
+    assert (f > 0).all()
+    m_total = 5.0 + ALUMINIUM.rho * 0.0254**2 * 0.2
+    np.testing.assert_allclose(f[:3], np.sqrt(2 * k / m_total) / TWO_PI, rtol=1e-5)
