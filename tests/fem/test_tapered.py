@@ -33,6 +33,11 @@ def test_a_uniform_section_gives_the_textbook_element(theory, mass):
     np.testing.assert_allclose(K, K0, rtol=0, atol=1e-12 * np.abs(K0).max())
     if theory == "euler-bernoulli" or mass == "lumped":  # the Timoshenko element adds rotary inertia
         np.testing.assert_allclose(M, M0, rtol=0, atol=1e-12 * np.abs(M0).max())
+    if mass == "lumped":  # NASTRAN's lumped CBEAM: torsional inertia rho (I1 + I2) L / 2 per end
+        Mt = tapered_frame_matrices(L, [0.0, 1.0], lambda xi: dict(A=A, Iy=Iy, Iz=Iz, J=J, Asy=np.inf, Asz=np.inf,
+                                                                   nsm=0.0), E, G, RHO, mass="lumped")[1]
+        np.testing.assert_allclose(Mt[:, 3, 3], RHO * (Iy + Iz) * L / 2, rtol=1e-13)
+        np.testing.assert_allclose(Mt[:, 9, 9], RHO * (Iy + Iz) * L / 2, rtol=1e-13)
 
 
 def test_one_element_has_the_closed_form_flexibility_of_a_tapered_cantilever():
