@@ -46,6 +46,11 @@ BAD_DECKS = [
     ("GENEL with a singular Z", BEAM + CBAR + "GENEL,53,,1,1,2,1\n,Z,1.,1.,1.\n", "GENEL 53"),
     ("GENEL on a component of a scalar point", BEAM + CBAR + "SPOINT,7\nGENEL,54,,7,3\n,K,1.\n", "GENEL 54"),
     ("GENEL on an undefined scalar point", BEAM + CBAR + "GENEL,55,,8,0\n,K,1.\n", "scalar point 8"),
+    ("scalar spring on no scalar point", BEAM + CBAR + "CELAS4,57,1.\n", "CELAS4 57"),
+    ("scalar-point deck with an undefined PELAS", "CELAS3,58,9,1,2\nCMASS4,59,1.,1\n", "CELAS3 58"),
+    ("a mass moving alone inside a structure (mechanism)", "GRID,1,,0.,0.,0.,,123456\nGRID,2,,1.,0.,0.,,236\n"
+     "GRID,3,,2.,0.,0.,,23456\nMAT1,1,70.+9,,0.3,2700.\nPROD,1,1,1.-4,1.-9\nCROD,1,1,1,2\nCROD,2,1,2,3\n"
+     "CONM2,3,2,,1.,,,,,\n,,,.1\n", "node 2 ry"),
     ("Q-set scalar point with an element", BEAM + CBAR + "SPOINT,9\nASET1,123456,2\nQSET1,0,9\n"
      "CELAS4,56,1.,9\n", "QSET 9"),
     ("DMIG with text in a term", BEAM + CBAR + "DMIG,KX,0,6,1,0\nDMIG,KX,1,1,,1,abc,1.\n", "DMIG KX"),
