@@ -257,7 +257,7 @@ def _ids(values, what: str) -> np.ndarray:
             raise ModelError(f"{what} must be whole numbers, got {values!r}") from None
     bad = ~np.isfinite(a) | (a != np.round(a))
     if bad.any():
-        raise ModelError(f"{what} must be whole numbers, got {a[bad].ravel()[0]!r}")
+        raise ModelError(f"{what} must be whole numbers, got {a[bad].ravel()[0].item()!r}")
     return a.astype(np.int64)
 
 

@@ -84,13 +84,13 @@ def test_conm1_full_mass_matrix_in_a_rotated_system(tmp_path):
     k = np.array([1e4, 2e4, 3e4, 40.0, 50.0, 60.0])
     M = np.diag([2.0, 2.0, 2.0, 0.01, 0.02, 0.03])
     M[4, 0] = M[0, 4] = 0.05  # a mass offset couples translation and rotation
-    lower = [M[i, j] for i in range(6) for j in range(i + 1)]
+    lower = [float(M[i, j]) for i in range(6) for j in range(i + 1)]
     fields = ",".join(repr(v) for v in lower)
     f = fields.split(",")
     # five terms on the first line, eight on each continuation (QRG CONM1)
     conm1 = (f"CONM1,1,1,5,{','.join(f[0:5])}\n,{','.join(f[5:13])}\n,{','.join(f[13:21])}\n")
     bulk = (f"CORD2R,5,,0.,0.,0.,0.,0.,1.,\n,{c!r},{s!r},0.\nGRID,1,,0.,0.,0.\n"
-            + "".join(f"CELAS2,{i + 1},{k[i]!r},1,{i + 1}\n" for i in range(6)) + conm1)
+            + "".join(f"CELAS2,{i + 1},{float(k[i])!r},1,{i + 1}\n" for i in range(6)) + conm1)
     R = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1.0]])  # rows: the system's axes in basic
     T = np.kron(np.eye(2), R)
     np.testing.assert_allclose(freqs(deck(tmp_path, bulk), 6), hand(np.diag(k), T.T @ M @ T), rtol=1e-10)
