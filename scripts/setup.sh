@@ -61,9 +61,4 @@ fi
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --quiet)
 "${pip[@]}" install --upgrade pip
 "${pip[@]}" install -e ".${extras:+[$extras]}"
-# INTERIM (until the project's own NASTRAN parser lands): pyNastran 1.4.1 declares numpy<2
-# but runs unmodified on numpy 2.3 (np.in1d is removed in 2.4); installed without its
-# dependency declaration, with the requirements it really has.
-"${pip[@]}" install "numpy>=2,<2.4" "docopt-ng>=0.9" colorama "cpylog>=1.5"
-"${pip[@]}" install --no-deps "pyNastran==1.4.1"
 echo "setup: done; run trussid as $venv/bin/trussid (or: source $venv/bin/activate)"

@@ -38,8 +38,9 @@ def _declared():
             for d in meta["project"]["dependencies"]}
 
 
-#: Installed by scripts/setup.sh outside dependency resolution, with the reason there.
-SETUP_INSTALLED = {"slycot"}
+#: Installed by scripts/setup.sh outside dependency resolution, with the reason there: none
+#: since slycot became an ordinary dependency and pyNastran left (issue 30).
+SETUP_INSTALLED: set = set()
 
 #: Optional features: the module -> the extra that installs it. Each is imported only where
 #: the feature is used, inside ``try``/``except ImportError`` that names the extra.

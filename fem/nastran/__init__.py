@@ -1,18 +1,19 @@
-"""NASTRAN bulk data in and out, through pyNastran.
+"""NASTRAN bulk data in and out, by trussid's own parser and writer.
 
 :func:`read_bdf` maps a bulk-data deck onto a :class:`trussid.fem.Model` and reports, in a
 :class:`BdfInfo`, every choice that changes the answer (mass formulation, WTMASS, beam
 theory, SPC set, eigenvalue request, AUTOSPC). :func:`write_bdf` writes a model back as a
 deck that NASTRAN can run and that :func:`read_bdf` re-reads to the same model.
 
-The deck is parsed by pyNastran (``pyNastran.bdf.bdf.BDF``), so the card formats (small,
-large and free field, continuations, INCLUDE) are pyNastran's; the executive control, PARAM,
-EIGR, and entries whose pyNastran objects lose information (a GRID's blank CP/CD against 0)
-or that it does not parse are read from their raw fields. pyNastran's own element matrices
-are not used: this package only translates cards into the model's arrays.
+The deck is parsed by :mod:`~trussid.fem.nastran.cards` (small, large and free field,
+continuations, comments, INCLUDE, executive and case control; NASTRAN's field rules) and the
+entries trussid translates are typed by :mod:`~trussid.fem.nastran.bulk` (NASTRAN's defaults,
+coordinate systems resolved); no third-party parser is involved (pyNastran's releases
+declare ``numpy<2``). This package only translates cards into the model's arrays.
 
 Modules: :mod:`~trussid.fem.nastran.entries` (what is read, accepted or refused),
-:mod:`~trussid.fem.nastran.deck` (text to pyNastran, raw fields, case control),
+:mod:`~trussid.fem.nastran.cards` (text to cards), :mod:`~trussid.fem.nastran.bulk` (cards
+to typed entries), :mod:`~trussid.fem.nastran.deck` (PARAMs, case control, checks),
 :mod:`~trussid.fem.nastran.reader` (the translation), :mod:`~trussid.fem.nastran.conventions`
 (NASTRAN's element conventions and the build conventions, ``conventions="nx"|"msc"``),
 :mod:`~trussid.fem.nastran.matrices` (DMIG through K2GG/M2GG),

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 
 
-__all__ = ['SUPPORTED_CARDS', 'RAW_CARDS', 'IGNORED_CARDS', 'CASE_SELECTED_CARDS', 'THERMAL_CARDS', 'HANDLED_PARAMS', 'MODE_PARAMS', 'OUTPUT_PARAMS', 'SECTION_TYPES']
+__all__ = ['SUPPORTED_CARDS', 'RAW_CARDS', 'IGNORED_CARDS', 'NOTED_CARDS', 'CASE_SELECTED_CARDS',
+           'THERMAL_CARDS', 'HANDLED_PARAMS', 'MODE_PARAMS', 'OUTPUT_PARAMS', 'SECTION_TYPES']
 
 
 #: Bulk-data cards :func:`read_bdf` translates.
@@ -22,7 +23,8 @@ SUPPORTED_CARDS = frozenset({
 })
 
 
-#: NASTRAN-95 rigid elements that pyNastran does not parse: read from the raw card lines.
+#: Entries the reader takes from their fields directly (NASTRAN-95 rigid elements, CONM1,
+#: GENEL, scalar-point elements, DMIG), not through :mod:`trussid.fem.nastran.bulk`.
 RAW_CARDS = frozenset({"CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR", "CONM1", "GENEL",
                        "CELAS3", "CELAS4", "CMASS3", "CMASS4", "DMIG"})
 
@@ -41,7 +43,7 @@ IGNORED_CARDS = frozenset({
     # tables, frequencies, random and transient set-up
     "TABLED1", "TABLED2", "TABLED3", "TABLED4", "TABDMP1", "TABRND1", "TABRNDG", "RANDPS",
     "RANDT1", "FREQ", "FREQ1", "FREQ2", "FREQ3", "FREQ4", "FREQ5", "TSTEP", "TSTEP1", "NLPARM",
-    "EIGC", "EPOINT", "TF",
+    "EIGC",
     # damping elements (real modes are undamped)
     "CDAMP1", "CDAMP2", "CDAMP3", "CDAMP4", "CVISC", "PDAMP", "PVISC",
     # aeroelastic model
@@ -56,20 +58,30 @@ IGNORED_CARDS = frozenset({
     "DEBUG", "PARVEC", "PARVEC1",
     # heat-transfer materials (structural SOL 103 does not use them)
     "MAT4", "MAT5",
-    # complex-eigenvalue poles (EIGP, for CEAD) and resequencing (SEQGP, SEQEP): the real
-    # eigenproblem and its answer do not depend on them
-    "EIGP", "SEQGP", "SEQEP",
 })
 
-#: Entries without effect unless the case control selects them, with the selecting request:
-#: ignored (and listed) when it is absent, refused when present. Rotordynamics (RGYRO)
-#: adds gyroscopic and spin-softening terms, which trussid does not compute; a real-modes run
-#: without RGYRO has the structure's modes (the rotor entries are then only data).
-CASE_SELECTED_CARDS = {
-    "ROTORD": "RGYRO", "ROTORG": "RGYRO", "ROTORB": "RGYRO", "RSPINR": "RGYRO", "RSPINT": "RGYRO",
-    "UNBALNC": "RGYRO",
+
+#: Entries accepted with a note (in :attr:`BdfInfo.notes`, and listed in
+#: :attr:`BdfInfo.ignored`) saying why they cannot change the real modes (issue 33): the
+#: reason is printed with the entry's name. Those in :data:`CASE_SELECTED_CARDS` are refused
+#: instead when the case control selects them.
+NOTED_CARDS = {
+    "EIGP": "poles for the complex eigenvalue search (CMETHOD), not used by real modes",
+    "SEQGP": "grid point resequencing: the order of the equations, not the structure",
+    "SEQEP": "extra point resequencing: the order of the equations, not the structure",
+    "EPOINT": "extra points belong to dynamic response (transfer functions), not to real modes",
+    "TF": "transfer function not selected by TFL in the case control",
+    **dict.fromkeys(("ROTORD", "ROTORG", "ROTORB", "RSPINR", "RSPINT", "UNBALNC"),
+                    "rotordynamics without RGYRO in the case control: the real modes are the structure's at rest"),
 }
 
+#: Noted entries that count when the case control selects them, with the selecting request:
+#: then refused, naming the entry. Rotordynamics (RGYRO) adds gyroscopic and spin-softening
+#: terms, and TFL adds transfer functions to the equations of motion; trussid computes neither.
+CASE_SELECTED_CARDS = {
+    **dict.fromkeys(("ROTORD", "ROTORG", "ROTORB", "RSPINR", "RSPINT", "UNBALNC"), "RGYRO"),
+    "TF": "TFL",
+}
 
 #: Temperature-dependent material entries: ignored like the above unless the deck gives
 #: temperatures (TEMP/TEMPD), when they would change the stiffness and are refused.

@@ -15,7 +15,7 @@ import numpy as np
 
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
-from trussid.fem.nastran.deck import BdfInfo, _card_lines, _case_values, _nastran_value, _raw_fields
+from trussid.fem.nastran.deck import BdfInfo, _case_values, _nastran_value
 
 __all__ = ["DIRECT_MATRIX_REQUESTS"]
 
@@ -27,11 +27,8 @@ DIRECT_MATRIX_REQUESTS = {"K2GG": True, "M2GG": True, "B2GG": False, "K2PP": Fal
 def _dmigs(bdf) -> dict:
     """DMIG name -> {"ifo": int, "tin": int, "terms": [(gj, cj, gi, ci, a), ...]}."""
     out: dict = {}
-    for lines in getattr(bdf, "reject_lines", []):
-        body = _card_lines(lines)
-        if not body or body[0][:8].strip().rstrip("*").upper().split(",")[0] != "DMIG":
-            continue
-        f = _raw_fields(body, "DMIG") + [""] * 9
+    for card in bdf.raw.get("DMIG", []):
+        f = list(card.fields) + [""] * 9
         name = f[1]
         try:
             if f[2] in ("0", ""):
@@ -45,24 +42,31 @@ def _dmigs(bdf) -> dict:
                     continue
                 terms.append((gj, cj, int(vals[k]), int(vals[k + 1] or 0), float(_nastran_value(vals[k + 2]))))
         except (ValueError, TypeError):
-            raise ModelError(f"DMIG {name}: malformed entry ({body[0].strip()!r})") from None
+            raise ModelError(f"{card.file}, line {card.line}: DMIG {name}: malformed entry "
+                             f"({', '.join(card.fields[:6])})") from None
         out.setdefault(name, {"terms": []})["terms"].extend(terms)
     return out
 
 
 def _selected(bdf, request: str) -> list:
-    """[(scale, name), ...] of a case-control matrix request (first subcase that has it)."""
+    """[(scale, name), ...] of a case-control matrix request (``K2GG = 1.25*KAAX, KBB``; the
+    first value given)."""
     values = _case_values(bdf, request)
     if not values:
         return []
-    value = values[0]
-    items = value if isinstance(value, list) else [value]
     out = []
-    for item in items:
-        if isinstance(item, tuple):
-            out.append((float(item[0]), str(item[-1]).upper()))
+    for item in values[0].split(","):
+        item = item.strip()
+        if not item:
+            continue
+        if "*" in item:
+            scale, name = item.split("*", 1)
+            try:
+                out.append((float(_nastran_value(scale)), name.strip()))
+            except (TypeError, ValueError):
+                raise ModelError(f"case control {request} = {values[0]}: scale {scale.strip()!r} is not a number") from None
         else:
-            out.append((1.0, str(item).upper()))
+            out.append((1.0, item))
     return out
 
 

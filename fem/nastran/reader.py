@@ -24,9 +24,9 @@ from trussid.fem.nastran.preload import add_preload_stiffness
 from trussid.fem.nastran.entries import SECTION_TYPES
 from trussid.fem.nastran.conventions import (BAR_SHEAR_FACTOR, CONVENTIONS, ROD_SHEAR_FACTOR,
                                              _nastran_mass_conventions)
-from trussid.fem.nastran.deck import (_is_preload_run, BdfInfo, _card_lines, _case_has, _case_values, _check_cards,
+from trussid.fem.nastran.deck import (_is_preload_run, BdfInfo, _case_has, _case_int, _check_cards,
                                       _comps, _ints, _nastran_value, _parse, _raw_cards,
-                                      _raw_fields, _read_params, _select_eigen)
+                                      _read_params, _select_eigen)
 
 __all__ = ['read_bdf', 'coord_axes', 'offset_spring_matrix']
 
@@ -94,7 +94,7 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
         raise ModelError(f"conventions must be one of {', '.join(CONVENTIONS)}, got {conventions!r}")
     bdf = _parse(path)
     info = BdfInfo(path=str(path), cards=dict(sorted(bdf.card_count.items())), conventions=conventions)
-    info.notes.extend(bdf.trussid_notes)
+    info.notes.extend(bdf.parsed.notes)
     _check_cards(bdf, path, info)
     _read_params(bdf, info)
 
@@ -155,7 +155,7 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     _add_spcs(bdf, model, nodes, info)
     _add_dof_sets(bdf, model, nodes, info)
     _select_eigen(bdf, info)
-    if _is_preload_run(*bdf.trussid_solution):
+    if _is_preload_run(*bdf.solution):
         add_preload_stiffness(bdf, model, nodes, info, _rect_frame)
     return model, info
 
@@ -211,56 +211,26 @@ class _NodeTable:
 
 
 def _nodes(bdf):
-    """GRID ids, basic coordinates and displacement frames; GRDSET defaults applied.
+    """GRID ids, basic coordinates and displacement frames (GRDSET defaults applied and
+    coordinate systems resolved by :func:`trussid.fem.nastran.bulk.build_bulk`).
 
-    CP systems are resolved by pyNastran. A displacement system CD gives the grid's DOFs
-    along that system's axes at the grid (for cylindrical and spherical systems these
-    depend on the position): returned as frames whose rows are the axes in basic.
+    A displacement system CD gives the grid's DOFs along that system's axes at the grid (for
+    cylindrical and spherical systems these depend on the position): returned as frames
+    whose rows are the axes in basic.
     """
     if not bdf.nodes:  # scalar points only (checked by the caller)
         return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), None
-    grdset = getattr(bdf, "grdset", None)
-    if grdset is not None:
-        blank_cp, blank_cd = getattr(bdf, "trussid_blank_cp_cd", ({}, {}))
-        for default, blanks, attr in ((grdset.cp, blank_cp, "cp"), (grdset.cd, blank_cd, "cd")):
-            if default:
-                for nid in blanks:
-                    setattr(bdf.nodes[nid], attr, default)
-        if grdset.seid:
-            raise ModelError("GRDSET: superelements (SEID) are not supported")
-        if grdset.ps:
-            for g in bdf.nodes.values():
-                if not g.ps:
-                    g.ps = grdset.ps
+    if bdf.grdset is not None and bdf.grdset.seid:
+        raise ModelError("GRDSET: superelements (SEID) are not supported")
     ids = np.fromiter(bdf.nodes.keys(), dtype=np.int64, count=len(bdf.nodes))
     cd = np.fromiter((g.cd for g in bdf.nodes.values()), dtype=np.int64, count=len(ids))
-    seid = [g.nid for g in bdf.nodes.values() if getattr(g, "seid", 0)]
+    seid = [g.nid for g in bdf.nodes.values() if g.seid]
     if seid:
         raise ModelError(f"GRID {seid[0]}: superelements (SEID) are not supported")
-    cp = np.fromiter((g.cp for g in bdf.nodes.values()), dtype=np.int64, count=len(ids))
-    for what, arr in (("CP", cp), ("CD", cd)):
-        for nid, c in zip(ids[arr > 0], arr[arr > 0]):
-            if c not in bdf.coords:
-                raise ModelError(f"GRID {nid}: coordinate system {what}={c} is not defined")
-    try:
-        if len(bdf.coords) > 1:  # resolve coordinate systems defined relative to others
-            bdf.cross_reference(xref=True, xref_nodes=True, xref_elements=False, xref_properties=False,
-                                xref_masses=False, xref_materials=False, xref_loads=False,
-                                xref_constraints=False, xref_aero=False, xref_sets=False,
-                                xref_optimization=False)
-    except Exception as exc:  # pyNastran raises many types for a malformed system
-        raise ModelError(f"cannot resolve coordinate systems: {' '.join(str(exc).split())[:200]}") from None
-    if not (cp != 0).any():
-        xyz = np.array([g.xyz for g in bdf.nodes.values()], dtype=float).reshape(-1, 3)
-    else:
-        try:
-            _icd, icp, xyz_cp, nid_cp_cd = bdf.get_displacement_index_xyz_cp_cd()
-            xyz_b = bdf.transform_xyzcp_to_xyz_cid(xyz_cp, nid_cp_cd[:, 0], icp, cid=0)
-        except Exception as exc:  # pyNastran raises many types for a malformed system
-            msg = " ".join(str(exc).split())[:200]
-            raise ModelError(f"cannot resolve grid coordinate systems: {msg}") from None
-        order = {int(n): i for i, n in enumerate(nid_cp_cd[:, 0])}
-        xyz = np.asarray(xyz_b, float)[[order[int(n)] for n in ids]]
+    for nid, c in zip(ids[cd > 0], cd[cd > 0]):
+        if c not in bdf.coords:
+            raise ModelError(f"GRID {nid}: coordinate system CD={c} is not defined")
+    xyz = bdf.xyz_basic
     frames = None
     if (cd > 0).any():
         frames = np.broadcast_to(np.eye(3), (len(ids), 3, 3)).copy()
@@ -272,6 +242,9 @@ def _nodes(bdf):
 
 def coord_axes(coord, xyz: np.ndarray, label: str) -> np.ndarray:
     """Local axes (rows, in basic) of a NASTRAN coordinate system at basic points ``xyz``.
+
+    ``coord`` has ``cid``, ``Type`` ("R", "C", "S"), ``origin`` and axes ``i``, ``j``, ``k``
+    in basic (:class:`trussid.fem.nastran.bulk.Coord`).
 
     Rectangular: the system's axes. Cylindrical (r, theta, z) and spherical (r, theta,
     phi): the unit vectors of the coordinate directions at the point, which NASTRAN uses as
@@ -322,11 +295,10 @@ def _check_units(bdf, mats: dict, wtmass: float) -> None:
 
 
 def _materials(bdf, wtmass: float) -> dict:
-    """MAT1 id -> dict(E, G, nu, rho); NASTRAN's rule for a blank E, G or NU is pyNastran's."""
+    """MAT1 id -> dict(E, G, nu, rho); NASTRAN's rule for a blank E, G or NU is applied when
+    the card is read (:func:`trussid.fem.nastran.bulk._mat1`)."""
     mats = {}
     for mid, mat in bdf.materials.items():
-        # pyNastran applies the MAT1 rule when it reads the card: one blank of E, G, NU is
-        # computed from E = 2 (1 + NU) G; E (or G) alone gives the others 0.0.
         mats[mid] = {"E": float(mat.e or 0.0), "G": float(mat.g or 0.0), "nu": float(mat.nu or 0.0),
                      "rho": float(mat.rho or 0.0) * wtmass, "label": f"MAT1 {mid}"}
     return mats
@@ -354,7 +326,7 @@ def _material(mats: dict, mid: int, label: str) -> dict:
 def _section_from_shape(shape: str, dims, nu: float, label: str) -> Section:
     """A :class:`Section` for a PBARL/PBEAML shape.
 
-    NASTRAN's element axes for these shapes (QRG PBARL figure, and pyNastran's I1/I2): DIM1
+    NASTRAN's element axes for these shapes (QRG PBARL figure): DIM1
     runs along element z, DIM2 along element y, so for BAR ``I1 = Izz = DIM1 DIM2^3 / 12``.
     """
     d = [float(x) for x in dims]
@@ -392,9 +364,9 @@ def _properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict
         if p.type == "PBAR":
             if p.i12:
                 raise ModelError(f"{label}: I12 = {p.i12:g} (non-principal axes) is not supported")
-            # NASTRAN: K1/K2 blank means no shear flexibility; pyNastran stores blank as 1e8.
-            k1 = math.inf if p.k1 is None or p.k1 >= 1e8 or p.k1 == 0 else p.k1
-            k2 = math.inf if p.k2 is None or p.k2 >= 1e8 or p.k2 == 0 else p.k2
+            # NASTRAN: K1/K2 blank (or 0.0) means no shear flexibility.
+            k1 = math.inf if p.k1 is None or p.k1 == 0 else p.k1
+            k2 = math.inf if p.k2 is None or p.k2 == 0 else p.k2
             sec = _sec(p.A, p.i2, p.i1, p.j, k1 * p.A, k2 * p.A)
             props[pid] = _Prop(label, "bar", sec, mat, float(p.nsm) * wtmass,
                                math.isfinite(k1) or math.isfinite(k2))
@@ -958,7 +930,8 @@ def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
         if e.type == "RBE2":
             nodes.index([e.gn], "RBE2", [eid])
             nodes.index(np.asarray(e.Gmi, dtype=np.int64), "RBE2", [eid] * len(e.Gmi))
-            model.add_rigid_body(eid, e.gn, e.Gmi, dofs=str(e.cm), mass=0.0, label=card)
+            dofs = "".join(str(c + 1) for c in _comps(e.cm, card))
+            model.add_rigid_body(eid, e.gn, e.Gmi, dofs=dofs, mass=0.0, label=card)
         elif e.type == "RBAR":
             ind = [(e.ga, c) for c in _comps(e.cna, card)] + [(e.gb, c) for c in _comps(e.cnb, card)]
             cma, cmb = _comps(e.cma, card), _comps(e.cmb, card)
@@ -999,21 +972,17 @@ def _add_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
 
 
 def _add_raw_rigid(bdf, model: Model, nodes: _NodeTable) -> None:
-    """NASTRAN-95's rigid elements CRIGD1, CRIGD2, CRIGD3 and CRIGDR (unparsed by pyNastran).
+    """NASTRAN-95's rigid elements CRIGD1, CRIGD2, CRIGD3 and CRIGDR (from their fields).
 
     CRIGD1 EID GI GM...: every component of each GM follows GI rigidly. CRIGD2 EID GI
     (GM CM)...: the listed components. CRIGD3 EID (GI CI)... MSET (GM CM)...: six
     independent components anywhere on the element determine the rigid motion. CRIGDR EID
     GI GM CM: a rigid pin-ended rod, component CM of GM keeps the distance GI-GM.
     """
-    for lines in getattr(bdf, "reject_lines", []):
-        body = _card_lines(lines)
-        name = body[0][:8].strip().rstrip("*").upper() if body else ""
-        if "," in name:
-            name = name.split(",")[0]
-        if name not in ("CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR"):
-            continue
-        f = _raw_fields(body, name)
+    cards = [c for n in ("CRIGD1", "CRIGD2", "CRIGD3", "CRIGDR") for c in bdf.raw.get(n, [])]
+    for c in sorted(cards, key=lambda c: (c.file, c.line)):
+        name = c.name
+        f = list(c.fields)
         try:
             eid = int(f[1])
         except (IndexError, ValueError):
@@ -1069,8 +1038,7 @@ def _dof_matrix(nodes: _NodeTable, dofs: list, card: str, eid: int) -> tuple[lis
 def _add_conm1(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
     """CONM1: a 6x6 mass matrix at a grid (lower triangle by rows, in system CID), times WTMASS.
 
-    pyNastran parses CONM1, but it is read here from the raw fields like the other entries
-    this reader adds, so that a blank is NASTRAN's 0.0 and a malformed entry is named.
+    Read from its fields, so that a blank is NASTRAN's 0.0 and a malformed entry is named.
     """
     for eid, f in _raw_cards(bdf, "CONM1"):
         card = f"CONM1 {eid}"
@@ -1190,7 +1158,7 @@ def _add_rigid_rod(model: Model, nodes: _NodeTable, eid: int, gi: int, gm: int, 
 
 def _add_mpcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     """MPC (through MPCADD) of the case control's MPC set: the first term is dependent."""
-    chosen = _case_values(bdf, "MPC")
+    chosen = _case_int(bdf, "MPC")
     if not chosen:
         if bdf.mpcs or bdf.mpcadds:
             info.notes.append(f"MPC sets {sorted(set(bdf.mpcs) | set(bdf.mpcadds))} present but not "
@@ -1301,7 +1269,7 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                           + (f"; QSET on {len(spoints)} scalar points: modal coordinates of the reduction, "
                              f"no part of these modes" if qsets else ""))
     suport = getattr(bdf, "suport", []) + list(getattr(bdf, "suport1", {}).values())
-    sol = (getattr(bdf, "trussid_solution", (None, None))[0] or "").split(",")[0]
+    sol = (bdf.solution[0] or "").split(",")[0]
     if suport and sol == "31":
         # MYSTRAN SOL 31 is a Craig-Bampton reduction whose boundary is the SUPORT set: its
         # printed eigenvalues are those of the structure with that boundary held.
@@ -1343,7 +1311,7 @@ def _scalar_point_refs(bdf) -> tuple[set, set]:
                 if k < len(f) and f[k]:
                     refs.add(int(f[k]))
     mpc_refs = set()
-    for sid in _case_values(bdf, "MPC")[:1]:
+    for sid in _case_int(bdf, "MPC")[:1]:
         for c in bdf.mpcs.get(int(sid), []):
             mpc_refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
     for eid, f in _raw_cards(bdf, "GENEL"):  # a GENEL's scalar points need their SPOINT, like an MPC's
@@ -1445,7 +1413,7 @@ def _add_scalar_point_elements(bdf, model: Model, nodes: _NodeTable, wtmass: flo
 def _add_spcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     """SPC/SPC1 (through SPCADD) of the case control's SPC set, else of all sets; GRID PS."""
     all_sets = set(bdf.spcs) | set(bdf.spcadds)
-    chosen = _case_values(bdf, "SPC")
+    chosen = _case_int(bdf, "SPC")
     if chosen:
         if len(chosen) > 1:
             info.notes.append(f"subcases select different SPC sets {chosen}; using the first, {chosen[0]}")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -13,6 +14,122 @@ from trussid.fem.model import Model
 from trussid.fem.nastran.reader import read_bdf
 
 __all__ = ['write_bdf']
+
+
+# ======================================================================= deck text
+def _real16(x: float) -> str:
+    """A real in at most 16 characters, as NASTRAN reads it, with as many digits as fit.
+
+    ``repr`` when it fits (exact round trip), else the implicit-exponent form
+    ``-1.2345678901-5`` (11 significant digits, a relative rounding of 5e-12).
+    """
+    x = float(x)
+    if not math.isfinite(x):
+        raise ModelError(f"write_bdf: value {x!r} cannot be written in a deck")
+    if x == 0.0:
+        return "0."
+    s = repr(x)
+    if len(s) <= 16:
+        if "." not in s:
+            s = s.replace("e", ".e") if "e" in s else s + "."
+            if len(s) <= 16:
+                return s
+        else:
+            return s
+    for digits in range(15, 0, -1):
+        mant, exp = f"{x:.{digits}e}".split("e")
+        t = f"{mant}{int(exp):+d}"
+        if len(t) <= 16:
+            return t
+    raise AssertionError(x)
+
+
+def _field16(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (bool, np.bool_)):
+        return str(int(v))
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return _real16(v)
+
+
+class _DeckText:
+    """The cards of a deck being written, as large-field text (16-character fields, so that
+    a re-read model matches to about 1e-11); written by :meth:`write`."""
+
+    def __init__(self):
+        self.lines: list[str] = []
+        self.coords: set = {0}
+        self.properties: set = set()
+
+    def card(self, name: str, fields: list, comment: str = "") -> None:
+        if comment:
+            self.lines.extend(f"$ {ln}" for ln in comment.splitlines())
+        f = [_field16(v) for v in fields]
+        while f and f[-1] == "":
+            f.pop()
+        for k in range(0, max(len(f), 1), 4):
+            chunk = "".join(f"{v:>16}" for v in f[k:k + 4])
+            self.lines.append((f"{name + '*':<8}" if k == 0 else "*       ") + chunk)
+
+    def add_grid(self, nid, xyz):
+        self.card("GRID", [nid, None, *xyz])
+
+    def add_mat1(self, mid, E, G, nu, rho=0.0):
+        self.card("MAT1", [mid, E, G, nu, rho])
+
+    def add_prod(self, pid, mid, A, j=0.0, nsm=0.0, comment=""):
+        self.properties.add(pid)
+        self.card("PROD", [pid, mid, A, j, None, nsm], comment)
+
+    def add_pbar(self, pid, mid, A, i1, i2, j, nsm, k1=None, k2=None, comment=""):
+        self.properties.add(pid)
+        self.card("PBAR", [pid, mid, A, i1, i2, j, nsm, None] + [None] * 8 + [k1, k2], comment)
+
+    def add_crod(self, eid, pid, nodes):
+        self.card("CROD", [eid, pid, *nodes])
+
+    def add_cbar(self, eid, pid, nodes, x):
+        self.card("CBAR", [eid, pid, *nodes, *x])
+
+    def add_conm2(self, eid, nid, mass, cid=0, X=(0.0, 0.0, 0.0), I=(0.0,) * 6, comment=""):
+        self.card("CONM2", [eid, nid, cid, mass, *X, None, *I], comment)
+
+    def add_celas2(self, eid, k, nodes, c1, c2):
+        self.card("CELAS2", [eid, k, nodes[0], c1, nodes[1], c2 if nodes[1] is not None else None])
+
+    def add_cmass2(self, eid, m, nodes, c1, c2, comment=""):
+        self.card("CMASS2", [eid, m, nodes[0], c1, nodes[1], c2], comment)
+
+    def add_cord2r(self, cid, origin, zpoint, xzpoint):
+        self.coords.add(cid)
+        self.card("CORD2R", [cid, 0, *origin, *zpoint, *xzpoint])
+
+    def add_pbush(self, pid, k):
+        self.properties.add(pid)
+        self.card("PBUSH", [pid, "K", *k])
+
+    def add_cbush(self, eid, pid, nodes, cid):
+        self.card("CBUSH", [eid, pid, *nodes, None, None, None, cid])
+
+    def add_rbe2(self, eid, gn, cm, gm, comment=""):
+        self.card("RBE2", [eid, gn, cm, *gm], comment)
+
+    def add_spc1(self, sid, comp, ids):
+        self.card("SPC1", [sid, comp, *ids])
+
+    def add_param(self, name, values):
+        self.card("PARAM", [name, *values])
+
+    def add_eigrl(self, sid, nd):
+        self.card("EIGRL", [sid, None, None, nd])
+
+    def write(self, path, head: list) -> None:
+        with open(path, "w") as fh:
+            fh.write("\n".join(head + self.lines + ["ENDDATA", ""]))
 
 
 # ======================================================================= writing
@@ -62,11 +179,7 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     >>> print(np.round(f0, 2), np.allclose(f0, f1, rtol=1e-6), info.eigen.n_modes)
     [ 20.71  20.71 106.69 106.69] True 4
     """
-    from cpylog import SimpleLogger
-    from pyNastran.bdf.bdf import BDF
-    from pyNastran.bdf.case_control_deck import CaseControlDeck
-
-    bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
+    bdf = _DeckText()
     ids, xyz = model.node_ids, model.xyz
     if len(ids) == 0:
         raise ModelError("write_bdf: the model has no nodes")
@@ -111,22 +224,19 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
             bdf.add_spc1(1, comp, ids[codes == comp].tolist())
     bdf.add_param("COUPMASS", [1 if model.mass_formulation == "consistent" else -1])
     if n_modes:
-        bdf.add_eigrl(1, nd=int(n_modes))
+        bdf.add_eigrl(1, int(n_modes))
 
-    bdf.sol = 103
-    bdf.executive_control_lines = ["SOL 103", "CEND"]
-    lines = [f"TITLE = {title or model.name}", "ECHO = NONE", "SUBCASE 1"]
+    lines = ["SOL 103", "CEND", f"TITLE = {title or model.name}", "ECHO = NONE", "SUBCASE 1"]
     if n_modes:
         lines.append("  METHOD = 1")
     if has_spc:
         lines.append("  SPC = 1")
     lines += ["  DISPLACEMENT = ALL", "BEGIN BULK"]
-    bdf.case_control_deck = CaseControlDeck(lines, log=bdf.log)
     with atomic_path(path) as tmp:
-        bdf.write_bdf(str(tmp), size=16, is_double=False, enddata=True)
+        bdf.write(tmp, lines)
         n_scalar = _write_mass_corrections(bdf, model, tmp, eid_for)
         if n_scalar:
-            bdf.write_bdf(str(tmp), size=16, is_double=False, enddata=True)
+            bdf.write(tmp, lines)
 
 
 def _global_mass(model: Model):
@@ -211,10 +321,9 @@ def _write_beams(bdf, model: Model, eid_for) -> None:
         if rod:
             bdf.add_prod(pid, mid, float(A), j=float(J), nsm=float(nsm), comment=label)
         else:
-            # Euler-Bernoulli: K1/K2 blank (no shear flexibility). pyNastran writes blank
-            # for its 1e8 sentinel.
-            k1 = float(asy / A) if timo and asy > 0 else 1e8
-            k2 = float(asz / A) if timo and asz > 0 else 1e8
+            # Euler-Bernoulli: K1/K2 blank (no shear flexibility).
+            k1 = float(asy / A) if timo and asy > 0 else None
+            k2 = float(asz / A) if timo and asz > 0 else None
             bdf.add_pbar(pid, mid, A=float(A), i1=float(Iz), i2=float(Iy), j=float(J), nsm=float(nsm),
                          k1=k1, k2=k2, comment=label)
     for i in range(len(b)):
@@ -224,7 +333,7 @@ def _write_beams(bdf, model: Model, eid_for) -> None:
         if b.rod[i]:
             bdf.add_crod(eid, pid, [ga, gb])
         else:
-            bdf.add_cbar(eid, pid, [ga, gb], b.orient[i].tolist(), None)
+            bdf.add_cbar(eid, pid, [ga, gb], b.orient[i].tolist())
 
 
 def _tensor_to_conm2(I: np.ndarray) -> list[float]:
@@ -266,8 +375,8 @@ def _write_springs(bdf, model: Model, eid_for) -> None:
         bdf.add_cord2r(cid, [0.0, 0.0, 0.0], frame[2].tolist(), frame[0].tolist())
         pid = next_pid[0]
         next_pid[0] += 1
-        bdf.add_pbush(pid, s.k[i].tolist(), [0.0] * 6, [0.0] * 6)
-        bdf.add_cbush(eid_for(int(s.ids[i])), pid, [ga, gb if gb >= 0 else None], None, None, cid=cid)
+        bdf.add_pbush(pid, s.k[i].tolist())
+        bdf.add_cbush(eid_for(int(s.ids[i])), pid, [ga, gb if gb >= 0 else None], cid)
 
 
 def _write_rigid(bdf, model: Model, eid_for) -> None:

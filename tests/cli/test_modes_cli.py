@@ -96,7 +96,7 @@ def test_n_overrides_the_deck_and_the_table_names_mass_and_units():
     ("BEGIN BULK\nGRID,1,,0.,0.,0.\nCQUAD4,1,1,1,2,3,4\nCHEXA,2,1,1,2,3,4,5,6\nENDDATA\n",
      "unsupported element entries: CHEXA (1), CQUAD4 (1)"),
     ("BEGIN BULK\nGRID,1,,0.,0.,0.\nCELAS2,2,800.,7,1\nENDDATA\n", "spring 2: grid 7 is not defined"),
-    ("BEGIN BULK\nGRID,1,,0,0,0\nENDDATA\n", "not a readable bulk-data deck"),
+    ("BEGIN BULK\nGRID,1,,0,0,0\nENDDATA\n", "line 2: GRID 1: field 4: X1 must be a real number"),
 ])
 def test_bad_deck_exits_nonzero_with_one_line(tmp_path, cli, text, match):
     deck = tmp_path / "bad.bdf"

@@ -172,7 +172,11 @@ ENDDATA
 
 
 def test_pbarl_sections_match_pyNastrans_own_section_properties(tmp_path):
-    from pyNastran.bdf.bdf import BDF
+    # pyNastran is an independent oracle here only; 1.4 fails at import on numpy >= 2.4
+    try:
+        from pyNastran.bdf.bdf import BDF
+    except Exception as exc:  # ImportError, or AttributeError (np.in1d) on numpy >= 2.4
+        pytest.skip(f"pyNastran is not importable here ({type(exc).__name__})")
 
     deck = """BEGIN BULK
 MAT1,1,70.+9,,0.3,2700.
@@ -559,7 +563,9 @@ def test_tapered_and_unsupported_sections_are_refused(tmp_path):
 def test_missing_and_unreadable_files_are_user_errors(tmp_path):
     with pytest.raises(ModelError, match="no such file"):
         read_bdf(tmp_path / "nope.bdf")
-    with pytest.raises(ModelError, match="not a readable bulk-data deck"):
+    # NASTRAN's reals have a decimal point: an integer there is refused, naming file, line,
+    # entry and field
+    with pytest.raises(ModelError, match=r"deck.bdf, line 2: GRID 1: field 4: X1 must be a real number"):
         read_bdf(write(tmp_path, "BEGIN BULK\nGRID,1,,0,0,0\nENDDATA\n"))
 
 

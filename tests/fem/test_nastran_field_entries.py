@@ -84,8 +84,8 @@ def test_conm1_full_mass_matrix_in_a_rotated_system(tmp_path):
     k = np.array([1e4, 2e4, 3e4, 40.0, 50.0, 60.0])
     M = np.diag([2.0, 2.0, 2.0, 0.01, 0.02, 0.03])
     M[4, 0] = M[0, 4] = 0.05  # a mass offset couples translation and rotation
-    lower = [float(M[i, j]) for i in range(6) for j in range(i + 1)]
-    fields = ",".join(repr(v) for v in lower)
+    lower = [M[i, j] for i in range(6) for j in range(i + 1)]
+    fields = ",".join(repr(float(v)) for v in lower)
     f = fields.split(",")
     # five terms on the first line, eight on each continuation (QRG CONM1)
     conm1 = (f"CONM1,1,1,5,{','.join(f[0:5])}\n,{','.join(f[5:13])}\n,{','.join(f[13:21])}\n")

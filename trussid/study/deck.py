@@ -33,20 +33,21 @@ import tempfile
 from pathlib import Path
 
 import pyarrow as pa
-from cpylog import SimpleLogger
-from pyNastran.bdf.bdf import BDF
 
 from trussid._util.errors import UserError
+from trussid.fem.errors import ModelError
 from trussid.fem.modal import solve_modes
 from trussid.fem.nastran import read_bdf
+from trussid.fem.nastran.cards import Card, ParsedDeck, deck_text, parse_deck
 
-#: Parameter field -> (pyNastran card dictionary, attribute) per card type.
+#: Parameter field -> its index in the entry's fields (0 = the name), per card type; PELAS
+#: holds a second property from field 6 on (its K 4 fields further).
 FIELDS = {
-    "PBAR": ("properties", {"A": "A", "I1": "i1", "I2": "i2", "J": "j"}),
-    "PROD": ("properties", {"A": "A", "J": "j"}),
-    "PELAS": ("properties", {"K": "k"}),
-    "CONM2": ("masses", {"M": "mass"}),
-    "CELAS2": ("elements", {"K": "k"}),
+    "PBAR": {"A": 3, "I1": 4, "I2": 5, "J": 6},
+    "PROD": {"A": 3, "J": 4},
+    "PELAS": {"K": 2},
+    "CONM2": {"M": 4},
+    "CELAS2": {"K": 2},
 }
 NAME = re.compile(r"^([A-Z0-9]+)\.(\d+)\.([A-Z0-9]+)$")
 
@@ -55,32 +56,42 @@ class StudyDeckError(UserError):
     """A deck study's mistake (unknown card, field or id), naming it."""
 
 
-def _parse(path) -> BDF:
-    bdf = BDF(log=SimpleLogger(level="critical"), debug=None)
+def _parse(path) -> ParsedDeck:
     try:
-        bdf.read_bdf(str(path), xref=False, punch=False)
-    except FileNotFoundError:
-        raise StudyDeckError(f"[evaluate] deck {path}: no such file") from None
-    except Exception as exc:  # pyNastran's many exception types: the deck is unreadable
-        raise StudyDeckError(f"[evaluate] deck {path}: not a readable deck ({exc})") from None
-    return bdf
+        return parse_deck(path)
+    except ModelError as exc:
+        raise StudyDeckError(f"[evaluate] deck {exc}") from None
 
 
-def _target(bdf: BDF, name: str, where: str):
-    """(card object, attribute) that parameter ``name`` sets."""
+def _target(deck: ParsedDeck, name: str, where: str) -> tuple[int, int]:
+    """(index of the entry in ``deck.cards``, index of the field) that parameter ``name`` sets."""
     m = NAME.match(name)
     if not m or m.group(1) not in FIELDS:
         raise StudyDeckError(f"{where}: parameter {name!r}: name it CARD.ID.FIELD with CARD one "
                              f"of {', '.join(FIELDS)} (e.g. PBAR.1.A, CONM2.901.M)")
     card, ident, fld = m.group(1), int(m.group(2)), m.group(3)
-    table, fields = FIELDS[card]
+    fields = FIELDS[card]
     if fld not in fields:
         raise StudyDeckError(f"{where}: parameter {name!r}: {card} field must be one of "
                              f"{', '.join(fields)}")
-    obj = getattr(bdf, table).get(ident)
-    if obj is None or obj.type != card:
-        raise StudyDeckError(f"{where}: parameter {name!r}: the deck has no {card} {ident}")
-    return obj, fields[fld]
+    for k, c in enumerate(deck.cards):
+        if c.name != card:
+            continue
+        for shift in ((0, 4) if card == "PELAS" else (0,)):
+            if c.get(1 + shift).isdigit() and int(c.get(1 + shift)) == ident:
+                return k, fields[fld] + shift
+    raise StudyDeckError(f"{where}: parameter {name!r}: the deck has no {card} {ident}")
+
+
+def _with_values(deck: ParsedDeck, targets: list) -> list:
+    """The deck's cards with ``(card index, field index, value)`` set."""
+    cards = list(deck.cards)
+    for k, i, v in targets:
+        c = cards[k]
+        f = list(c.fields) + [""] * max(0, i + 1 - len(c.fields))
+        f[i] = repr(float(v))
+        cards[k] = Card(c.name, tuple(f), c.file, c.lines, c.per_line)
+    return cards
 
 
 class DeckModesEvaluator:
@@ -118,25 +129,16 @@ class DeckModesEvaluator:
 
     def context(self, options: dict):
         opts = self.resolved(options)
-        return {"bdf": _parse(opts["deck"]), "key": json.dumps(opts, sort_keys=True)}
+        return {"deck": _parse(opts["deck"]), "key": json.dumps(opts, sort_keys=True)}
 
     def point(self, ctx, params: dict, options: dict) -> dict:
         opts = self.resolved(options)
-        bdf = ctx["bdf"]
-        saved = []
-        try:
-            for name, v in params.items():
-                obj, attr = _target(bdf, name, "point")
-                saved.append((obj, attr, getattr(obj, attr)))
-                setattr(obj, attr, float(v))
-            with tempfile.TemporaryDirectory() as tmp:
-                path = Path(tmp) / Path(opts["deck"]).name
-                bdf.write_bdf(str(path), size=16, is_double=False, enddata=True)
-                model, info = read_bdf(path)
-                f = solve_modes(model, n_modes=opts["n_modes"],
-                                autospc=info.autospc).frequencies_hz
-        finally:
-            for obj, attr, old in reversed(saved):  # the shared deck back as read
-                setattr(obj, attr, old)
+        deck = ctx["deck"]
+        targets = [(*_target(deck, name, "point"), v) for name, v in params.items()]
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / Path(opts["deck"]).name
+            path.write_text(deck_text(deck, _with_values(deck, targets)))
+            model, info = read_bdf(path)
+            f = solve_modes(model, n_modes=opts["n_modes"], autospc=info.autospc).frequencies_hz
         return {f"f{k + 1}": float(f[k]) if k < len(f) else math.nan
                 for k in range(opts["n_modes"])}
