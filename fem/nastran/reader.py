@@ -1177,10 +1177,7 @@ def _add_mpcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
         sets.append(sid)
         for add in bdf.mpcadds.get(sid, []):
             stack.extend(add.sets)
-    qpoints = set()
-    for q in getattr(bdf, "qsets", []):
-        qpoints |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
-    qpoints &= set(getattr(bdf, "spoints", {}) or {})
+    qpoints = set(_qset_points(bdf)) & bdf.spoints
     for sid in sets:
         for k, c in enumerate(bdf.mpcs.get(sid, [])):
             card = f"MPC {sid}"
@@ -1219,7 +1216,8 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     def mask_of(cards, what):
         mask = np.zeros((n, 6), bool)
         for c in cards:
-            ids = np.asarray(c.ids if hasattr(c, "ids") else c.node_ids, dtype=np.int64)
+            ids = np.asarray(c.ids, dtype=np.int64)
+            # OMIT/ASET pairs carry a component per id; OMIT1/ASET1 one for all
             comps = c.components if isinstance(c.components, list) else [c.components] * len(ids)
             idx = nodes.index(ids, what, np.zeros(len(ids), dtype=np.int64))
             for g, i, cm in zip(ids.tolist(), np.atleast_1d(idx), comps):
@@ -1228,8 +1226,7 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                 mask[i, [0] if on_spoint else _comps(cm, what)] = True
         return mask
 
-    omits = getattr(bdf, "omits", [])
-    asets = getattr(bdf, "asets", [])
+    omits, asets = bdf.omits, bdf.asets
     if omits or asets:
         omitted = mask_of(omits, "OMIT")
         if asets:
@@ -1246,10 +1243,10 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                           + (f"Craig-Bampton reduction, the lowest {len(qpoints)} fixed-interface modes on the "
                              f"QSET scalar points, as NASTRAN does" if qpoints else
                              "Guyan reduction, as NASTRAN does (exact for DOFs without mass)"))
-    spoints = set(getattr(bdf, "spoints", {}) or {})
-    bsets, qsets = getattr(bdf, "bsets", []), getattr(bdf, "qsets", [])
+    spoints = bdf.spoints
+    bsets, qsets = bdf.bsets, bdf.qsets
     for c in qsets:
-        ids = [int(g) for g in (c.ids if hasattr(c, "ids") else c.node_ids)]
+        ids = [int(g) for g in c.ids]
         grids = [g for g in ids if g not in spoints]
         if grids:
             raise ModelError(f"{c.type} {grids[0]}: modal (Q-set) DOFs on grid points are not supported; "
@@ -1257,7 +1254,7 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     if bsets:
         extseout = _case_has(bdf, "EXTSEOUT")
         if not (qsets or extseout):
-            g0 = (bsets[0].ids if hasattr(bsets[0], "ids") else bsets[0].node_ids)[0]
+            g0 = bsets[0].ids[0]
             raise ModelError(f"{bsets[0].type} (grid {g0}): a boundary set without QSET or EXTSEOUT (residual-structure "
                              f"B-set analysis) is not supported")
         held = mask_of(bsets, bsets[0].type)
@@ -1268,15 +1265,15 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                           f"prints its fixed-interface (Craig-Bampton) modes, which these are"
                           + (f"; QSET on {len(spoints)} scalar points: modal coordinates of the reduction, "
                              f"no part of these modes" if qsets else ""))
-    suport = getattr(bdf, "suport", []) + list(getattr(bdf, "suport1", {}).values())
+    suport = bdf.suport + list(bdf.suport1.values())
     sol = (bdf.solution[0] or "").split(",")[0]
     if suport and sol == "31":
         # MYSTRAN SOL 31 is a Craig-Bampton reduction whose boundary is the SUPORT set: its
         # printed eigenvalues are those of the structure with that boundary held.
         held = np.zeros((n, 6), bool)
         for c in suport:
-            ids = np.asarray(c.nodes if hasattr(c, "nodes") else c.IDs, dtype=np.int64)
-            comps = c.Cs if hasattr(c, "Cs") else c.components
+            ids = np.asarray(c.ids, dtype=np.int64)
+            comps = c.components if isinstance(c.components, list) else [c.components] * len(ids)
             idx = nodes.index(ids, "SUPORT", np.zeros(len(ids), dtype=np.int64))
             for i, cm in zip(np.atleast_1d(idx), comps):
                 held[i, _comps(cm, "SUPORT")] = True
@@ -1326,21 +1323,20 @@ def _scalar_point_refs(bdf) -> tuple[set, set]:
 def _qset_points(bdf) -> list:
     """Ids on QSET/QSET1 entries, in deck order (each once)."""
     ids = []
-    for q in getattr(bdf, "qsets", []):
-        ids.extend(int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids))
+    for q in bdf.qsets:
+        ids.extend(int(n) for n in q.ids)
     return list(dict.fromkeys(ids))
 
 
 def _component_mode_reduction(bdf) -> bool:
     """QSET with ASET/OMIT and no BSET: a Craig-Bampton reduction whose modes are solved (the
     B-set case prints the fixed-interface modes instead, see :func:`_add_dof_sets`)."""
-    return bool(getattr(bdf, "qsets", [])) and bool(getattr(bdf, "asets", []) or getattr(bdf, "omits", [])) \
-        and not getattr(bdf, "bsets", [])
+    return bool(bdf.qsets) and bool(bdf.asets or bdf.omits) and not bdf.bsets
 
 
 def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
     """Ids of the SPOINTs that something connects (sorted); the others are noted and ignored."""
-    spoints = set(getattr(bdf, "spoints", {}) or {})
+    spoints = set(bdf.spoints)
     qset = set(_qset_points(bdf))
     elem_refs, mpc_refs = _scalar_point_refs(bdf)
     if _component_mode_reduction(bdf) and (elem_refs | mpc_refs) & qset:
