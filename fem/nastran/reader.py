@@ -1303,10 +1303,13 @@ def _scalar_point_refs(bdf) -> tuple[set, set]:
         if e.type in ("CELAS1", "CELAS2", "CMASS1", "CMASS2"):
             refs |= {int(n) for n, c in zip(list(e.nodes), (e.c1, e.c2)) if n and not c}
     for name in SCALAR_POINT_CARDS:
-        for _eid, f in _raw_cards(bdf, name):
+        for eid, f in _raw_cards(bdf, name):
             for k in (3, 4, 7, 8):
                 if k < len(f) and f[k]:
-                    refs.add(int(f[k]))
+                    try:
+                        refs.add(int(f[k]))
+                    except ValueError:
+                        raise ModelError(f"{name} {eid}: scalar point field {k} is {f[k]!r}, not a point id") from None
     mpc_refs = set()
     for sid in _case_int(bdf, "MPC")[:1]:
         for c in bdf.mpcs.get(int(sid), []):

@@ -47,6 +47,8 @@ BAD_DECKS = [
     ("GENEL on a component of a scalar point", BEAM + CBAR + "SPOINT,7\nGENEL,54,,7,3\n,K,1.\n", "GENEL 54"),
     ("GENEL on an undefined scalar point", BEAM + CBAR + "GENEL,55,,8,0\n,K,1.\n", "scalar point 8"),
     ("scalar spring on no scalar point", BEAM + CBAR + "CELAS4,57,1.\n", "CELAS4 57"),
+    ("scalar element on a point that is not an id", "PELAS,1,100.\nCELAS3,58,1,abc,2\nCMASS4,59,1.,2\n",
+     "CELAS3 58"),
     ("scalar-point deck with an undefined PELAS", "CELAS3,58,9,1,2\nCMASS4,59,1.,1\n", "CELAS3 58"),
     ("a mass moving alone inside a structure (mechanism)", "GRID,1,,0.,0.,0.,,123456\nGRID,2,,1.,0.,0.,,236\n"
      "GRID,3,,2.,0.,0.,,23456\nMAT1,1,70.+9,,0.3,2700.\nPROD,1,1,1.-4,1.-9\nCROD,1,1,1,2\nCROD,2,1,2,3\n"
