@@ -706,10 +706,18 @@ def build_bulk(parsed: ParsedDeck, typed: frozenset) -> Bulk:
             grdset = GrdSet(integer_or_blank(card, 2, "CP", 0), integer_or_blank(card, 6, "CD", 0),
                             _comp(card, 7), integer_or_blank(card, 8, "SEID", 0))
 
+    first_card: dict = {}
+
     def unique(table, key, entry, card):
+        # NASTRAN accepts an entry repeated word for word (decks assembled from INCLUDEs
+        # often are); two different entries with one id are an error
         if key in table:
-            raise card.error(1, f"duplicate id {key} (another {table[key].type if hasattr(table[key], 'type') else card.name} has it)")
+            other = first_card[(id(table), key)]
+            if other.name == card.name and other.fields == card.fields:
+                return
+            raise card.error(1, f"duplicate id {key} (also on {other.name} {key}, {other.file} line {other.line})")
         table[key] = entry
+        first_card[(id(table), key)] = card
 
     for card in cards:
         name = card.name
@@ -757,9 +765,7 @@ def build_bulk(parsed: ParsedDeck, typed: frozenset) -> Bulk:
                 unique(pmass, p.pid, p, card)
         elif name == "MAT1":
             m = _mat1(card)
-            if m.mid in mats:
-                raise card.error(1, f"duplicate id {m.mid} (another MAT1 has it)")
-            mats[m.mid] = m
+            unique(mats, m.mid, m, card)
         elif name in ("RBE2", "RBE3", "RBAR"):
             r = _rigid(card)
             unique(rigid, r.eid, r, card)
@@ -837,7 +843,7 @@ def _grids(cards: list, grdset: GrdSet | None) -> tuple:
     se0 = grdset.seid if grdset else 0
     nodes = {}
     xyz = np.empty((len(cards), 3))
-    for k, card in enumerate(cards):
+    for card in cards:
         f = card.fields
         try:
             nid = int(f[1])
@@ -856,10 +862,12 @@ def _grids(cards: list, grdset: GrdSet | None) -> tuple:
         seid = integer_or_blank(card, 8, "SEID", se0) if len(f) > 8 and f[8] else se0
         ps = _comp(card, 7) or ps0
         if nid in nodes:
+            if nodes[nid] == Grid(nid, cp, x, cd, ps, seid):
+                continue  # repeated word for word: NASTRAN accepts it
             raise card.error(1, f"duplicate id {nid} (another GRID has it)")
+        xyz[len(nodes)] = x
         nodes[nid] = Grid(nid, cp, x, cd, ps, seid)
-        xyz[k] = x
-    return nodes, xyz
+    return nodes, xyz[:len(nodes)]
 
 
 def _coord_points(card: Card, base: int) -> np.ndarray:

@@ -236,3 +236,19 @@ def test_deck_text_writes_a_deck_that_reads_back_to_the_same_cards(tmp_path):
     assert [fields(c) for c in again.cards] == [fields(c) for c in deck.cards]
     assert again.case.values("METHOD") == ["1"] and again.sol == "103"
     assert math.isclose(real(again.cards[0], 3, "X"), 1e-3)
+
+
+def test_an_entry_repeated_word_for_word_is_read_once_and_a_clash_is_named(tmp_path):
+    from trussid.fem.nastran import read_bdf
+
+    beam = ("MAT1,1,70.+9,,0.3,2700.\nPBAR,1,1,1.-4,2.-9,3.-9,4.-9\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\n"
+            "CBAR,10,1,1,2,0.,0.,1.\nSPC1,1,123456,1\n")
+    p = tmp_path / "twice.bdf"
+    p.write_text("BEGIN BULK\n" + beam + "GRID,2,,1.,0.,0.\nMAT1,1,70.+9,,0.3,2700.\nCBAR,10,1,1,2,0.,0.,1.\n")
+    model, _ = read_bdf(p)
+    assert (model.n_nodes, len(model.beams)) == (2, 1)
+    np.testing.assert_array_equal(model.xyz, [[0, 0, 0], [1, 0, 0]])
+    p.write_text("BEGIN BULK\n" + beam + "CBAR,10,1,2,1,0.,0.,1.\n")
+    with pytest.raises(ModelError, match=r"twice.bdf, line 8: CBAR 10: field 2: duplicate id 10 \(also on CBAR 10, "
+                                         r".*twice.bdf line 6\)"):
+        read_bdf(p)
