@@ -481,8 +481,10 @@ def _bulk_cards(lines: list) -> list:
             cont = c0 in " +*," or not head
             large = "*" in head
             width = 4 if large else 8
-            # auto-continuation: a free-field line longer than ten fields is several lines
-            rows = [parts[k:k + 10] for k in range(0, len(parts), 10)] if len(parts) > 10 else [parts]
+            # auto-continuation: a free-field line longer than a line's fields (ten; six in large
+            # field) is several lines
+            step = width + 2
+            rows = [parts[k:k + step] for k in range(0, len(parts), step)] if len(parts) > step else [parts]
             for r, row in enumerate(rows):
                 data = [x.strip() for x in row[1:1 + width]]
                 data += [""] * (width - len(data))

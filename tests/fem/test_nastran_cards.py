@@ -62,6 +62,7 @@ WANT = tuple(f for f in CBAR_FIELDS[:13])
     ("free field, +marker", "CBAR,10,1,1,2,0.,0.,1.,,+A\n+A,,456,,0.1\n"),
     ("free field, auto-continuation", "CBAR,10,1,1,2,0.,0.,1.,,,,,456,,0.1\n"),
     ("large free field", "CBAR*,10,1,1,2\n*,0.,0.,1.,\n*,,456,,0.1\n"),
+    ("large free field, auto-continuation", "CBAR*,10,1,1,2,,*,0.,0.,1.,,,*,,456,,0.1\n"),
     ("mixed: small then free", small("CBAR", "10", "1", "1", "2", "0.", "0.", "1.") + "\n,,456,,0.1\n"),
     ("lower case, comments, blank lines", "$ a comment\ncbar,10,1,1,2,0.,0.,1. $ the bar\n\n,,456,,0.1\n"),
 ])
