@@ -17,8 +17,9 @@ import scipy.sparse as sp
 from trussid.fem.constraints import build_transformation, dof_label, rigid_mass
 from trussid.fem.elements import check_beam_properties, frame_matrices, local_axes
 from trussid.fem.errors import ModelError
+from trussid.fem.free_bodies import component_rigid_fit, node_components
 from trussid.fem.model import DOF_NAMES
-from trussid.fem.reduction import guyan
+from trussid.fem.reduction import craig_bampton, guyan
 
 __all__ = ["System", "beam_matrices", "spring_matrices", "general_blocks", "mass_blocks",
            "assemble"]
@@ -55,6 +56,10 @@ class System:
         Full DOFs with neither stiffness nor mass before constraints: nothing acts on them,
         so a support there (NASTRAN GRID PS on an unconnected rotation) does not stop a
         rigid-body motion.
+    components : (n_nodes,) int or None
+        Kinematic component of each node (:func:`trussid.fem.free_bodies.node_components`).
+    scalar : (n_nodes,) bool or None
+        Scalar points (no position: any motion of theirs is rigid).
     """
 
     K: sp.csr_matrix
@@ -70,6 +75,23 @@ class System:
     has_supports: bool = False
     name: str = "model"
     inert: np.ndarray | None = None
+    components: np.ndarray | None = None
+    scalar: np.ndarray | None = None
+
+    def free_dofs(self) -> np.ndarray:
+        """(6 n_nodes,) bool: full DOFs the free-body test leaves out (scalar points and
+        DOFs nothing acts on)."""
+        n = len(self.node_ids)
+        free = np.zeros(6 * n, bool) if self.inert is None else self.inert.copy()
+        if self.scalar is not None:
+            free |= np.repeat(self.scalar, 6)
+        return free
+
+    def free_body(self, Z) -> tuple[np.ndarray, np.ndarray]:
+        """``(rigid, fitted)`` of full-DOF motions ``Z`` (6 n_nodes, k): whether each moves
+        every component rigidly (:func:`trussid.fem.free_bodies.component_rigid_fit`)."""
+        labels = self.components if self.components is not None else np.zeros(len(self.node_ids), np.int64)
+        return component_rigid_fit(self.xyz, labels, self.free_dofs(), Z)
 
     def dof_label(self, j: int) -> str:
         """``"node 7 rz"`` for reduced DOF ``j``."""
@@ -226,6 +248,27 @@ def _check_unique_element_ids(model) -> None:
         raise ModelError(f"element {dup} is defined more than once ({' and '.join(kinds)})")
 
 
+def _stiffness_pairs(model) -> np.ndarray:
+    """(m, 2) node index pairs joined by an element stiffness: beams, two-node springs with a
+    stiffness, general elements with a nonzero K (each node to the first); from the element
+    lists, not from K (its entries are 150 per beam)."""
+    out = []
+    b = model.beams
+    if len(b):
+        out.append(model.index_of(b.nodes, what="a beam"))
+    s = model.springs
+    if len(s):
+        two = (s.nodes[:, 1] >= 0) & (s.k > 0).any(axis=1)
+        if two.any():
+            out.append(model.index_of(s.nodes[two], what="a spring"))
+    for g in model.general:
+        live = np.abs(g.K).max(axis=(1, 2), initial=0.0) > 0
+        if live.any() and g.nodes.shape[1] > 1:
+            idx = model.index_of(g.nodes[live], what=g.label or "a general element")
+            out.append(np.stack([np.repeat(idx[:, :1], idx.shape[1] - 1, axis=1).ravel(), idx[:, 1:].ravel()], 1))
+    return np.concatenate(out) if out else np.zeros((0, 2), np.int64)
+
+
 def assemble(model, autospc: bool = False) -> System:
     """Assemble and constrain a :class:`trussid.fem.Model`.
 
@@ -282,6 +325,19 @@ def assemble(model, autospc: bool = False) -> System:
         K = K_full[dofs][:, dofs].tocsr()
         M = M_full[dofs][:, dofs].tocsr()
 
+    generalized = model.generalized_mask() if hasattr(model, "generalized_mask") else None
+    q_full = np.zeros(n, bool)
+    if generalized is not None and generalized.any():
+        # Component-mode amplitudes live on scalar points that no element touches: taken out
+        # here (they are empty DOFs), put back by the Craig-Bampton reduction below.
+        q_full[6 * np.flatnonzero(generalized)] = True
+        touched = q_full & ((abs(K_full).sum(axis=1).A1 != 0) | (abs(M_full).sum(axis=1).A1 != 0))
+        if touched.any():
+            raise ModelError(f"generalized coordinate {dof_label(node_ids, int(np.flatnonzero(touched)[0]))}: "
+                             f"an element acts on it (component-mode amplitudes must be free scalar points)")
+        keep = np.flatnonzero(~q_full[dofs])
+        T, dofs = T[:, keep].tocsr(), dofs[keep]
+        K, M = K[keep][:, keep].tocsr(), M[keep][:, keep].tocsr()
     zk = _zero(K.diagonal(), dofs)
     zm = _zero(M.diagonal(), dofs)
     removed: list[tuple[int, str]] = []
@@ -296,20 +352,30 @@ def assemble(model, autospc: bool = False) -> System:
         T, dofs = T[:, keep].tocsr(), dofs[keep]
         K, M = K[keep][:, keep].tocsr(), M[keep][:, keep].tocsr()
         zk = zk[keep]
-    if model.has_supports and zk.any():
-        j = int(np.flatnonzero(zk)[0])
-        raise ModelError(f"mechanism: {dof_label(node_ids, dofs[j])} has no stiffness")
     if K.shape[0] == 0:
         raise ModelError("the model has no free DOF left after supports and constraints")
     K.sort_indices()
     M.sort_indices()
     inert = (K_full.diagonal() == 0) & (M_full.diagonal() == 0)
+    scalar = model.scalar_mask() if hasattr(model, "scalar_mask") else np.zeros(len(node_ids), bool)
     system = System(K=K, M=M, T=T, node_ids=node_ids, xyz=model.xyz, n_dof=K.shape[0], dofs=dofs,
                     autospc=removed, mass_formulation=model.mass_formulation,
                     beam_theory=model.beam_theory, has_supports=model.has_supports, name=model.name,
-                    inert=inert)
+                    inert=inert, components=node_components(len(node_ids), _stiffness_pairs(model), T),
+                    scalar=scalar)
+    if model.has_supports and zk.any():
+        # A DOF with mass and no stiffness: a free body when moving it moves its whole
+        # component rigidly (a point mass joined to nothing), else a mechanism.
+        cols = np.flatnonzero(zk)
+        rigid, _ = system.free_body(T[:, cols].toarray())
+        if not rigid.all():
+            j = int(cols[~rigid][0])
+            raise ModelError(f"mechanism: {dof_label(node_ids, dofs[j])} has no stiffness")
     omitted = model.omitted_mask().reshape(-1) if hasattr(model, "omitted_mask") else None
-    if omitted is not None and omitted.any():
+    if q_full.any():
+        omit = np.zeros(len(dofs), bool) if omitted is None else omitted[dofs]
+        system = craig_bampton(system, omit, np.flatnonzero(q_full))
+    elif omitted is not None and omitted.any():
         # Omitted DOFs that were supported, dependent or removed by AUTOSPC are not in the
         # system any more: only the remaining ones are condensed.
         system = guyan(system, omitted[dofs])

@@ -436,7 +436,19 @@ def _zero_modes(system: System, lam, X, shapes_full, proven: bool) -> np.ndarray
     rigid = np.zeros(len(lam), bool)
     rigid[:r] = lam[:r] < limit                    # ascending: the r lowest are rigid-body modes
     lam[rigid] = 0.0
-    other = np.flatnonzero(~rigid & (lam < limit) & ~_is_rigid_any(system, shapes_full, lam, limit))
+    # Zero-energy modes that move each kinematic component rigidly are free bodies (a point
+    # mass joined to nothing, a free part beside a supported one): 0 Hz when the nearest
+    # such motion is strain-free to round-off, otherwise a genuine low mode is kept.
+    small = np.flatnonzero(~rigid & (lam < limit))
+    free = np.zeros(len(lam), bool)
+    if small.size:
+        ok, fitted = system.free_body(shapes_full[:, small])
+        free[small] = ok
+        if ok.any():
+            snap = np.zeros(len(ok), bool)
+            snap[ok] = _strain_free(system, fitted[:, ok])
+            lam[small[snap]] = 0.0
+    other = np.flatnonzero(~rigid & (lam < limit) & ~free)
     if system.has_supports and other.size and not proven:
         ok, j = factor_stiffness(system)
         if ok is None:
@@ -447,13 +459,18 @@ def _zero_modes(system: System, lam, X, shapes_full, proven: bool) -> np.ndarray
     return np.maximum(lam, 0.0)
 
 
-def _is_rigid_any(system: System, shapes_full, lam, limit) -> np.ndarray:
-    """Per mode: True for shapes that move the nodes rigidly (only where ``lam < limit``)."""
-    out = np.zeros(len(lam), bool)
-    small = np.flatnonzero(lam < limit)
-    if small.size:
-        out[small] = _is_rigid(system.xyz, shapes_full[:, small])
-    return out
+def _strain_free(system: System, Z: np.ndarray) -> np.ndarray:
+    """Per column of full-DOF motions ``Z``: whether the constraints admit it (``T q = Z``
+    with ``q`` its reduced coordinates) and its strain energy is round-off, judged as in
+    :func:`rigid_null_dimension` (``eps |q|^T |K| |q|``)."""
+    Q = Z[system.dofs]
+    free = system.free_dofs()
+    D = np.where(free[:, None], 0.0, system.T @ Q - Z)
+    admitted = np.linalg.norm(D, axis=0) <= 1e-9 * np.maximum(np.linalg.norm(Z, axis=0), 1e-300)
+    absQ = np.abs(Q)
+    energy = np.abs(np.einsum("ij,ij->j", Q, system.K @ Q))
+    bound = np.finfo(float).eps * np.einsum("ij,ij->j", absQ, abs(system.K) @ absQ)
+    return admitted & (energy <= 1e3 * bound)
 
 
 def _is_rigid(xyz: np.ndarray, Z: np.ndarray, tol: float = 1e-5) -> np.ndarray:

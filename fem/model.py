@@ -336,6 +336,8 @@ class Model:
         self._frames: list[tuple[np.ndarray, np.ndarray]] = []
         self.constraints: list[LinearConstraint] = []
         self.general: list[GeneralElements] = []
+        self._scalar: list[np.ndarray] = []
+        self._generalized: list[np.ndarray] = []
 
     # ------------------------------------------------------------------ nodes
     def add_nodes(self, ids, xyz) -> None:
@@ -353,6 +355,50 @@ class Model:
     def add_node(self, id: int, xyz) -> None:
         """Add one node."""
         self.add_nodes([id], [xyz])
+
+    def add_scalar_points(self, ids) -> None:
+        """Add scalar points (NASTRAN SPOINT): points with one DOF and no position.
+
+        A scalar point is a node whose only DOF is component 0 (``ux``); the other five are
+        held (they are no support: :attr:`has_supports` does not count them). Scalar
+        elements, general elements and constraints join it; it has no geometry, so the
+        free-body test (:mod:`trussid.fem.free_bodies`) accepts any motion of it.
+        """
+        ids = np.atleast_1d(_ids(ids, "add_scalar_points: ids"))
+        self.add_nodes(ids, np.zeros((len(ids), 3)))
+        self._scalar.append(ids)
+
+    def scalar_mask(self) -> np.ndarray:
+        """(n_nodes,) bool: scalar points, in node index order."""
+        mask = np.zeros(self.n_nodes, bool)
+        if self._scalar:
+            mask[np.atleast_1d(self.index_of(np.concatenate(self._scalar), what="a scalar point"))] = True
+        return mask
+
+    def add_generalized_coordinates(self, ids) -> None:
+        """Make scalar points ``ids`` the generalized coordinates of component modes
+        (NASTRAN QSET on SPOINTs).
+
+        With omitted DOFs (:meth:`omit`), the static (Guyan) condensation becomes a
+        Craig-Bampton reduction: the omitted DOFs follow the retained ones statically plus
+        the lowest ``len(ids)`` modes of the omitted DOFs with the retained ones held, whose
+        amplitudes are these points' DOFs (:func:`trussid.fem.reduction.craig_bampton`).
+        Points beyond the number of such modes are left out, as NASTRAN's AUTOSPC does.
+        """
+        ids = np.atleast_1d(_ids(ids, "add_generalized_coordinates: ids"))
+        self._generalized.append(ids)
+
+    def generalized_mask(self) -> np.ndarray:
+        """(n_nodes,) bool: scalar points holding component-mode amplitudes."""
+        mask = np.zeros(self.n_nodes, bool)
+        if self._generalized:
+            ids = np.concatenate(self._generalized)
+            idx = np.atleast_1d(self.index_of(ids, what="a generalized coordinate"))
+            if not self.scalar_mask()[idx].all():
+                bad = ids[~self.scalar_mask()[idx]][0]
+                raise ModelError(f"generalized coordinate {bad}: not a scalar point")
+            mask[idx] = True
+        return mask
 
     def set_node_frames(self, ids, frames) -> None:
         """Give nodes a displacement frame (NASTRAN's GRID CD).
@@ -681,8 +727,10 @@ class Model:
         self._fixed.append((nodes, parse_dofs(dofs)))
 
     def fixed_mask(self) -> np.ndarray:
-        """(n_nodes, 6) bool: supported DOFs, in node index order."""
+        """(n_nodes, 6) bool: supported DOFs, in node index order (and the five components
+        a scalar point does not have)."""
         mask = np.zeros((self.n_nodes, 6), dtype=bool)
+        mask[self.scalar_mask(), 1:] = True
         for nodes, comps in self._fixed:
             idx = self.index_of(nodes, what="a support")
             mask[np.ix_(np.atleast_1d(idx), comps.nonzero()[0])] = True

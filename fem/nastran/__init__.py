@@ -47,11 +47,12 @@ Conventions that matter
 
 from trussid.fem.nastran.conventions import BAR_SHEAR_FACTOR, CONVENTIONS, ROD_SHEAR_FACTOR
 from trussid.fem.nastran.deck import BdfInfo, EigenRequest
-from trussid.fem.nastran.entries import (HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS, NOTED_CARDS, OUTPUT_PARAMS,
-                                         RAW_CARDS, SECTION_TYPES, SUPPORTED_CARDS, THERMAL_CARDS)
+from trussid.fem.nastran.entries import (CASE_SELECTED_CARDS, HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS,
+                                         NOTED_CARDS, OUTPUT_PARAMS, RAW_CARDS, SECTION_TYPES, SUPPORTED_CARDS,
+                                         THERMAL_CARDS)
 from trussid.fem.nastran.reader import coord_axes, offset_spring_matrix, read_bdf
 from trussid.fem.nastran.writer import write_bdf
 
-__all__ = ["SUPPORTED_CARDS", "RAW_CARDS", "IGNORED_CARDS", "NOTED_CARDS", "THERMAL_CARDS", "HANDLED_PARAMS", "MODE_PARAMS",
-           "OUTPUT_PARAMS", "CONVENTIONS", "ROD_SHEAR_FACTOR", "BAR_SHEAR_FACTOR", "SECTION_TYPES",
+__all__ = ["SUPPORTED_CARDS", "RAW_CARDS", "IGNORED_CARDS", "NOTED_CARDS", "CASE_SELECTED_CARDS", "THERMAL_CARDS",
+           "HANDLED_PARAMS", "MODE_PARAMS", "OUTPUT_PARAMS", "CONVENTIONS", "ROD_SHEAR_FACTOR", "BAR_SHEAR_FACTOR", "SECTION_TYPES",
            "EigenRequest", "BdfInfo", "read_bdf", "coord_axes", "offset_spring_matrix", "write_bdf"]

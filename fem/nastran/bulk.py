@@ -171,6 +171,7 @@ class Prop:
     vars: tuple = ()  # PBUSH keywords given
     beam_type: str = ""  # PBARL/PBEAML section type
     dim: object = None  # PBARL dimensions; PBEAML (stations, dimensions)
+    xxb: tuple = (0.0,)  # PBEAM/PBEAML station positions X/XB, end A (0.0) first
     OD1: float = 0.0  # PTUBE outer diameters and wall thickness (None: solid)
     OD2: float | None = None
     t: float | None = None
@@ -472,13 +473,14 @@ def _pbeam(card: Card) -> Prop:
     pid = integer(card, 1, "PID")
     mid = integer(card, 2, "MID")
     a = [real(card, 3, "A")] + _reals(card, 4, 9, "section property")  # A I1 I2 I12 J NSM
-    stations = [a]
+    stations, xxb = [a], [0.0]
     n = len(card.fields)
     k = 9  # second line: stress recovery points at A, unless a station starts there
     if k < n and card.get(k) not in _SO:
         k += 8
     while k < n and card.get(k) in _SO:
         so = card.get(k)
+        xxb.append(real(card, k + 1, "X/XB"))
         vals = [real_or_blank(card, k + 2 + m, "section property") for m in range(6)]
         stations.append([a[m] if v is None else v for m, v in enumerate(vals)])
         k += 8
@@ -501,7 +503,7 @@ def _pbeam(card: Card) -> Prop:
     S = np.array(stations, float)
     return Prop("PBEAM", pid, mid, A=S[:, 0], i1=S[:, 1], i2=S[:, 2], i12=S[:, 3], j=S[:, 4], nsm=S[:, 5],
                 k1=k1, k2=k2, m1a=m1a, m2a=m2a, m1b=m1b, m2b=m2b, n1a=n1a, n2a=n2a, n1b=n1b, n2b=n2b,
-                nsia=nsia, nsib=nsib, cwa=cwa, cwb=cwb)
+                nsia=nsia, nsib=nsib, cwa=cwa, cwb=cwb, xxb=tuple(xxb))
 
 
 def _pbarl(card: Card) -> Prop:
@@ -525,14 +527,15 @@ def _pbarl(card: Card) -> Prop:
     dims = _reals(card, 9, 9 + ndim, "DIM", None)
     if any(d is None for d in dims):
         raise card.error(9 + dims.index(None), f"DIM{dims.index(None) + 1}(A) of {shape} is blank")
-    rows, nsms = [dims], [real_or_blank(card, 9 + ndim, "NSM", 0.0)]
+    rows, nsms, xxb = [dims], [real_or_blank(card, 9 + ndim, "NSM", 0.0)], [0.0]
     k = 10 + ndim
     while k < n and card.get(k) in _SO:
+        xxb.append(real(card, k + 1, "X/XB"))
         d = _reals(card, k + 2, k + 2 + ndim, "DIM", None)
         rows.append([dims[m] if v is None else v for m, v in enumerate(d)])
         nsms.append(real_or_blank(card, k + 2 + ndim, "NSM", nsms[0]))
         k += 3 + ndim
-    return Prop("PBEAML", pid, mid, nsm=np.array(nsms), beam_type=shape, dim=np.array(rows))
+    return Prop("PBEAML", pid, mid, nsm=np.array(nsms), beam_type=shape, dim=np.array(rows), xxb=tuple(xxb))
 
 
 def _pbush(card: Card) -> Prop:

@@ -13,8 +13,8 @@ from pathlib import Path
 from trussid.fem.errors import ModelError
 from trussid.fem.nastran.bulk import Bulk, build_bulk
 from trussid.fem.nastran.cards import nastran_value, parse_deck
-from trussid.fem.nastran.entries import (HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS, NOTED_CARDS, RAW_CARDS,
-                                         SUPPORTED_CARDS, THERMAL_CARDS)
+from trussid.fem.nastran.entries import (CASE_SELECTED_CARDS, HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS,
+                                         NOTED_CARDS, RAW_CARDS, SUPPORTED_CARDS, THERMAL_CARDS)
 
 __all__ = ['EigenRequest', 'BdfInfo']
 
@@ -212,16 +212,17 @@ def _check_cards(bdf: Bulk, path: Path, info: BdfInfo) -> None:
 
 
 def _check_selected(bdf: Bulk, path: Path, name: str) -> None:
-    """Refuse the noted entries that the case control makes count (rotordynamics, TFL)."""
+    """Refuse a noted entry that the case control makes count (:data:`CASE_SELECTED_CARDS`:
+    rotordynamics through RGYRO, transfer functions through TFL)."""
+    request = CASE_SELECTED_CARDS.get(name)
+    chosen = _case_values(bdf, request) if request else []
+    if not chosen:
+        return
     first = bdf.raw[name][0].label() if bdf.raw.get(name) else name
-    if name.startswith("ROTOR") and _case_values(bdf, "RGYRO"):
-        raise ModelError(f"{path}: {first}: RGYRO = {_case_values(bdf, 'RGYRO')[0]} in the case control asks for "
-                         f"rotordynamics (gyroscopic and spin terms), which trussid does not compute")
-    if name == "TF":
-        tfl = _case_values(bdf, "TFL")
-        if tfl:
-            raise ModelError(f"{path}: {first}: TFL = {tfl[0]} in the case control selects transfer functions, "
-                             f"which add terms to the equations of motion that trussid does not translate")
+    what = {"RGYRO": "asks for rotordynamics (gyroscopic and spin terms), which trussid does not compute",
+            "TFL": "selects transfer functions, which add terms to the equations of motion that trussid does "
+                   "not translate"}[request]
+    raise ModelError(f"{path}: {first}: {request} = {chosen[0]} in the case control {what}")
 
 
 def _first_ids(bdf: Bulk, bad: dict) -> str:

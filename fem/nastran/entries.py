@@ -6,8 +6,8 @@ from __future__ import annotations
 
 
 
-__all__ = ['SUPPORTED_CARDS', 'RAW_CARDS', 'IGNORED_CARDS', 'NOTED_CARDS', 'THERMAL_CARDS', 'HANDLED_PARAMS',
-           'MODE_PARAMS', 'OUTPUT_PARAMS', 'SECTION_TYPES']
+__all__ = ['SUPPORTED_CARDS', 'RAW_CARDS', 'IGNORED_CARDS', 'NOTED_CARDS', 'CASE_SELECTED_CARDS',
+           'THERMAL_CARDS', 'HANDLED_PARAMS', 'MODE_PARAMS', 'OUTPUT_PARAMS', 'SECTION_TYPES']
 
 
 #: Bulk-data cards :func:`read_bdf` translates.
@@ -61,16 +61,26 @@ IGNORED_CARDS = frozenset({
 })
 
 
-#: Entries accepted with a note saying why they cannot change the real modes (issue 33): the
-#: reason is printed with the entry's name. Rotor entries are refused when the case control
-#: selects rotordynamics (RGYRO); TF is refused when TFL selects it (both would add terms).
+#: Entries accepted with a note (in :attr:`BdfInfo.notes`, and listed in
+#: :attr:`BdfInfo.ignored`) saying why they cannot change the real modes (issue 33): the
+#: reason is printed with the entry's name. Those in :data:`CASE_SELECTED_CARDS` are refused
+#: instead when the case control selects them.
 NOTED_CARDS = {
     "EIGP": "poles for the complex eigenvalue search (CMETHOD), not used by real modes",
     "SEQGP": "grid point resequencing: the order of the equations, not the structure",
-    "ROTORD": "rotordynamics without RGYRO in the case control: the real modes are the structure's at rest",
-    "ROTORG": "rotordynamics without RGYRO in the case control: the real modes are the structure's at rest",
-    "TF": "transfer function not selected by TFL in the case control",
+    "SEQEP": "extra point resequencing: the order of the equations, not the structure",
     "EPOINT": "extra points belong to dynamic response (transfer functions), not to real modes",
+    "TF": "transfer function not selected by TFL in the case control",
+    **dict.fromkeys(("ROTORD", "ROTORG", "ROTORB", "RSPINR", "RSPINT", "UNBALNC"),
+                    "rotordynamics without RGYRO in the case control: the real modes are the structure's at rest"),
+}
+
+#: Noted entries that count when the case control selects them, with the selecting request:
+#: then refused, naming the entry. Rotordynamics (RGYRO) adds gyroscopic and spin-softening
+#: terms, and TFL adds transfer functions to the equations of motion; trussid computes neither.
+CASE_SELECTED_CARDS = {
+    **dict.fromkeys(("ROTORD", "ROTORG", "ROTORB", "RSPINR", "RSPINT", "UNBALNC"), "RGYRO"),
+    "TF": "TFL",
 }
 
 #: Temperature-dependent material entries: ignored like the above unless the deck gives

@@ -14,6 +14,8 @@ import numpy as np
 from trussid.fem.constraints import rbe3_constraint, rigid_element, rigid_transform
 from trussid.fem.elements import frame_matrices, local_axes, to_global
 from trussid.fem.errors import ModelError, UnitsWarning
+from trussid.fem.general_element import general_element_stiffness, lower_by_columns
+from trussid.fem.tapered import tapered_frame_matrices
 from trussid.fem.materials import wave_speed_problem
 from trussid.fem.model import Model
 from trussid.fem.sections import Section
@@ -98,6 +100,8 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
 
     node_ids, xyz, frames = _nodes(bdf)
     scalar = _scalar_points(bdf, set(node_ids.tolist()), info)
+    if not len(node_ids) and not scalar:
+        raise ModelError("the deck has no GRID cards (and no scalar points)")
     if scalar:
         # Scalar points become nodes of their own with only component 1 free (position and
         # frame are irrelevant: only scalar elements and MPCs join them).
@@ -128,11 +132,13 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
         raise ModelError(f"beam_theory must be 'euler-bernoulli' or 'timoshenko', got {beam_theory!r}")
 
     model = Model(beam_theory=info.beam_theory, mass=info.mass, name=path.stem)
-    model.add_nodes(node_ids, xyz)
+    n_grid = len(node_ids) - len(scalar)
+    if n_grid:
+        model.add_nodes(node_ids[:n_grid], xyz[:n_grid])
+    if scalar:
+        model.add_scalar_points(scalar)
     if nodes.frames is not None:
         model.set_node_frames(node_ids, nodes.frames)
-    if scalar:
-        model.fix(scalar, "23456")
     _add_bars(bdf, model, nodes, props)
     _add_rods(bdf, model, nodes, props, mats, info.wtmass)
     _nastran_mass_conventions(bdf, model, nodes, props, info)
@@ -212,10 +218,8 @@ def _nodes(bdf):
     cylindrical and spherical systems these depend on the position): returned as frames
     whose rows are the axes in basic.
     """
-    if not bdf.nodes:
-        if bdf.spoints:  # scalar points only: added by the caller
-            return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), None
-        raise ModelError("the deck has no GRID cards")
+    if not bdf.nodes:  # scalar points only (checked by the caller)
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), None
     if bdf.grdset is not None and bdf.grdset.seid:
         raise ModelError("GRDSET: superelements (SEID) are not supported")
     ids = np.fromiter(bdf.nodes.keys(), dtype=np.int64, count=len(bdf.nodes))
@@ -310,6 +314,7 @@ class _Prop:
     mat: dict
     nsm: float
     shear: bool
+    taper: tuple | None = None  # (stations x/L, section_at(xi) -> dict): a tapered PBEAM/PBEAML
 
 
 def _material(mats: dict, mid: int, label: str) -> dict:
@@ -366,11 +371,6 @@ def _properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict
             props[pid] = _Prop(label, "bar", sec, mat, float(p.nsm) * wtmass,
                                math.isfinite(k1) or math.isfinite(k2))
         elif p.type == "PBEAM":
-            for key in ("A", "i1", "i2", "j", "nsm"):
-                v = np.asarray(getattr(p, key), float)
-                if (v != v[0]).any():
-                    raise ModelError(f"{label}: tapered beam ({key} varies along the element) is not "
-                                     f"supported; give a constant section")
             if np.any(np.asarray(p.i12, float) != 0):
                 raise ModelError(f"{label}: I12 (non-principal axes) is not supported")
             for key in ("m1a", "m2a", "m1b", "m2b", "n1a", "n2a", "n1b", "n2b", "nsia", "nsib",
@@ -384,33 +384,23 @@ def _properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict
             A = float(p.A[0])
             sec = _sec(A, p.i2[0], p.i1[0], p.j[0], k1 * A, k2 * A)
             props[pid] = _Prop(label, "bar", sec, mat, float(p.nsm[0]) * wtmass,
-                               math.isfinite(k1) or math.isfinite(k2))
+                               math.isfinite(k1) or math.isfinite(k2), _pbeam_taper(p, k1, k2, wtmass, label))
         elif p.type in ("PBARL", "PBEAML"):
             shape = str(p.beam_type).strip().upper()
             if shape not in SECTION_TYPES:
                 raise ModelError(f"{label}: section type {shape} is not supported "
                                  f"(supported: {', '.join(SECTION_TYPES)})")
+            taper = None
             if p.type == "PBEAML":
                 dims = np.atleast_2d(np.asarray(p.dim, float))
                 nsm = np.atleast_1d(np.asarray(p.nsm, float))
                 if (dims != dims[0]).any() or (nsm != nsm[0]).any():
-                    raise ModelError(f"{label}: tapered beam (dimensions vary along the element) is "
-                                     f"not supported; give a constant section")
+                    taper = _pbeaml_taper(p, shape, _nu_for_shear(full), conventions, wtmass, label)
                 dims, nsm = dims[0], float(nsm[0])
             else:
                 dims, nsm = p.dim, float(p.nsm or 0.0)
-            s = _section_from_shape(shape, dims, _nu_for_shear(full), label)
-            asy, asz = s.Asy, s.Asz
-            if shape == "ROD":
-                # NASTRAN converts PBARL/PBEAML ROD to PBAR/PBEAM with K1 = K2 = 0.9 in the
-                # newest builds (Simcenter 2019.2, NX 2022 ~0.898, MSC 2012-13 OP2s); one
-                # MSC 2012 build used 6/7. Cowper's 6(1+nu)/(7+6nu) (0.886 at nu = 0.33)
-                # sits between them; 0.9 is what the recent decks of the corpus were run with.
-                asy = asz = ROD_SHEAR_FACTOR[conventions] * s.A
-            elif shape == "BAR":
-                asy = asz = BAR_SHEAR_FACTOR * s.A
-            props[pid] = _Prop(label, "bar", _sec(s.A, s.Iy, s.Iz, s.J, asy, asz), mat,
-                               nsm * wtmass, True)
+            props[pid] = _Prop(label, "bar", _shape_section(shape, dims, _nu_for_shear(full), conventions, label),
+                               mat, nsm * wtmass, True, taper)
         elif p.type == "PROD":
             props[pid] = _Prop(label, "rod", _rod_sec(p.A, p.j), mat, float(p.nsm) * wtmass, False)
         elif p.type == "PTUBE":
@@ -421,6 +411,60 @@ def _properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict
             s = Section.circle(r, name=label) if t >= r else Section.tube(r, t, name=label)
             props[pid] = _Prop(label, "rod", _rod_sec(s.A, s.J), mat, float(p.nsm) * wtmass, False)
     return props
+
+
+def _shape_section(shape: str, dims, nu: float, conventions: str, label: str) -> dict:
+    """Section arrays of a PBARL/PBEAML shape with NASTRAN's shear factors."""
+    s = _section_from_shape(shape, dims, nu, label)
+    asy, asz = s.Asy, s.Asz
+    if shape == "ROD":
+        # NASTRAN converts PBARL/PBEAML ROD to PBAR/PBEAM with K1 = K2 = 0.9 in the
+        # newest builds (Simcenter 2019.2, NX 2022 ~0.898, MSC 2012-13 OP2s); one
+        # MSC 2012 build used 6/7. Cowper's 6(1+nu)/(7+6nu) (0.886 at nu = 0.33)
+        # sits between them; 0.9 is what the recent decks of the corpus were run with.
+        asy = asz = ROD_SHEAR_FACTOR[conventions] * s.A
+    elif shape == "BAR":
+        asy = asz = BAR_SHEAR_FACTOR * s.A
+    return _sec(s.A, s.Iy, s.Iz, s.J, asy, asz)
+
+
+def _stations(xxb, label: str) -> np.ndarray:
+    """Station positions x/L of a tapered PBEAM/PBEAML: 0 (end A) ... 1 (end B), ascending."""
+    x = np.asarray(xxb, float).ravel()
+    if len(x) < 2 or x[0] != 0.0 or x[-1] != 1.0 or not (np.diff(x) > 0).all():
+        raise ModelError(f"{label}: stations X/XB must ascend from 0 to 1.0 (end B), got {x.tolist()}")
+    return x
+
+
+def _pbeam_taper(p, k1: float, k2: float, wtmass: float, label: str):
+    """``(stations, section_at)`` of a PBEAM whose properties vary (NASTRAN: linearly between
+    stations), or None for a uniform one. I2 bends about element y, I1 about z."""
+    cols = {key: np.asarray(getattr(p, key), float).ravel() for key in ("A", "i1", "i2", "j", "nsm")}
+    if all((v == v[0]).all() for v in cols.values()):
+        return None
+    x = _stations(p.xxb, label)
+
+    def at(xi):
+        f = {key: np.interp(xi, x, v) for key, v in cols.items()}
+        return {"A": f["A"], "Iy": f["i2"], "Iz": f["i1"], "J": f["j"], "Asy": k1 * f["A"],
+                "Asz": k2 * f["A"], "nsm": f["nsm"] * wtmass}
+    return x, at
+
+
+def _pbeaml_taper(p, shape: str, nu: float, conventions: str, wtmass: float, label: str):
+    """``(stations, section_at)`` of a PBEAML whose dimensions vary: dimensions and NSM linear
+    between stations, the section computed from the dimensions at each point."""
+    x = _stations(p.xxb, label)
+    dims = np.atleast_2d(np.asarray(p.dim, float))
+    nsm = np.asarray(p.nsm, float).ravel()
+
+    def at(xi):
+        d = np.stack([np.interp(xi, x, dims[:, k]) for k in range(dims.shape[1])], 1)
+        rows = [_shape_section(shape, di, nu, conventions, label) for di in d]
+        out = {key: np.array([r[key] for r in rows]) for key in ("A", "Iy", "Iz", "J", "Asy", "Asz")}
+        out["nsm"] = np.interp(xi, x, nsm) * wtmass
+        return out
+    return x, at
 
 
 def _nu_for_shear(mat: dict) -> float:
@@ -491,6 +535,9 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         if bad.any():
             raise ModelError(f"{card} {eids[bad][0]}: no orientation (give X1-X3 or G0)")
         mat, nsm = prop.mat, prop.nsm
+        if prop.taper is not None:
+            _add_tapered(model, group, ends, xyz, orient, prop, eids)
+            continue
         if prop.section["A"] == 0 or prop.mat["G"] == 0:
             _add_spring_bars(model, group, xyz, orient, prop, eids)
             continue
@@ -504,6 +551,21 @@ def _add_bars(bdf, model: Model, nodes: _NodeTable, props: dict) -> None:
         pinned = np.array([bool(e.pa or e.pb) for e in group])
         if pinned.any():
             _add_pin_flags(model, [e for e, p in zip(group, pinned) if p], xyz[pinned], orient[pinned], prop)
+
+
+def _add_tapered(model: Model, elems: list, ends: np.ndarray, xyz: np.ndarray, orient: np.ndarray,
+                 prop: _Prop, eids: np.ndarray) -> None:
+    """CBEAMs of a tapered PBEAM/PBEAML, integrated along the element
+    (:func:`trussid.fem.tapered.tapered_frame_matrices`), added as element matrices."""
+    card = f"{elems[0].type} {eids[0]}"
+    if any(e.pa or e.pb for e in elems):
+        raise ModelError(f"{card}: pin flags on a tapered beam ({prop.label}) are not supported")
+    L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
+    breaks, at = prop.taper
+    K, M = tapered_frame_matrices(L, breaks, at, prop.mat["E"], prop.mat["G"], prop.mat["rho"],
+                                  theory=model.beam_theory, mass=model.mass_formulation,
+                                  torsion_lumped=elems[0].type == "CBEAM", label=prop.label)
+    model.add_matrices(eids, ends, K=to_global(K, R), M=to_global(M, R), label=f"{prop.label} (tapered)")
 
 
 def _add_spring_bars(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarray, prop: _Prop,
@@ -959,9 +1021,13 @@ def _dof_matrix(nodes: _NodeTable, dofs: list, card: str, eid: int) -> tuple[lis
     """(grids, A): A maps the grids' 6-DOF vectors (basic) to the listed (grid, component) DOFs."""
     grids = list(dict.fromkeys(g for g, _ in dofs))
     pos = {g: i for i, g in enumerate(grids)}
+    spoints = getattr(nodes, "spoints", set())
+    dofs = [(g, 1 if g in spoints and c == 0 else c) for g, c in dofs]  # a scalar point's DOF
     for g, c in dofs:
+        if g in spoints and c != 1:
+            raise ModelError(f"{card}: scalar point {g} has component 0 only, got {c}")
         if not 1 <= c <= 6:
-            raise ModelError(f"{card}: component {c} of grid {g} must be 1-6 (scalar points are not supported)")
+            raise ModelError(f"{card}: component {c} of grid {g} must be 1-6 (0 or blank only on a scalar point)")
     vec = nodes.dof_vectors([g for g, _ in dofs], [c for _, c in dofs], card.split()[0], [eid] * len(dofs))
     A = np.zeros((len(dofs), 6 * len(grids)))
     for k, (g, _c) in enumerate(dofs):
@@ -993,49 +1059,77 @@ def _add_conm1(bdf, model: Model, nodes: _NodeTable, wtmass: float) -> None:
         model.add_matrices([eid], [[g]], M=[M * wtmass], label="CONM1")
 
 
-def _add_genel(bdf, model: Model, nodes: _NodeTable) -> None:
-    """GENEL: a general element given by its stiffness K or flexibility Z with rigid-body matrix S.
+def _genel_fields(f: list, card: str) -> tuple[list, list, str, list, list | None]:
+    """``(ui, ud, kind, terms, s_terms)`` of a GENEL from its flat fields (``f[1]`` = EID).
 
-    UI (m DOFs) and UD (n DOFs) pairs, then K or Z (lower triangle by columns, m x m), then
-    optionally S (m x n, by rows). With Z, K = Z^-1; the element's stiffness on (UI, UD) is
-    ``[[K, -K S], [-S^T K, S^T K S]]`` (NASTRAN QRG, GENEL), so that the UD DOFs moving as
-    the rigid motion S leaves it unstrained.
+    Positional, as the QRG lays the entry out: (grid or scalar point, component) pairs from
+    field 4 of the first line and from field 2 of each continuation (a blank component is a
+    scalar point's 0, a pair of blanks is padding); the keywords UD, K or Z, and S start a
+    continuation (field 2, flat index 1 + 8 j); UD pairs start after one blank field, the
+    K/Z and S terms right after their keyword, running on over continuations. A term list
+    may end with blank padding, but a blank inside it is refused (not silently 0.0).
     """
+    f = [x.strip().upper() for x in f] + [""] * 2
+    keyword = lambda k, names: k < len(f) and f[k] in names and (k - 1) % 8 == 0
+
+    def pairs(k: int, stop: tuple) -> tuple[list, int]:
+        out = []
+        while k < len(f) - 2 and not keyword(k, stop):
+            g, c = f[k], f[k + 1]
+            if g:
+                out.append((int(g), int(c) if c else 0))
+            elif c:
+                raise ModelError(f"{card}: component {c} without a grid or scalar point")
+            k += 2
+        return out, k
+
+    def terms(seg: list, name: str) -> list:
+        while seg and not seg[-1]:
+            seg = seg[:-1]
+        if "" in seg:
+            raise ModelError(f"{card}: a blank field inside the {name} terms (write 0.0)")
+        return [float(_nastran_value(v)) for v in seg]
+
+    ui, k = pairs(3, ("UD", "K", "Z", "S"))
+    ud = []
+    if keyword(k, ("UD",)):
+        ud, k = pairs(k + 2, ("K", "Z", "S"))
+    if not keyword(k, ("K", "Z")):
+        raise ModelError(f"{card}: no K or Z matrix given (a continuation starting with K or Z)")
+    kind = f[k]
+    s_at = next((j for j in range(k + 1, len(f)) if keyword(j, ("S",))), None)
+    kz = terms(f[k + 1:s_at], kind)
+    s_terms = terms(f[s_at + 1:], "S") if s_at is not None else None
+    return ui, ud, kind, kz, s_terms
+
+
+def _add_genel(bdf, model: Model, nodes: _NodeTable) -> None:
+    """GENEL: a general element given by its stiffness K or flexibility Z with rigid-body
+    matrix S (:func:`trussid.fem.general_element.general_element_stiffness`), on grid
+    components or scalar points."""
     for eid, f in _raw_cards(bdf, "GENEL"):
         card = f"GENEL {eid}"
-        vals = [v for v in f[2:] if v]
         try:
-            keys = {k: vals.index(k) for k in ("UD", "K", "Z", "S") if k in vals}
-            mat_key = "K" if "K" in keys else "Z" if "Z" in keys else None
-            if mat_key is None:
-                raise ModelError(f"{card}: no K or Z matrix given")
-            end_ui = keys.get("UD", keys[mat_key])
-            ui = [(int(g), int(c or 0)) for g, c in zip(vals[0:end_ui:2], vals[1:end_ui:2])]
-            ud = ([(int(g), int(c or 0)) for g, c in zip(vals[end_ui + 1:keys[mat_key]:2],
-                                                          vals[end_ui + 2:keys[mat_key]:2])]
-                  if "UD" in keys else [])
-            end_m = keys.get("S", len(vals))
-            tri = [float(_nastran_value(v)) for v in vals[keys[mat_key] + 1:end_m]]
-            svals = [float(_nastran_value(v)) for v in vals[end_m + 1:]] if "S" in keys else []
+            ui, ud, kind, kz, s_terms = _genel_fields(f, card)
+        except ModelError:
+            raise
         except (ValueError, TypeError):
-            raise ModelError(f"{card}: malformed entry") from None
+            raise ModelError(f"{card}: malformed entry (a grid or component that is not an integer, "
+                             f"or a term that is not a number)") from None
         m, n = len(ui), len(ud)
-        if len(tri) != m * (m + 1) // 2:
-            raise ModelError(f"{card}: {mat_key} needs {m * (m + 1) // 2} terms for {m} UI DOFs, got {len(tri)}")
-        if "S" in keys and len(svals) != m * n:
-            raise ModelError(f"{card}: S needs {m * n} terms ({m} UI x {n} UD), got {len(svals)}")
-        KZ = np.zeros((m, m))
-        KZ[np.triu_indices(m)] = tri  # columns of the lower triangle = rows of the upper one
-        KZ = KZ + np.triu(KZ, 1).T
-        if mat_key == "Z":
-            try:
-                K = np.linalg.inv(KZ)
-            except np.linalg.LinAlgError:
-                raise ModelError(f"{card}: the flexibility matrix Z is singular") from None
-        else:
-            K = KZ
-        S = np.asarray(svals, float).reshape(m, n) if n and svals else np.zeros((m, n))
-        full = np.block([[K, -K @ S], [-S.T @ K, S.T @ K @ S]]) if n else K
+        if not m:
+            raise ModelError(f"{card}: no UI (independent) DOFs given")
+        matrix = lower_by_columns(kz, m, card, kind)
+        S = None
+        if n:
+            if s_terms is None:
+                raise ModelError(f"{card}: UD DOFs given without the S matrix")
+            if len(s_terms) != m * n:
+                raise ModelError(f"{card}: S needs {m * n} terms ({m} UI x {n} UD), got {len(s_terms)}")
+            S = np.asarray(s_terms, float).reshape(m, n)  # by rows: S11, S12, ..., S21, ...
+        elif s_terms:
+            raise ModelError(f"{card}: S given without UD DOFs")
+        full = general_element_stiffness(matrix, kind, S, card)
         grids, A = _dof_matrix(nodes, ui + ud, card, eid)
         Kg = A.T @ full @ A
         model.add_matrices([eid], [grids], K=[0.5 * (Kg + Kg.T)], label="GENEL")
@@ -1083,10 +1177,7 @@ def _add_mpcs(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
         sets.append(sid)
         for add in bdf.mpcadds.get(sid, []):
             stack.extend(add.sets)
-    qpoints = set()
-    for q in getattr(bdf, "qsets", []):
-        qpoints |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
-    qpoints &= set(getattr(bdf, "spoints", {}) or {})
+    qpoints = set(_qset_points(bdf)) & bdf.spoints
     for sid in sets:
         for k, c in enumerate(bdf.mpcs.get(sid, [])):
             card = f"MPC {sid}"
@@ -1125,29 +1216,37 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     def mask_of(cards, what):
         mask = np.zeros((n, 6), bool)
         for c in cards:
-            ids = np.asarray(c.ids if hasattr(c, "ids") else c.node_ids, dtype=np.int64)
+            ids = np.asarray(c.ids, dtype=np.int64)
+            # OMIT/ASET pairs carry a component per id; OMIT1/ASET1 one for all
             comps = c.components if isinstance(c.components, list) else [c.components] * len(ids)
             idx = nodes.index(ids, what, np.zeros(len(ids), dtype=np.int64))
-            for i, cm in zip(np.atleast_1d(idx), comps):
-                mask[i, _comps(cm, what)] = True
+            for g, i, cm in zip(ids.tolist(), np.atleast_1d(idx), comps):
+                # component 0 (or blank) is a scalar point's only DOF
+                on_spoint = g in nodes.spoints and str(cm).strip() in ("0", "", "None")
+                mask[i, [0] if on_spoint else _comps(cm, what)] = True
         return mask
 
-    omits = getattr(bdf, "omits", [])
-    asets = getattr(bdf, "asets", [])
+    omits, asets = bdf.omits, bdf.asets
     if omits or asets:
         omitted = mask_of(omits, "OMIT")
         if asets:
             omitted |= ~mask_of(asets, "ASET")
+        qpoints = _qset_points(bdf) if _component_mode_reduction(bdf) else []
+        if qpoints:
+            omitted[nodes.index(qpoints, "QSET", np.zeros(len(qpoints), dtype=np.int64))] = False
+            model.add_generalized_coordinates(qpoints)
         for c in range(6):
             sel = omitted[:, c]
             if sel.any():
                 model.omit(nodes.ids[sel], str(c + 1))
-        info.notes.append(f"OMIT/ASET: {int(omitted.sum())} DOFs condensed by Guyan reduction, as "
-                          f"NASTRAN does (exact for DOFs without mass)")
-    spoints = set(getattr(bdf, "spoints", {}) or {})
-    bsets, qsets = getattr(bdf, "bsets", []), getattr(bdf, "qsets", [])
+        info.notes.append(f"OMIT/ASET: {int(omitted.sum())} DOFs condensed by "
+                          + (f"Craig-Bampton reduction, the lowest {len(qpoints)} fixed-interface modes on the "
+                             f"QSET scalar points, as NASTRAN does" if qpoints else
+                             "Guyan reduction, as NASTRAN does (exact for DOFs without mass)"))
+    spoints = bdf.spoints
+    bsets, qsets = bdf.bsets, bdf.qsets
     for c in qsets:
-        ids = [int(g) for g in (c.ids if hasattr(c, "ids") else c.node_ids)]
+        ids = [int(g) for g in c.ids]
         grids = [g for g in ids if g not in spoints]
         if grids:
             raise ModelError(f"{c.type} {grids[0]}: modal (Q-set) DOFs on grid points are not supported; "
@@ -1155,7 +1254,7 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
     if bsets:
         extseout = _case_has(bdf, "EXTSEOUT")
         if not (qsets or extseout):
-            g0 = (bsets[0].ids if hasattr(bsets[0], "ids") else bsets[0].node_ids)[0]
+            g0 = bsets[0].ids[0]
             raise ModelError(f"{bsets[0].type} (grid {g0}): a boundary set without QSET or EXTSEOUT (residual-structure "
                              f"B-set analysis) is not supported")
         held = mask_of(bsets, bsets[0].type)
@@ -1166,15 +1265,15 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
                           f"prints its fixed-interface (Craig-Bampton) modes, which these are"
                           + (f"; QSET on {len(spoints)} scalar points: modal coordinates of the reduction, "
                              f"no part of these modes" if qsets else ""))
-    suport = getattr(bdf, "suport", []) + list(getattr(bdf, "suport1", {}).values())
+    suport = bdf.suport + list(bdf.suport1.values())
     sol = (bdf.solution[0] or "").split(",")[0]
     if suport and sol == "31":
         # MYSTRAN SOL 31 is a Craig-Bampton reduction whose boundary is the SUPORT set: its
         # printed eigenvalues are those of the structure with that boundary held.
         held = np.zeros((n, 6), bool)
         for c in suport:
-            ids = np.asarray(c.nodes if hasattr(c, "nodes") else c.IDs, dtype=np.int64)
-            comps = c.Cs if hasattr(c, "Cs") else c.components
+            ids = np.asarray(c.ids, dtype=np.int64)
+            comps = c.components if isinstance(c.components, list) else [c.components] * len(ids)
             idx = nodes.index(ids, "SUPORT", np.zeros(len(ids), dtype=np.int64))
             for i, cm in zip(np.atleast_1d(idx), comps):
                 held[i, _comps(cm, "SUPORT")] = True
@@ -1193,37 +1292,76 @@ def _add_dof_sets(bdf, model: Model, nodes: _NodeTable, info: BdfInfo) -> None:
 SCALAR_POINT_CARDS = ("CELAS3", "CELAS4", "CMASS3", "CMASS4")
 
 
-def _scalar_point_refs(bdf) -> set:
-    """Scalar points that scalar elements or selected MPCs reference (besides Q-set points)."""
+def _scalar_point_refs(bdf) -> tuple[set, set]:
+    """Scalar points that scalar elements, and selected MPCs, reference (besides Q-set points).
+
+    A scalar element's points need no SPOINT entry (QRG, CELASi/CMASSi remarks): they are
+    defined by the reference. An MPC's are not.
+    """
     refs = set()
     for e in list(bdf.elements.values()) + list(bdf.masses.values()):
         if e.type in ("CELAS1", "CELAS2", "CMASS1", "CMASS2"):
             refs |= {int(n) for n, c in zip(list(e.nodes), (e.c1, e.c2)) if n and not c}
     for name in SCALAR_POINT_CARDS:
-        for _eid, f in _raw_cards(bdf, name):
+        for eid, f in _raw_cards(bdf, name):
             for k in (3, 4, 7, 8):
                 if k < len(f) and f[k]:
-                    refs.add(int(f[k]))
+                    try:
+                        refs.add(int(f[k]))
+                    except ValueError:
+                        raise ModelError(f"{name} {eid}: scalar point field {k} is {f[k]!r}, not a point id") from None
+    mpc_refs = set()
     for sid in _case_int(bdf, "MPC")[:1]:
         for c in bdf.mpcs.get(int(sid), []):
-            refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
-    return refs
+            mpc_refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
+    for eid, f in _raw_cards(bdf, "GENEL"):  # a GENEL's scalar points need their SPOINT, like an MPC's
+        try:
+            ui, ud, *_ = _genel_fields(f, f"GENEL {eid}")
+        except (ModelError, ValueError, TypeError):
+            continue  # reported, naming the entry, when the element is built
+        mpc_refs |= {g for g, c in ui + ud if c == 0}
+    return refs, mpc_refs
+
+
+def _qset_points(bdf) -> list:
+    """Ids on QSET/QSET1 entries, in deck order (each once)."""
+    ids = []
+    for q in bdf.qsets:
+        ids.extend(int(n) for n in q.ids)
+    return list(dict.fromkeys(ids))
+
+
+def _component_mode_reduction(bdf) -> bool:
+    """QSET with ASET/OMIT and no BSET: a Craig-Bampton reduction whose modes are solved (the
+    B-set case prints the fixed-interface modes instead, see :func:`_add_dof_sets`)."""
+    return bool(bdf.qsets) and bool(bdf.asets or bdf.omits) and not bdf.bsets
 
 
 def _scalar_points(bdf, grids: set, info: BdfInfo) -> list:
     """Ids of the SPOINTs that something connects (sorted); the others are noted and ignored."""
-    spoints = set(getattr(bdf, "spoints", {}) or {})
-    qset = set()
-    for q in getattr(bdf, "qsets", []):
-        qset |= {int(n) for n in (q.ids if hasattr(q, "ids") else q.node_ids)}
-    refs = _scalar_point_refs(bdf) - qset
-    missing = sorted(refs - spoints - grids)
+    spoints = set(bdf.spoints)
+    qset = set(_qset_points(bdf))
+    elem_refs, mpc_refs = _scalar_point_refs(bdf)
+    if _component_mode_reduction(bdf) and (elem_refs | mpc_refs) & qset:
+        q = min((elem_refs | mpc_refs) & qset)
+        raise ModelError(f"QSET {q}: scalar point {q} holds a component mode's amplitude (Craig-Bampton with "
+                         f"ASET/OMIT), but a scalar element, MPC or GENEL also references it")
+    elem_refs, mpc_refs = elem_refs - qset, mpc_refs - qset
+    missing = sorted(mpc_refs - spoints - grids - elem_refs)
     if missing:
-        raise ModelError(f"scalar point {missing[0]} is referenced (component 0 or a CELAS3/4, CMASS3/4) but "
-                         f"no SPOINT defines it")
+        raise ModelError(f"scalar point {missing[0]} is referenced by an MPC or GENEL (component 0) but no "
+                         f"SPOINT or scalar element defines it")
     clash = sorted(spoints & grids)
     if clash:
         raise ModelError(f"SPOINT {clash[0]}: the id is also a GRID")
+    implicit = sorted(elem_refs - spoints - grids)
+    if implicit:
+        info.notes.append(f"scalar point(s) {', '.join(map(str, implicit[:5]))}{' ...' if len(implicit) > 5 else ''} "
+                          f"defined by the scalar elements that reference them (no SPOINT needed, as NASTRAN)")
+    spoints = spoints | set(implicit)
+    refs = elem_refs | mpc_refs
+    if _component_mode_reduction(bdf):
+        refs |= qset  # the generalized coordinates of the reduction
     used = sorted(refs & spoints)
     idle = sorted(spoints - refs - qset)
     if idle:

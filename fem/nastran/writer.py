@@ -188,6 +188,7 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
         ("linear constraints (add_constraint)", bool(getattr(model, "constraints", None))),
         ("node displacement frames", model.node_frames() is not None if hasattr(model, "node_frames") else False),
         ("omitted DOFs", bool(model.omitted_mask().any()) if hasattr(model, "omitted_mask") else False),
+        ("scalar points", bool(model.scalar_mask().any()) if hasattr(model, "scalar_mask") else False),
     ) if present]
     if unwritable:
         raise ModelError(f"write_bdf: the model has {', '.join(unwritable)}, which this writer does not "

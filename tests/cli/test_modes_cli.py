@@ -169,3 +169,27 @@ def test_op2_onto_a_directory_is_one_line_and_leaves_no_file(tmp_path, cli):
     target.mkdir()
     one_line_error(cli(FRAME, "--n", "2", "--op2", target))
     assert list(tmp_path.iterdir()) == [target] and not list(target.iterdir())
+
+
+def test_decks_from_the_field_of_issue_33_run_from_the_command_line(tmp_path, cli):
+    """Two decks NASTRAN solves that were refused before: a scalar-point string without GRID
+    or SPOINT cards, and a free point mass tied by an MPC to a scalar point (0 Hz first)."""
+    string = tmp_path / "string.bdf"
+    n, k, m = 40, 1000.0, 0.5
+    string.write_text("BEGIN BULK\n" + "".join(f"CMASS4,{i},{m},{i}\nCELAS4,{100 + i},{k},{i},{i + 1}\n"
+                                              for i in range(1, n)) + f"CMASS4,{n},{m},{n}\nCELAS4,200,{k},{n}\n"
+                      f"CELAS4,201,{k},1\nENDDATA\n")
+    res = cli(string, "--json", "--n", "3")
+    assert res.returncode == 0, res.stderr
+    j = np.arange(1, 4)
+    np.testing.assert_allclose(json.loads(res.stdout)["frequencies_hz"],
+                               2 * math.sqrt(k / m) * np.sin(j * math.pi / (2 * (n + 1))) / (2 * math.pi), rtol=1e-9)
+    free = tmp_path / "free.bdf"
+    free.write_text("SOL 103\nCEND\nMPC = 10\nBEGIN BULK\nGRID,1,,0.,0.,0.,,123456\nGRID,2,,1.,0.,0.,,23456\n"
+                    "GRID,3,,2.,0.,0.,,23456\nSPOINT,100\nEPOINT,200\nCELAS2,1,1000.,1,1,2,1\nCONM2,2,2,,1.\n"
+                    "CONM2,3,3,,2.\nMPC,10,3,1,1.,100,0,-1.\nTF,5,200,,1.,0.,0.\nENDDATA\n")
+    res = cli(free, "--json", "--n", "5")
+    assert res.returncode == 0, res.stderr
+    f = json.loads(res.stdout)["frequencies_hz"]
+    assert f[0] == 0.0
+    np.testing.assert_allclose(f[1:], [math.sqrt(1000.0) / (2 * math.pi)], rtol=1e-12)
