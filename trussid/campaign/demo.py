@@ -64,13 +64,14 @@ from trussid._util.files import atomic_directory, atomic_path
 from trussid._util.jsonio import json_safe
 from trussid.campaign.adapt import demo_section as adapt_demo_section
 from trussid.campaign.adapt import write_files as write_adapt_files
-from trussid.campaign.control import LoopSettings, demo_section
+from trussid.campaign.control import demo_section
 from trussid.campaign.report import report_markdown
 from trussid.campaign.structure import DEFAULT_SNR_DB
-from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
+from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
                                       DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
                                       PlantSummary, Provenance, ReportFiles)
 from trussid.geometry.lab import G0, lab_record
+from trussid.lqg.grading import LoopSettings
 from trussid.plid.datafile import with_channels, write_data
 from trussid.plid.estimator import PLID, PLIDWarning
 from trussid.plid.evaluate import compare
@@ -884,7 +885,8 @@ def _adapt_section(tp, fits, records, settings, timings, say):
 def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings, prov, t0,
                   t_start, control=None, adapted=None) -> DemoSummary:
     """Every file of the report into ``out`` (the temporary directory); the summary.
-    ``control``: the closed-loop section ``(markdown, figures, summary)`` or None;
+    ``control``: the closed-loop section and its figures (:func:`trussid.campaign.control.
+    demo_section`) or None;
     ``adapted``: :func:`trussid.campaign.adapt.demo_section`'s result or None."""
     files = write_files(out, records, fits, truth, tp.lab)
     files.figures = write_figures(out, records, fits, h1s, truth, settings)
@@ -901,8 +903,8 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
         format_version=1, provenance=prov, settings=settings, plant=plant_section(tp),
         experiments=experiment_summary(records, settings), models=models, files=files,
         timings_s=timings,
-        control=None if control is None else ClosedLoopSection(control[0], control[2]),
-        adapt=None if adapted is None else ClosedLoopSection(adapted[0], adapted[2]))
+        control=None if control is None else control[0],
+        adapt=None if adapted is None else AdaptSection(adapted[0], adapted[2]))
     timings["report"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
     with atomic_path(out / "summary.json") as tmp:

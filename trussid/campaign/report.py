@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import math
 
-from trussid.campaign.summary import DemoSummary, Provenance
+from trussid.campaign.loop_report import closed_loop_markdown
+from trussid.campaign.summary import ClosedLoopSection, DemoSummary, Provenance
 
 __all__ = ["report_markdown", "provenance_lines", "lacks_lines"]
 
@@ -155,8 +156,15 @@ def report_markdown(s: DemoSummary) -> str:
           "Models: " + ", ".join(s.files.models), "",
           "All metrics: `summary.json`.", ""]
     md = "\n".join(L)
-    return (md + ("\n" + s.control.markdown if s.control is not None else "")
+    return (md + ("\n" + control_markdown(s.control) if s.control is not None else "")
             + ("\n" + s.adapt.markdown if s.adapt is not None else ""))
+
+
+def control_markdown(section: ClosedLoopSection) -> str:
+    """The closed-loop section, rendered from its typed summary (or why there is none)."""
+    if section.summary is None:
+        return f"## Closed loop: active damping\n\nNo controller designed: {section.error}.\n"
+    return closed_loop_markdown(section.summary, "##", section.figures)
 
 
 def provenance_lines(pv: Provenance) -> list:
