@@ -426,6 +426,8 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
     label : str, optional
         Text after mode number and frequency in the title; default ``labels[mode - 1]``,
         then ``modes.labels[mode - 1]`` when present.
+    labels : sequence of str, optional
+        One text per mode (``label`` of mode ``mode`` when ``label`` is not given).
     n_samples : int
         Points per beam element for the Hermite interpolation (>= 2).
     n_sides : int
@@ -747,7 +749,7 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
     antialias : bool
         4x multisampling; off by default for GIFs (it more than doubles the time per frame
         in software rendering, and the 255-colour palette blurs the gain).
-    Others
+    model, modes, mode, window_size, scale, amplitude, label, labels, decorations, view, show_ghost, cmap, n_samples
         As :func:`render_mode`.
 
     Returns
@@ -817,7 +819,7 @@ def render_mode_grid(model: Model, modes, n: int = 6, out=None, *, ncols: int | 
         Whole image [pixels]; default 420 x 340 per cell.
     out : path-like, optional
         PNG file to write (atomically).
-    Others
+    model, modes, scale, amplitude, labels, decorations, view, show_ghost, cmap, n_samples
         As :func:`render_mode`; ``scale``, when given, applies to every mode.
 
     Returns

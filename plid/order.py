@@ -76,8 +76,12 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
         Sample time [s].
     u_val, y_val : arrays, optional
         Validation data; default the last ``holdout`` of the record.
+    holdout : float
+        Fraction of the record held out for validation when ``u_val, y_val`` are not given.
     band : (lo, hi) Hz, optional
         Band of the FRF change; default (1 %, 49 %) of fs.
+    n_freq : int
+        Frequencies of the FRF change in ``band``.
     method : {"plid", "subspace"}
         ``"plid"``: :func:`trussid.plid.recipe.identify` (subspace start); ``"subspace"``: the
         N4SID prior only (quicker).

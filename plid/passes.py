@@ -56,6 +56,10 @@ def multipass(u, y, order: int, dt: float, schedule, *, basis: ObserverBasis | N
         Start of the first pass (else theta = 0).
     R, N : covariances (scaled units) for every pass.
     form : {"direct", "sqrt"}
+    progress : bool or None
+        A tqdm bar per pass (None: shown when the pass is slow).
+    history_every : int
+        Keep the parameter estimate every this many samples (0: none kept).
 
     Returns
     -------

@@ -119,6 +119,8 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         candidate refined by prediction error with ``A, B, C, D`` fixed and the predictor
         kept stable (:func:`trussid.plid.pem.refine_gain`); the plant and its simulation
         fit are unchanged.
+    progress : bool or None
+        A tqdm bar over the PLID passes (None: shown when the record is long).
 
     Returns
     -------

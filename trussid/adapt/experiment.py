@@ -84,7 +84,11 @@ def run_loop(plant, controller, d, noise_rms, *, adc_full_scale, dac_full_scale,
     noise_rms : float or (p,) float
         White sensor noise RMS [V].
     adc_full_scale, dac_full_scale : float or array
-        Converter ranges [V]; ``bits`` their resolution.
+        Converter ranges [V].
+    bits : int
+        The converters' resolution.
+    seed : int
+        Seed of the sensor noise.
     x_plant, x_controller : array, optional
         Initial states (default rest).
 

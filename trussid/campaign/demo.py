@@ -66,7 +66,7 @@ from trussid.campaign.adapt import demo_section as adapt_demo_section
 from trussid.campaign.adapt import write_files as write_adapt_files
 from trussid.campaign.control import demo_section
 from trussid.campaign.report import report_markdown
-from trussid.campaign.structure import DEFAULT_SNR_DB
+from trussid.campaign.structure import DEFAULT_SNR_DB, STRUCTURAL_DAMPING_MAX
 from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
                                       DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
                                       PlantSummary, Provenance, ReportFiles)
@@ -532,9 +532,6 @@ def _mode_checks(poles, modes, model, truth) -> list[ModeCheck]:
     return rows
 
 
-#: A true or identified pole with a damping ratio above this is not a structural mode (the
-#: plant's filter and amplifier poles are real: damping 1).
-MODE_DAMPING_MAX = 0.5
 #: Relative frequency error within which an identified mode counts as the true one found.
 FOUND_TOLERANCE = 0.05
 #: Identified modes below this damping ratio are listed wherever they are (a controller
@@ -557,7 +554,7 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
     Returns
     -------
     ModeAudit
-        ``true_modes_in_band``: every true structural mode (damping <= MODE_DAMPING_MAX) in
+        ``true_modes_in_band``: every true structural mode (damping <= STRUCTURAL_DAMPING_MAX) in
         ``band`` with ``found`` (matched within FOUND_TOLERANCE in frequency) and the
         identified frequency and damping; ``missing``: the frequencies not found;
         ``filter_poles_in_band``: true poles that are not modes (excluded from the count);
@@ -568,18 +565,18 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
     lo, hi = band
     true_modes = sorted({(r.true_frequency_hz, r.true_damping) for r in poles
                          if r.true_frequency_hz is not None
-                         and r.true_damping <= MODE_DAMPING_MAX})
+                         and r.true_damping <= STRUCTURAL_DAMPING_MAX})
     f_true = np.array([f for f, _ in true_modes]) if true_modes else np.zeros(0)
     rows, filters = [], 0
     for r in poles:
         ft = r.true_frequency_hz
         if ft is None or not lo <= ft <= hi:
             continue
-        if r.true_damping > MODE_DAMPING_MAX:
+        if r.true_damping > STRUCTURAL_DAMPING_MAX:
             filters += 1
             continue
         fi = r.frequency_hz
-        found = (fi is not None and r.damping <= MODE_DAMPING_MAX
+        found = (fi is not None and r.damping <= STRUCTURAL_DAMPING_MAX
                  and abs(fi - ft) <= FOUND_TOLERANCE * ft)
         rows.append(AuditedTrueMode(true_frequency_hz=ft, true_damping=r.true_damping,
                                     found=bool(found), frequency_hz=fi if found else None,
@@ -594,7 +591,7 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
     identified, spurious, light = [], [], []
     for r in poles:
         fi = r.frequency_hz
-        if fi is None or r.damping > MODE_DAMPING_MAX:
+        if fi is None or r.damping > STRUCTURAL_DAMPING_MAX:
             continue
         near, rel = nearest(fi)
         entry = AuditedIdentifiedMode(frequency_hz=fi, damping=r.damping, nearest_true_hz=near,
@@ -612,7 +609,7 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
                      missing=[r.true_frequency_hz for r in rows if not r.found],
                      filter_poles_in_band=filters,
                      spurious=sorted(spurious, key=key), lightly_damped=sorted(light, key=key),
-                     rules={"structural_damping_max": MODE_DAMPING_MAX,
+                     rules={"structural_damping_max": STRUCTURAL_DAMPING_MAX,
                             "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING})
 
 

@@ -153,6 +153,8 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
         Discrete identified model.
     band : (float, float), optional
         Every complex mode with a frequency in ``[lo, hi]`` Hz.
+    max_damping : float
+        Only complex modes damped below this are candidates [-].
     dominant_fraction : float
         Without ``band``: the complex modes with damping below ``max_damping`` inside the
         ``excited`` band whose residue is at least this fraction of the largest such residue
