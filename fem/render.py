@@ -43,7 +43,7 @@ import numpy as np
 from PIL import Image
 
 from trussid.fem.model import Model
-from trussid._util.errors import UserError
+from trussid.fem.errors import RenderError
 from trussid._util.files import atomic_path
 
 __all__ = ["DEFAULT_AMPLITUDE", "DEFAULT_WINDOW", "GHOST_COLOR", "GHOST_OPACITY", "SUPPORT_COLOR",
@@ -60,10 +60,6 @@ GHOST_COLOR = "#9a9a9a"
 GHOST_OPACITY = 0.22
 SUPPORT_COLOR = "#3b3b3b"
 SCALAR_NAME = "displacement / max"
-
-
-class RenderError(UserError):
-    """A rendering request that cannot be met (mode number, output format, sizes)."""
 
 
 # --------------------------------------------------------------------------- inputs
@@ -556,7 +552,7 @@ def offscreen_backend():
         yield os.environ[key]
         return
     if not _osmesa_available():
-        raise RuntimeError(
+        raise RenderError(
             "offscreen rendering needs Mesa's OSMesa library (Debian/Ubuntu package libosmesa6, "
             "installed by scripts/setup.sh), or set VTK_DEFAULT_OPENGL_WINDOW to another VTK "
             "window class such as vtkEGLRenderWindow")

@@ -16,7 +16,8 @@ from trussid.campaign.report import report_markdown
 from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
                                       ClosedLoopSection, ClosedLoopSummary, ControllerSummary,
                                       DemoSummary, DesignSummary, ExperimentRow, ModeAudit,
-                                      ModelSummary, PlantSummary, Provenance, ReportFiles)
+                                      ModelSummary, PlantSummary, ReportFiles,
+                                      ReportProvenance)
 from trussid.geometry.lab import LabSpec
 from trussid.lqg.design import TargetMode
 from trussid.lqg.evaluate import ChannelMargin, DiskMargins, Margin, ModeRow
@@ -95,7 +96,7 @@ def _summary(model=None, control=None):
     lab = LabSpec()
     return DemoSummary(
         format_version=1,
-        provenance=Provenance("0.1", "abc123", 1997, "trussid demo --quick", "host", "Linux", 2,
+        provenance=ReportProvenance("0.1", "abc123", 1997, "trussid demo --quick", "host", "Linux", 2,
                               "3.12", [0.5, 0.4, 0.3], "2026-01-01 00:00:00 UTC"),
         settings=demo_settings(True),
         plant=PlantSummary(states=400, inputs=["ch1", "ch2", "ch3"],

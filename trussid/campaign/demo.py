@@ -69,7 +69,7 @@ from trussid.campaign.report import report_markdown
 from trussid.campaign.structure import DEFAULT_SNR_DB, STRUCTURAL_DAMPING_MAX
 from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
                                       DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
-                                      PlantSummary, Provenance, ReportFiles)
+                                      PlantSummary, ReportProvenance, ReportFiles)
 from trussid.geometry.lab import G0, lab_record
 from trussid.lqg.grading import LoopSettings
 from trussid.plid.datafile import with_channels, write_data
@@ -613,7 +613,7 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
                             "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING})
 
 
-def provenance(settings: "DemoSettings", command: str | None = None) -> Provenance:
+def provenance(settings: "DemoSettings", command: str | None = None) -> ReportProvenance:
     """Who made the report, how and where: trussid version, source commit (when the package
     runs from a git checkout), seed, command line, machine, load and date (UTC)."""
     import os
@@ -643,7 +643,7 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> Provenan
         load = list(os.getloadavg())
     except OSError:
         load = None
-    return Provenance(trussid_version=trussid_version, commit=commit, seed=settings.seed,
+    return ReportProvenance(trussid_version=trussid_version, commit=commit, seed=settings.seed,
                       command=command, machine=platform.node(), platform=platform.platform(),
                       cpus=os.cpu_count(), python=platform.python_version(),
                       load_average_start=load,

@@ -7,7 +7,7 @@ import math
 
 from trussid.campaign.loop_report import closed_loop_markdown
 from trussid.campaign.structure import STRUCTURAL_DAMPING_MAX
-from trussid.campaign.summary import ClosedLoopSection, DemoSummary, Provenance
+from trussid.campaign.summary import ClosedLoopSection, DemoSummary, ReportProvenance
 
 __all__ = ["report_markdown", "provenance_lines", "lacks_lines"]
 
@@ -176,7 +176,7 @@ def control_markdown(section: ClosedLoopSection) -> str:
     return closed_loop_markdown(section.summary, "##", section.figures)
 
 
-def provenance_lines(pv: Provenance) -> list:
+def provenance_lines(pv: ReportProvenance) -> list:
     """The report's provenance paragraph."""
     load = pv.load_average_start
     return ["## Provenance", "",

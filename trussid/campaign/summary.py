@@ -17,14 +17,14 @@ from trussid.geometry.lab import LabSpec
 from trussid.lqg.grading import LoopSettings
 from trussid.plid.provenance import Stabilised
 
-__all__ = ["Provenance", "PlantSummary", "ExperimentRow", "AuditedTrueMode",
+__all__ = ["ReportProvenance", "PlantSummary", "ExperimentRow", "AuditedTrueMode",
            "AuditedIdentifiedMode", "ModeAudit", "ModelSummary", "ReportFiles",
            "ControllerSummary", "DesignSummary", "ClosedLoopSummary", "ClosedLoopSection",
            "AdaptSection", "DemoSummary"]
 
 
 @dataclass(frozen=True)
-class Provenance:
+class ReportProvenance:
     """Who made the report, how and where."""
 
     trussid_version: str | None
@@ -286,7 +286,7 @@ class DemoSummary:
     """Everything the demo reports; ``summary.json`` is :meth:`to_dict`."""
 
     format_version: int
-    provenance: Provenance
+    provenance: ReportProvenance
     settings: object              # trussid.campaign.demo.DemoSettings
     plant: PlantSummary
     experiments: list             # of ExperimentRow

@@ -17,6 +17,8 @@ import numpy as np
 from .errors import ControlError
 from .evaluate import damping_table
 
+__all__ = ["KINDS", "decentralised", "tune_baseline"]
+
 KINDS = ("static", "static+delay", "bandpass", "bandpass+delay")
 
 

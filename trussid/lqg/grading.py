@@ -18,7 +18,7 @@ import numpy as np
 
 from trussid.plid.experiment import excitation
 
-from .baselines import decentralised, tune_baseline
+from .baselines import KINDS, decentralised, tune_baseline
 from .design import LQGDesign, design_lqg
 from .errors import ControlError
 from .evaluate import (DampingTable, DiskMargins, ModeRow, damping_table, disk_margins, h2_norm,
@@ -428,7 +428,8 @@ def check(evaluation: LoopEvaluation, nominal: bool,
 # --------------------------------------------------------------------------- design
 
 
-BASELINE_KINDS = ("static", "static+delay", "bandpass", "bandpass+delay")
+#: The decentralised baselines graded beside an LQG (:data:`trussid.lqg.baselines.KINDS`).
+BASELINE_KINDS = KINDS
 
 
 @dataclass(frozen=True)

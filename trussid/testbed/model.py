@@ -181,7 +181,7 @@ class TestbedModel:
     ----------
     model : fem.Model
     map : TestbedMap
-    testbed : geometry.testbed.Testbed
+    testbed : trussid.geometry.Testbed
     elements_per_segment : int
     """
 
@@ -302,7 +302,7 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
 
     Parameters
     ----------
-    tb : geometry.testbed.Testbed, optional
+    tb : trussid.geometry.Testbed, optional
     elements_per_segment : int
         Frame elements on each bare tube segment.
     beam_theory, mass : str

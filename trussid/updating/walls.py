@@ -127,7 +127,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         Identified natural frequencies [Hz] (any order; modes of any kind: strut bending,
         UDF rigid-body, ...). At least 7 are needed when ``frequency_std_hz`` is not given
         (6 walls plus a degree of freedom for the scatter).
-    tb_nominal : geometry.testbed.Testbed, optional
+    tb_nominal : trussid.geometry.Testbed, optional
         The model to update (default: the default testbed); its walls are the start.
     damping : (k,) float, optional
         Identified damping ratios [-] of the same modes: gives the damping estimate.
@@ -140,7 +140,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         Identified mode shapes at ``sensors`` (for MAC pairing).
     sensors : list of fem.sensors.Sensor, optional
         Where ``shapes`` were measured (any quantity: MAC ignores scale).
-    tbm : fem.testbed.TestbedModel, optional
+    tbm : trussid.testbed.TestbedModel, optional
         ``build_testbed(tb_nominal)`` if already built (Euler-Bernoulli).
     n_model_modes : int, optional
         Model modes considered for pairing (default: those up to 1.5 times the highest
