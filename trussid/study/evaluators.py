@@ -40,7 +40,8 @@ from trussid.study.deck import DeckModesEvaluator
 from trussid.study.errors import StudyError
 from trussid.study.plants import PLANTS, record
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.model import build_testbed, design_at_walls, wall_basis, wall_modes
+from trussid.testbed.model import build_testbed
+from trussid.testbed.walls import design_at_walls, wall_basis, wall_modes
 from trussid.testbed.plant import testbed_plant
 from trussid.testbed.sensitivity import wall_sensitivities
 
@@ -147,7 +148,7 @@ def _walls(ctx, params):
 @dataclass(frozen=True)
 class WallContext:
     """What every point of a wall study shares: the testbed model at the reference walls
-    and its wall basis (:func:`trussid.testbed.model.wall_basis`)."""
+    and its wall basis (:func:`trussid.testbed.walls.wall_basis`)."""
 
     tbm: object
     basis: object
@@ -172,7 +173,7 @@ class CaseContext:
 class ModesEvaluator(Evaluator):
     """Natural frequencies [Hz] of the testbed at the point's walls, and each mode's label.
 
-    Frequencies from the wall basis (:func:`trussid.testbed.model.wall_modes`: only the
+    Frequencies from the wall basis (:func:`trussid.testbed.walls.wall_modes`: only the
     strut terms of K and M change between designs); labels from where each mode's energy
     sits (:func:`trussid.testbed.labels.label_testbed_modes`) on the model at those walls.
     """
