@@ -68,8 +68,10 @@ def main() -> None:
 
     import control
 
-    from trussid.campaign.control import (LoopSettings, control_study, report_markdown, summary,
-                                          truths)
+    from trussid.campaign.control import control_study
+    from trussid.campaign.loop_report import closed_loop_markdown, closed_loop_summary
+    from trussid.lqg.grading import LoopSettings
+    from trussid.testbed.perturbed import truths
     from trussid._util.jsonio import json_safe
     from trussid.campaign.demo import build_plant, demo_settings, identify_model, run_experiments
 
@@ -89,7 +91,7 @@ def main() -> None:
                               baselines=not args.no_baselines,
                               settings=LoopSettings.for_lab(tp.lab), progress=print)
     load1 = os.getloadavg()
-    t = study["timings_s"]
+    t = study.timings_s
     kind = "quick (18 states)" if args.quick else "full (36 states)"
     L = [f"## {kind} MIMO model", "",
          f"Commit {commit()}, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
@@ -105,14 +107,14 @@ def main() -> None:
          f"| {t['evaluation']:.1f} | - |",
          f"| baselines on {len(plants)} truths | {t.get('baselines', 0):.1f} | - |",
          f"| design + evaluation + baselines, total | {w_st:.1f} | {c_st:.1f} |", "",
-         report_markdown(study, heading="###")]
+         closed_loop_markdown(closed_loop_summary(study), heading="###")]
     text = "\n".join(L) + "\n"
     print(text)
     if args.out:
         out = Path(args.out)
         tag = "quick" if args.quick else "full"
         out.with_name(f"control_{tag}.json").write_text(json.dumps(json_safe(
-            {**summary(study), "identification_s": {"wall": w_id, "cpu": c_id},
+            {**json_safe(closed_loop_summary(study)), "identification_s": {"wall": w_id, "cpu": c_id},
              "study_s": {"wall": w_st, "cpu": c_st}, "load": [load0, load1]}), indent=1))
         part = out.with_name(f"control_{tag}.md")
         part.write_text(text)

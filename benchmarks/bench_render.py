@@ -45,7 +45,7 @@ def load(name: str):
         from trussid.testbed.render import testbed_decorations
         from trussid.testbed.model import build_testbed
 
-        from trussid.testbed.model import solve_testbed_modes
+        from trussid.testbed.walls import solve_testbed_modes
 
         tbm = build_testbed()
         return tbm.model, solve_testbed_modes(tbm, 12), testbed_decorations(tbm)

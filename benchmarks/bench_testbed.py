@@ -6,10 +6,10 @@ wall-thickness designs (build + 30 lowest modes each).
 Three ways to get a design's 30 lowest modes are timed side by side in one run:
 
 - ``rebuild``: what a user without the sweep API would do: ``build_testbed(tb.with_walls(w))``,
-  ``assemble`` and the dense subset eigensolver (:func:`trussid.testbed.model.solve_testbed_modes`);
+  ``assemble`` and the dense subset eigensolver (:func:`trussid.testbed.walls.solve_testbed_modes`);
 - ``rebuild (fem.modal)``: the same with the general :func:`trussid.fem.modal.solve_modes`;
-- ``sweep``: the model built once, :func:`trussid.testbed.model.wall_basis`, then per design only
-  :func:`trussid.testbed.model.wall_modes` (strut terms of K and M re-formed from precomputed data on
+- ``sweep``: the model built once, :func:`trussid.testbed.walls.wall_basis`, then per design only
+  :func:`trussid.testbed.walls.wall_modes` (strut terms of K and M re-formed from precomputed data on
   a fixed sparse pattern, dense ``scipy.linalg.eigh(..., subset_by_index=[0, 29])``).
 
 One core: the BLAS/LAPACK thread pools are limited to one thread by setting
@@ -66,7 +66,8 @@ def main(argv=None) -> int:
 
     from trussid.fem.assembly import assemble
     from trussid.fem.modal import solve_modes
-    from trussid.testbed.model import build_testbed, solve_testbed_modes, wall_basis, wall_modes
+    from trussid.testbed.model import build_testbed
+    from trussid.testbed.walls import solve_testbed_modes, wall_basis, wall_modes
     from trussid.geometry.spec import Testbed
 
     tb = Testbed()

@@ -180,15 +180,15 @@ def frame_matrices(L, A, Iy, Iz, J, E, G, rho, *, nsm=0.0, Asy=np.inf, Asz=np.in
     """
     L = np.asarray(L, float)
     n = len(L)
-    f = {k: np.broadcast_to(np.asarray(v, float), (n,)) for k, v in dict(
-        A=A, Iy=Iy, Iz=Iz, J=J, E=E, G=G, rho=rho, nsm=nsm, Asy=Asy, Asz=Asz).items()}
+    A, Iy, Iz, J, E, G, rho, nsm, Asy, Asz = (np.broadcast_to(np.asarray(v, float), (n,))
+                                               for v in (A, Iy, Iz, J, E, G, rho, nsm, Asy, Asz))
     rod = np.broadcast_to(np.asarray(rod, bool), (n,))
     beam = (~rod).astype(float)[:, None, None]
     if rod.any():
         # A rod's bending properties are meaningless (often 0 or NaN from a deck): neutralise
         # them so that no 0/0 or NaN * 0 reaches the rod's matrices.
-        for key, neutral in (("Iy", 0.0), ("Iz", 0.0), ("Asy", np.inf), ("Asz", np.inf)):
-            f[key] = np.where(rod, neutral, f[key])
+        Iy, Iz = np.where(rod, 0.0, Iy), np.where(rod, 0.0, Iz)
+        Asy, Asz = np.where(rod, np.inf, Asy), np.where(rod, np.inf, Asz)
     timo = theory == "timoshenko"
     if theory not in ("euler-bernoulli", "timoshenko"):
         raise ModelError(f"unknown beam theory {theory!r}")
@@ -197,21 +197,21 @@ def frame_matrices(L, A, Iy, Iz, J, E, G, rho, *, nsm=0.0, Asy=np.inf, Asz=np.in
 
     # phi = 12 E I / (G As L^2); As = inf gives exactly 0, and Euler-Bernoulli forces 0.
     if timo:
-        phi_y = 12.0 * f["E"] * f["Iz"] / (f["G"] * f["Asy"] * L**2)  # shear along y, x-y plane
-        phi_z = 12.0 * f["E"] * f["Iy"] / (f["G"] * f["Asz"] * L**2)  # shear along z, x-z plane
+        phi_y = 12.0 * E * Iz / (G * Asy * L**2)  # shear along y, x-y plane
+        phi_z = 12.0 * E * Iy / (G * Asz * L**2)  # shear along z, x-z plane
     else:
         phi_y = phi_z = np.zeros(n)
 
     K = np.zeros((n, 12, 12))
-    ax = (f["E"] * f["A"] / L)[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    ax = (E * A / L)[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
     _put(K, np.array([0, 6]), ax)
-    tor = (f["G"] * f["J"] / L)[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    tor = (G * J / L)[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
     _put(K, np.array([3, 9]), tor)
     sgn = np.outer(_XZ_SIGN, _XZ_SIGN)
-    _put(K, _XY, beam * f["E"][:, None, None] * f["Iz"][:, None, None] * _bending_block(L, phi_y))
-    _put(K, _XZ, beam * f["E"][:, None, None] * f["Iy"][:, None, None] * _bending_block(L, phi_z) * sgn)
+    _put(K, _XY, beam * E[:, None, None] * Iz[:, None, None] * _bending_block(L, phi_y))
+    _put(K, _XZ, beam * E[:, None, None] * Iy[:, None, None] * _bending_block(L, phi_z) * sgn)
 
-    m_len = f["rho"] * f["A"] + f["nsm"]  # translational mass per length [kg/m]
+    m_len = rho * A + nsm  # translational mass per length [kg/m]
     M = np.zeros((n, 12, 12))
     if mass == "lumped":
         half = 0.5 * m_len * L
@@ -225,14 +225,14 @@ def frame_matrices(L, A, Iy, Iz, J, E, G, rho, *, nsm=0.0, Asy=np.inf, Asz=np.in
         _put(M, np.array([1, 7]), rodf * lin)
         _put(M, np.array([2, 8]), rodf * lin)
         # Beams: torsional inertia of the section (polar moment Iy + Iz) ...
-        tor_m = (f["rho"] * (f["Iy"] + f["Iz"]) * L / 6.0)[:, None, None] * np.array([[2.0, 1.0], [1.0, 2.0]])
+        tor_m = (rho * (Iy + Iz) * L / 6.0)[:, None, None] * np.array([[2.0, 1.0], [1.0, 2.0]])
         _put(M, np.array([3, 9]), beam * tor_m)
         # ... and the cubic (Timoshenko-consistent) translational inertia of each plane.
         _put(M, _XY, beam * m_len[:, None, None] * _translational_mass_block(L, phi_y))
         _put(M, _XZ, beam * m_len[:, None, None] * _translational_mass_block(L, phi_z) * sgn)
         if timo:
-            _put(M, _XY, beam * (f["rho"] * f["Iz"])[:, None, None] * _rotary_mass_block(L, phi_y))
-            _put(M, _XZ, beam * (f["rho"] * f["Iy"])[:, None, None] * _rotary_mass_block(L, phi_z) * sgn)
+            _put(M, _XY, beam * (rho * Iz)[:, None, None] * _rotary_mass_block(L, phi_y))
+            _put(M, _XZ, beam * (rho * Iy)[:, None, None] * _rotary_mass_block(L, phi_z) * sgn)
 
     if R is not None:
         K = to_global(K, R)

@@ -2,11 +2,16 @@
 
 from trussid._util.errors import UserError
 
-__all__ = ["ModelError", "UnitsWarning"]
+__all__ = ["ModelError", "RenderError", "UnitsWarning"]
 
 
 class ModelError(UserError):
     """The model as given cannot be built or solved (bad value, unknown node, mechanism)."""
+
+
+class RenderError(UserError):
+    """A rendering request that cannot be met (mode number, output format, sizes, no
+    offscreen backend)."""
 
 
 class UnitsWarning(UserWarning):

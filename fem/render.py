@@ -43,7 +43,7 @@ import numpy as np
 from PIL import Image
 
 from trussid.fem.model import Model
-from trussid._util.errors import UserError
+from trussid.fem.errors import RenderError
 from trussid._util.files import atomic_path
 
 __all__ = ["DEFAULT_AMPLITUDE", "DEFAULT_WINDOW", "GHOST_COLOR", "GHOST_OPACITY", "SUPPORT_COLOR",
@@ -60,10 +60,6 @@ GHOST_COLOR = "#9a9a9a"
 GHOST_OPACITY = 0.22
 SUPPORT_COLOR = "#3b3b3b"
 SCALAR_NAME = "displacement / max"
-
-
-class RenderError(UserError):
-    """A rendering request that cannot be met (mode number, output format, sizes)."""
 
 
 # --------------------------------------------------------------------------- inputs
@@ -426,6 +422,8 @@ def mode_scene(model: Model, modes, mode: int = 1, *, scale: float | None = None
     label : str, optional
         Text after mode number and frequency in the title; default ``labels[mode - 1]``,
         then ``modes.labels[mode - 1]`` when present.
+    labels : sequence of str, optional
+        One text per mode (``label`` of mode ``mode`` when ``label`` is not given).
     n_samples : int
         Points per beam element for the Hermite interpolation (>= 2).
     n_sides : int
@@ -554,7 +552,7 @@ def offscreen_backend():
         yield os.environ[key]
         return
     if not _osmesa_available():
-        raise RuntimeError(
+        raise RenderError(
             "offscreen rendering needs Mesa's OSMesa library (Debian/Ubuntu package libosmesa6, "
             "installed by scripts/setup.sh), or set VTK_DEFAULT_OPENGL_WINDOW to another VTK "
             "window class such as vtkEGLRenderWindow")
@@ -757,7 +755,7 @@ def render_mode_gif(model: Model, modes, mode: int = 1, out=None, *, frames: int
     antialias : bool
         4x multisampling; off by default for GIFs (it more than doubles the time per frame
         in software rendering, and the 255-colour palette blurs the gain).
-    Others
+    model, modes, mode, window_size, scale, amplitude, label, labels, decorations, view, show_ghost, cmap, n_samples
         As :func:`render_mode`.
 
     Returns
@@ -828,7 +826,7 @@ def render_mode_grid(model: Model, modes, n: int = 6, out=None, *, ncols: int | 
         Whole image [pixels]; default 420 x 340 per cell.
     out : path-like, optional
         PNG file to write (atomically).
-    Others
+    model, modes, scale, amplitude, labels, decorations, view, show_ghost, cmap, n_samples
         As :func:`render_mode`; ``scale``, when given, applies to every mode.
 
     Returns

@@ -19,6 +19,9 @@ def solve_static(model_or_system, f_full, *, autospc: bool = False) -> np.ndarra
     ----------
     model_or_system : fem.Model or System
         A model is assembled first (with ``autospc``).
+    autospc : bool
+        Constrain the DOFs no element stiffens when assembling a model
+        (:func:`trussid.fem.assembly.assemble`).
     f_full : (6 n_nodes,) or (6 n_nodes, k) float
         Nodal forces and moments on every node's six DOFs [N, N m]. Loads on supported DOFs
         go to the supports; loads on rigid-body slaves act through their master.

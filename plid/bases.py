@@ -149,19 +149,6 @@ def as_selector(basis: ObserverBasis) -> ObserverBasis:
     return ObserverBasis(F, Cs, basis.name + " selector")
 
 
-def _with_real_poles(basis: ObserverBasis, count_per_output: int, radius: float):
-    """Append ``count_per_output`` real poles at ``radius`` to each output's group."""
-    if count_per_output == 0:
-        return basis
-    p = basis.p
-    extra = p * count_per_output
-    # distinct real poles keep (F, C) observable: spread them slightly below the radius
-    vals = radius * (1 - 0.02 * np.arange(1, extra + 1))
-    F = scipy.linalg.block_diag(basis.F, np.diag(vals))
-    C = np.hstack([basis.C, np.kron(np.eye(p), np.ones((1, count_per_output)))])
-    return ObserverBasis(F, C, basis.name + f" +{extra} real")
-
-
 def band_frequencies(count: int, band, spacing: str = "geometric") -> np.ndarray:
     """``count`` frequencies spread over ``band = (lo, hi)`` Hz (geometric or linear)."""
     lo, hi = (float(b) for b in band)

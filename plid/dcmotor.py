@@ -267,6 +267,8 @@ def identify_dc_motor(
     seed : int
     bounds : mapping, optional
         Bounds for ``b``, ``R``, ``k`` (default :data:`DEFAULT_BOUNDS`).
+    confidence : float
+        Level of the parameters' confidence intervals [-].
 
     Returns
     -------

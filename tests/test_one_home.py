@@ -1,4 +1,5 @@
-"""One definition of each modal-analysis concept in the library (issue 22, acceptance 3).
+"""One definition of each modal-analysis concept in the library (issue 22, acceptance 3), and
+of each closed-loop rule (issue 31, acceptance 2).
 
 A line scan cannot see a semantic duplicate: the frequency response, the MAC, the
 frequency and damping of a pole, and the pairing of two sets of modes were each written
@@ -61,6 +62,16 @@ def pairing(func) -> bool:
     return _calls(func, "linear_sum_assignment")
 
 
+def closed_loop_mode_damping(func) -> bool:
+    """The damping of poles of a closed loop: a pole conversion (``freq_damping``,
+    ``pole_parameters``) in a function that builds or reads the closed loop
+    (``closed_loop(...)``, ``loop.closed``)."""
+    converts = _calls(func, "freq_damping") or _calls(func, "pole_parameters")
+    closes = _calls(func, "closed_loop") or any(
+        isinstance(n, ast.Attribute) and n.attr == "closed" for n in ast.walk(func))
+    return converts and closes
+
+
 @functools.cache
 def _functions(path) -> list:
     tree = ast.parse(path.read_text(), filename=str(path))
@@ -72,6 +83,7 @@ HOMES = {
     mac: "trussid.plid.modal.mac",
     damping_of_pole: "trussid.plid.modal.pole_parameters",
     pairing: "trussid.plid.modal.assign_pairs",
+    closed_loop_mode_damping: "trussid.lqg.evaluate.damping_table",
 }
 
 
@@ -99,6 +111,12 @@ def test_each_concept_is_computed_in_one_function(concept):
     ("def my_mac(a, b):\n    return np.abs(a.conj().T @ b) ** 2 / 4\n", mac),
     ("def fd(z, dt):\n    s = np.log(z) / dt\n    return abs(s), -s.real / abs(s)\n", damping_of_pole),
     ("def match(c):\n    return scipy.optimize.linear_sum_assignment(c)\n", pairing),
+    ("def mode_damping(plant, ctrl, f_modes):\n"
+     "    lam = np.linalg.eigvals(closed_loop(plant, ctrl).A)\n"
+     "    f, z = freq_damping(lam, plant.dt)\n"
+     "    return [z[np.argmin(np.abs(f - fi))] for fi in f_modes]\n", closed_loop_mode_damping),
+    ("def worst(loop, f0):\n    f, z = freq_damping(np.linalg.eigvals(loop.closed.A), 1e-3)\n"
+     "    return z[np.abs(f / f0 - 1) < 0.03].min()\n", closed_loop_mode_damping),
 ])
 def test_a_second_definition_is_caught(tmp_path, monkeypatch, source, concept):
     """The check itself: a copy planted in another module is found beside the home."""
@@ -107,3 +125,39 @@ def test_a_second_definition_is_caught(tmp_path, monkeypatch, source, concept):
     got = definitions(concept)  # the library and the planted module
     name = source.split("(")[0].removeprefix("def ")
     assert got == sorted([HOMES[concept], f"trussid.elsewhere.planted.{name}"])
+
+
+# --------------------------------------------------------------------------- thresholds
+
+
+def threshold_classes(paths=None) -> list[str]:
+    """Library classes that declare acceptance thresholds of a loop: a numeric default for
+    the damping of the dominant modes (a field named ``dominant...`` or ``accept...``) and
+    one for the ratio kept by the others (``...ratio...``)."""
+    found = []
+    for path in paths or layering.library_files():
+        module = layering._module_name(path)
+        tree = ast.parse(path.read_text(), filename=str(path))
+        for cls in (n for n in ast.walk(tree) if isinstance(n, ast.ClassDef)):
+            names = [n.target.id for n in cls.body if isinstance(n, ast.AnnAssign)
+                     and isinstance(n.target, ast.Name) and isinstance(n.value, ast.Constant)
+                     and isinstance(n.value.value, float)]
+            if (any(k.startswith(("dominant", "accept")) for k in names)
+                    and any("ratio" in k for k in names)):
+                found.append(f"{module}.{cls.name}")
+    return sorted(found)
+
+
+def test_the_loop_thresholds_are_declared_once():
+    assert threshold_classes() == ["trussid.lqg.grading.Thresholds"]
+
+
+def test_a_second_set_of_thresholds_is_caught(tmp_path, monkeypatch):
+    """The check itself: the supervisor's former settings, planted, are found."""
+    (tmp_path / "planted.py").write_text(
+        "from dataclasses import dataclass\n\n\n@dataclass(frozen=True)\n"
+        "class SupervisorSettings:\n    accept_damping: float = 0.05\n"
+        "    others_ratio: float = 0.8\n    min_margin_db: float = 6.0\n")
+    monkeypatch.setitem(layering.SOURCES, "trussid.elsewhere", tmp_path)
+    assert threshold_classes() == ["trussid.elsewhere.planted.SupervisorSettings",
+                                   "trussid.lqg.grading.Thresholds"]

@@ -13,10 +13,16 @@ import pytest
 
 from trussid.campaign.demo import demo_settings
 from trussid.campaign.report import report_markdown
-from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
-                                      DemoSummary, ExperimentRow, ModeAudit, ModelSummary,
-                                      PlantSummary, Provenance, ReportFiles)
+from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
+                                      ClosedLoopSection, ClosedLoopSummary, ControllerSummary,
+                                      DemoSummary, DesignSummary, ExperimentRow, ModeAudit,
+                                      ModelSummary, PlantSummary, ReportFiles,
+                                      ReportProvenance)
 from trussid.geometry.lab import LabSpec
+from trussid.lqg.design import TargetMode
+from trussid.lqg.evaluate import ChannelMargin, DiskMargins, Margin, ModeRow
+from trussid.lqg.grading import (Checks, Converters, DominantMode, LoopEvaluation, LoopSettings,
+                                 WatchedMode)
 from trussid.plid.metrics import PoleMatch
 from trussid.plid.multipass import Stabilised
 
@@ -56,11 +62,41 @@ def _model(name="mimo", kind="MIMO"):
             {"label": "direct 18", "identification_ratio_db": 31.42, "seconds": 2.5}]})
 
 
-def _summary(model=None):
+def _evaluation(cls=LoopEvaluation, **renamed):
+    values = dict(
+        stable=True, spectral_radius=0.99913,
+        rows=(ModeRow(166.0, 0.0025, 1.5, 165.4, 0.0721, 0.0711, 1, True),
+              ModeRow(227.2, 0.0025, 0.2, 227.3, 0.0027, 0.0026, 0, False)),
+        dominant=(DominantMode(166.0, 0.0711, 0.0721),), dominant_min=0.0711,
+        other_min_ratio=1.04, other_worst_mode_hz=227.2,
+        watched=(WatchedMode(118.0, 0.00293), WatchedMode(138.0, 0.00864)),
+        margins=DiskMargins(Margin(0.9, 8.76, 48.3, 170.0),
+                            (ChannelMargin(1.1, 11.1, 52.0, 171.0, channel="ch1"),), 2000, 10),
+        h2_open=1.0, h2_closed=0.21, h2_ratio_db=-13.57, command_rms_v=[0.42, 0.43],
+        command_peak_v=[1.5, 1.6], dac_clipped=[0, 0], adc_clipped=[0, 0],
+        y_rms_closed=[0.1, 0.1], converters=Converters(1600.0, [1e-3] * 2, [1e-3] * 2, 12, 10.0),
+        seconds=1.0)
+    for new, old in renamed.items():
+        values[new] = values.pop(old)
+    return cls(**values)
+
+
+def _control(evaluation=None):
+    return ClosedLoopSummary(
+        nominal="nominal", settings=LoopSettings(bits=12, full_scale=10.0, sample_rate=1600.0),
+        rows={"nominal": evaluation or _evaluation()},
+        checks={"nominal": Checks(True, True, True, True, True, True, False)},
+        baselines={}, timings_s={"evaluation": 4.25},
+        controller=ControllerSummary(6, ["acc1", "acc2"], ["ch1", "ch2"]),
+        design=DesignSummary("predictor", (TargetMode(3, 166.1, 0.0025, 1.0, True, 0.07, 1e-3),),
+                             6, 0.07, "kalman Q/R ratio 100", {"lqr_iterations": 12}))
+
+
+def _summary(model=None, control=None):
     lab = LabSpec()
     return DemoSummary(
         format_version=1,
-        provenance=Provenance("0.1", "abc123", 1997, "trussid demo --quick", "host", "Linux", 2,
+        provenance=ReportProvenance("0.1", "abc123", 1997, "trussid demo --quick", "host", "Linux", 2,
                               "3.12", [0.5, 0.4, 0.3], "2026-01-01 00:00:00 UTC"),
         settings=demo_settings(True),
         plant=PlantSummary(states=400, inputs=["ch1", "ch2", "ch3"],
@@ -83,7 +119,7 @@ def _summary(model=None):
                           figures=["bode_mimo_ch1.png"]),
         timings_s={"plant": 1.0, "experiments": 2.0, "identification": 3.0, "evaluation": 4.0,
                    "report": 5.0, "total": 15.0},
-        control=ClosedLoopSection("## Closed loop: active damping\n", {"nominal": "nominal"}))
+        control=ClosedLoopSection(control or _control(), ["control_poles.png"]))
 
 
 #: Figures the report shows, by field, as the report formats them.
@@ -97,7 +133,10 @@ SHOWN = {
                "57.90 Hz", "441.50", "2 unstable pole(s) reflected", "0.987", "0.123"],
     "provenance": ["abc123", "seed 1997", "trussid demo --quick", "0.50, 0.40, 0.30"],
     "files": ["data_mimo_ide.npz", "model_mimo.npz", "bode_mimo_ch1.png"],
-    "control": ["## Closed loop: active damping"],
+    "control": ["## Closed loop: active damping", "166.1 Hz", "kalman Q/R ratio 100",
+                "Controller: 6 states", "165.4", "7.210", "**7.110**", "| 1 |", "1.04",
+                "8.76 / 48.3", "11.1", "-13.6", "0.42, 0.43", "0.29 | 0.86", "FAIL 5_command",
+                "`5_command` the command RMS", "evaluation 4.2", "control_poles.png"],
 }
 
 
@@ -145,10 +184,15 @@ def test_summary_json_holds_exactly_the_typed_fields():
                         "/models/0/h1_coherence", "/models/0/identification",
                         "/models/0/modes_check/rules"))}
     assert keys - {"/control"} == typed
-    assert s.to_dict()["control"] == {"nominal": "nominal"}
+    assert s.to_dict()["control"]["nominal"] == "nominal"
     assert "control" not in dataclasses.replace(s, control=None).to_dict()
+    none = ClosedLoopSection(None, [], "the model has no lightly damped mode")
+    assert dataclasses.replace(s, control=none).to_dict()["control"] == {
+        "error": "the model has no lightly damped mode"}
+    assert "No controller designed: the model has no lightly damped mode" in report_markdown(
+        dataclasses.replace(s, control=none))
     assert "adapt" not in s.to_dict()
-    with_adapt = dataclasses.replace(s, adapt=ClosedLoopSection("## Closed-loop id\n", {"a": 1}))
+    with_adapt = dataclasses.replace(s, adapt=AdaptSection("## Closed-loop id\n", {"a": 1}))
     assert with_adapt.to_dict()["adapt"] == {"a": 1}
     assert "## Closed-loop id" in report_markdown(with_adapt)
 
@@ -162,4 +206,40 @@ def test_renaming_a_reported_field_fails_the_report():
     values["modes_check"] = _audit()
     renamed = _summary(Renamed(**values))
     with pytest.raises(AttributeError, match="frf_rms_error_db"):
+        report_markdown(renamed)
+
+
+def _typed(obj, path="") -> set:
+    """Every JSON path of a typed object, through dataclasses, dicts, lists and tuples."""
+    out = set()
+    if isinstance(obj, (list, tuple)):  # elements by index, as _keys reads them
+        for k, v in enumerate(obj):
+            out |= _typed(v, f"{path}/{k}")
+        return out
+    items = ([(f.name, getattr(obj, f.name)) for f in dataclasses.fields(obj)]
+             if dataclasses.is_dataclass(obj) else list(obj.items()) if isinstance(obj, dict)
+             else [])
+    for k, v in items:
+        out.add(f"{path}/{k}")
+        out |= _typed(v, f"{path}/{k}")
+    return out
+
+
+def test_the_closed_loop_summary_json_holds_exactly_its_typed_fields():
+    s = _summary()
+    assert set(_keys(s.to_dict()["control"])) == _typed(s.control.summary)
+
+
+def test_renaming_a_closed_loop_field_fails_the_report():
+    """The closed-loop section is rendered from its typed summary too (issue 31)."""
+    fields = [(f.name if f.name != "h2_ratio_db" else "h2_change_db", f.type,
+               dataclasses.field(default=f.default))
+              if f.default is not dataclasses.MISSING else
+              (f.name if f.name != "h2_ratio_db" else "h2_change_db", f.type)
+              for f in dataclasses.fields(LoopEvaluation)]
+    Renamed = dataclasses.make_dataclass(
+        "LoopEvaluation", fields, frozen=True,
+        namespace={"watched_damping": LoopEvaluation.watched_damping})
+    renamed = _summary(control=_control(_evaluation(Renamed, h2_change_db="h2_ratio_db")))
+    with pytest.raises(AttributeError, match="h2_ratio_db"):
         report_markdown(renamed)

@@ -400,9 +400,10 @@ def testbed():
     """The default testbed's model, its first 18 modes (6 suspension, 12 strut bending),
     their labels and its solids as decorations."""
     testbed_mod = pytest.importorskip("trussid.testbed.model")
+    walls_mod = pytest.importorskip("trussid.testbed.walls")
 
     tbm = testbed_mod.build_testbed()
-    modes = testbed_mod.solve_testbed_modes(tbm, 18)
+    modes = walls_mod.solve_testbed_modes(tbm, 18)
     try:
         from trussid.testbed.labels import label_testbed_modes
 

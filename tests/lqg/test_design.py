@@ -45,7 +45,7 @@ def test_state_feedback_gives_each_target_mode_the_target_damping(structure, rec
     f, z = freq_damping(np.linalg.eigvals(A - B @ des.F), structure.dt)
     up = np.argsort(f)[1::2]  # one of each conjugate pair
     assert np.allclose(z[up], target, rtol=0.03)
-    assert [t["frequency_hz"] for t in des.target_modes] == pytest.approx([166, 194, 220], rel=1e-3)
+    assert [t.frequency_hz for t in des.target_modes] == pytest.approx([166, 194, 220], rel=1e-3)
 
 
 @pytest.mark.parametrize("form", ["predictor", "filter"])

@@ -77,17 +77,17 @@ def test_damping_table_tracks_the_poles_of_decoupled_loops():
     g = -300.0
     ctrl = decentralised("static", g, P.dt, ["acc1", "acc2", "acc3"], ["ch1", "ch2", "ch3"])
     tab = damping_table(plant, ctrl, band=(100, 300))
-    assert tab["stable"]
+    assert tab.stable
     expect = []
     for i in range(2):
         idx = [i, i + 2]
         Ai = A[np.ix_(idx, idx)] + g * B[idx, i:i + 1] @ C[i:i + 1, idx]
         f, z = freq_damping(np.linalg.eigvals(Ai), P.dt)
         expect.append(z.min())
-    got = [r["damping_tracked"] for r in tab["rows"]]
+    got = [r.damping_tracked for r in tab.rows]
     assert got == pytest.approx(expect, rel=1e-9)
-    assert all(r["damping_worst_visible"] == r["damping_tracked"] for r in tab["rows"])
-    assert all(r["damping_tracked"] > 5 * r["damping_open"] for r in tab["rows"])
+    assert all(r.damping_worst_visible == r.damping_tracked for r in tab.rows)
+    assert all(r.damping_tracked > 5 * r.damping_open for r in tab.rows)
 
 
 def test_a_lightly_damped_controller_pole_counts_when_visible(structure, record):
@@ -106,12 +106,12 @@ def test_a_lightly_damped_controller_pole_counts_when_visible(structure, record)
                          inputs=list(c.input_labels), outputs=list(c.output_labels))
     plain = damping_table(structure, c)
     tab = damping_table(structure, ringing)
-    r194 = [r for r in tab["rows"] if abs(r["frequency_hz"] - 194) < 1][0]
-    p194 = [r for r in plain["rows"] if abs(r["frequency_hz"] - 194) < 1][0]
-    assert p194["damping_worst_visible"] > 0.04
-    assert 0.003 < r194["damping_worst_visible"] < 0.012
+    r194 = [r for r in tab.rows if abs(r.frequency_hz - 194) < 1][0]
+    p194 = [r for r in plain.rows if abs(r.frequency_hz - 194) < 1][0]
+    assert p194.damping_worst_visible > 0.04
+    assert 0.003 < r194.damping_worst_visible < 0.012
     # the well-damped plant pole is still there: one of the two poles near 194 Hz
-    f, z = freq_damping(tab["closed_loop_poles"], structure.dt)
+    f, z = freq_damping(tab.closed_loop_poles, structure.dt)
     assert np.any((np.abs(f - 194) < 15) & (z > 0.04))
 
 
@@ -124,9 +124,9 @@ def test_disk_margins_agree_with_python_control(structure, record):
     L = -control.series(structure, c)  # loop at the plant input, negative-feedback sign
     L = control.ss(L.A, L.B, L.C, L.D, structure.dt)
     dm, gm, pm = control.disk_margins(L, 2 * np.pi * f, skew=0.0)
-    assert ours["mimo"]["alpha"] == pytest.approx(dm, rel=1e-6)
-    assert ours["mimo"]["gain_db"] == pytest.approx(gm, rel=1e-6)
-    assert ours["mimo"]["phase_deg"] == pytest.approx(pm, rel=1e-6)
+    assert ours.mimo.alpha == pytest.approx(dm, rel=1e-6)
+    assert ours.mimo.gain_db == pytest.approx(gm, rel=1e-6)
+    assert ours.mimo.phase_deg == pytest.approx(pm, rel=1e-6)
     # loop 1 with loops 2 and 3 closed, built by python-control
     others = control.ss(c.A, c.B, np.asarray(c.C)[1:], np.asarray(c.D)[1:], structure.dt)
     Pc = control.feedback(structure, control.ss(others.A, others.B,
@@ -137,7 +137,7 @@ def test_disk_margins_agree_with_python_control(structure, record):
                                         structure.dt))[0, 0]
     dm1, gm1, _ = control.disk_margins(control.ss(L1.A, L1.B, L1.C, L1.D, structure.dt),
                                        2 * np.pi * f, skew=0.0)
-    assert ours["loops"][0]["alpha"] == pytest.approx(dm1, rel=1e-6)
+    assert ours.loops[0].alpha == pytest.approx(dm1, rel=1e-6)
 
 
 def test_time_simulation_command_rms_matches_the_h2_prediction(structure, record):
@@ -153,8 +153,8 @@ def test_time_simulation_command_rms_matches_the_h2_prediction(structure, record
     cl = closed_loop(structure, c)
     h = h2_norm(control.ss(cl.A, np.asarray(cl.B)[:, :1], np.asarray(cl.C)[3:4],
                            np.asarray(cl.D)[3:4, :1], structure.dt))
-    assert sim["u_rms"][0] == pytest.approx(h, rel=0.08)
-    assert sim["dac_clipped"] == [0, 0, 0]
+    assert sim.u_rms[0] == pytest.approx(h, rel=0.08)
+    assert sim.dac_clipped == [0, 0, 0]
 
 
 def test_mismatched_controller_and_plant_are_named(structure, record):

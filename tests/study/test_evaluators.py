@@ -10,7 +10,8 @@ import pytest
 from trussid.geometry.spec import Testbed
 from trussid.study.evaluators import EVALUATORS, WALLS
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.model import build_testbed, solve_testbed_modes
+from trussid.testbed.model import build_testbed
+from trussid.testbed.walls import solve_testbed_modes
 
 DESIGN = (0.0006, 0.0015, 0.0009, 0.0012446, 0.0011, 0.0016)
 

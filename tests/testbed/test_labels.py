@@ -12,7 +12,8 @@ from scipy.optimize import brentq
 
 from trussid.fem.assembly import assemble
 from trussid.testbed.labels import DOMINANT, bending_order, element_energies, label_testbed_modes
-from trussid.testbed.model import build_testbed, solve_testbed_modes
+from trussid.testbed.model import build_testbed
+from trussid.testbed.walls import solve_testbed_modes
 
 
 @pytest.fixture(scope="module")

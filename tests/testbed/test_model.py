@@ -14,8 +14,8 @@ from trussid.fem.constraints import rigid_body_modes
 from trussid.fem.errors import ModelError
 from trussid.testbed.labels import label_testbed_modes
 from trussid.fem.modal import Modes
-from trussid.testbed.model import (build_testbed, design_at_walls, solve_testbed_modes, tube_properties,
-                                   wall_basis, wall_matrices, wall_modes)
+from trussid.testbed.model import build_testbed, tube_properties
+from trussid.testbed.walls import design_at_walls, solve_testbed_modes, wall_basis, wall_matrices, wall_modes
 from trussid.geometry.layout import testbed_layout
 from trussid.geometry.solids import strut_solids, udf_rigid_body
 from trussid.geometry.spec import Testbed
@@ -370,7 +370,7 @@ def test_fine_meshes_take_the_sparse_path_and_match_a_dense_solution():
     frequency found by count-doubling, and the wall sweep's sparse path agrees too."""
     import scipy.linalg as la
 
-    from trussid.testbed.model import DENSE_MAX_DOF, solve_testbed_modes, wall_basis, wall_modes
+    from trussid.testbed.walls import DENSE_MAX_DOF, solve_testbed_modes, wall_basis, wall_modes
 
     tbm = build_testbed(elements_per_segment=10)
     system = assemble(tbm.model)

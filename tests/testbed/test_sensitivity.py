@@ -10,7 +10,8 @@ import pytest
 
 from trussid.fem.assembly import assemble
 from trussid.testbed.sensitivity import eigenvalue_sensitivities, wall_sensitivities
-from trussid.testbed.model import build_testbed, tube_properties, tube_property_derivatives, wall_basis, wall_matrices, wall_modes
+from trussid.testbed.model import build_testbed, tube_properties, tube_property_derivatives
+from trussid.testbed.walls import wall_basis, wall_matrices, wall_modes
 from trussid.geometry.spec import Testbed
 
 N_MODES = 30
@@ -88,7 +89,7 @@ def test_a_strut_wall_moves_its_own_first_bending_modes_most(basis):
         warnings.simplefilter("ignore", RuntimeWarning)
         f, dfdt = wall_sensitivities(basis, basis.walls_ref, N_MODES)
     from trussid.testbed.labels import label_testbed_modes
-    from trussid.testbed.model import solve_testbed_modes
+    from trussid.testbed.walls import solve_testbed_modes
 
     tbm = build_testbed()
     lab = label_testbed_modes(tbm, solve_testbed_modes(tbm, N_MODES))

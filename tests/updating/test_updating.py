@@ -18,7 +18,8 @@ import scipy.linalg as la
 
 from trussid.testbed.sensitivity import eigenvalue_sensitivities
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.model import build_testbed, solve_testbed_modes, wall_basis, wall_modes
+from trussid.testbed.model import build_testbed
+from trussid.testbed.walls import solve_testbed_modes, wall_basis, wall_modes
 from trussid.geometry.spec import Testbed
 from trussid.updating import (
     UpdateError,

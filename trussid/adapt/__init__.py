@@ -20,7 +20,7 @@ _LAZY = {
     "closed_loop_record": "experiment", "trial_rms": "experiment",
     "ClosedLoopModel": "identify", "identify_plid": "identify", "identify_n4sid": "identify",
     "nearest_modes": "identify",
-    "ModeDamping": "supervisor", "mode_damping": "supervisor",
+    "mode_damping": "supervisor",
     "SupervisorSettings": "supervisor", "Verdict": "supervisor", "redesign": "supervisor",
     "check_candidate": "supervisor", "check_fresh": "supervisor", "detect": "supervisor",
     "AdaptSettings": "supervisor", "AdaptRun": "supervisor", "Event": "supervisor",

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trussid.lqg.evaluate import check_pair
+from trussid.lqg.loop import Loop
 from trussid.plid.experiment import excitation
 
 
@@ -77,14 +77,18 @@ def run_loop(plant, controller, d, noise_rms, *, adc_full_scale, dac_full_scale,
     Parameters
     ----------
     plant, controller : control.StateSpace
-        Discrete, named signals (:func:`trussid.lqg.evaluate.check_pair`); the plant strictly
+        Discrete, named signals (:class:`trussid.lqg.loop.Loop`); the plant strictly
         proper from its D/A inputs to the sensors.
     d : (N, m) float
         Dither at the D/A [V], columns in the controller's output order.
     noise_rms : float or (p,) float
         White sensor noise RMS [V].
     adc_full_scale, dac_full_scale : float or array
-        Converter ranges [V]; ``bits`` their resolution.
+        Converter ranges [V].
+    bits : int
+        The converters' resolution.
+    seed : int
+        Seed of the sensor noise.
     x_plant, x_controller : array, optional
         Initial states (default rest).
 
@@ -92,13 +96,11 @@ def run_loop(plant, controller, d, noise_rms, *, adc_full_scale, dac_full_scale,
     -------
     ClosedLoopRecord
     """
-    check_pair(plant, controller)
-    p_in, p_out = list(plant.input_labels), list(plant.output_labels)
-    iu = [p_in.index(s) for s in controller.output_labels]
-    iy = [p_out.index(s) for s in controller.input_labels]
-    Ap, Bp, Cp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C))
-    Bu, Cy = Bp[:, iu], Cp[iy]
-    if np.any(np.asarray(plant.D)[np.ix_(iy, iu)] != 0):
+    loop = Loop.of(plant, controller)
+    iu, iy = list(loop.iu), list(loop.iy)
+    Ap = np.asarray(plant.A, dtype=float)
+    Bu, Cy = (np.asarray(M, dtype=float) for M in (loop.open_loop.B, loop.open_loop.C))
+    if np.any(np.asarray(loop.open_loop.D) != 0):
         raise ValueError("the plant must be strictly proper from its D/A to its sensors")
     Ac, Bc, Cc, Dc = (np.asarray(M, dtype=float) for M in
                       (controller.A, controller.B, controller.C, controller.D))

@@ -26,113 +26,30 @@ import numpy as np
 
 from trussid.lqg.design import design_lqg, excited_band
 from trussid.lqg.errors import ControlError
-from trussid.lqg.evaluate import closed_loop, disk_margins
-from trussid.lqg.modal import freq_damping, modal_data
+from trussid.lqg.evaluate import (MODE_DAMPING_MAX, DampingTable, closed_loop, damping_table,
+                                  disk_margins)
+from trussid.lqg.grading import DEFAULT_BAND, THRESHOLDS, Thresholds
 from trussid.plid.metrics import prediction_ratio_db
 
 from .experiment import ClosedLoopRecord, closed_loop_record
 from .identify import ClosedLoopModel, identify_plid
 
-#: A complex pole with more damping than this is no structural mode (filters, amplifiers).
-MODE_DAMPING_MAX = 0.2
-
-
 # --------------------------------------------------------------------------- damping per mode
 
 
-@dataclass
-class ModeDamping:
-    """Damping of a plant's modes under a controller (issue 27's definition).
-
-    The modes are the plant's complex poles with damping below :data:`MODE_DAMPING_MAX` in
-    ``band``; the *dominant* ones the ``n_dominant`` with the largest input-output residue.
-    A mode's closed-loop damping is that of the worst closed-loop pole within ``window``
-    (relative) of its frequency, or of the nearest pole (s-plane) if none is.
-
-    Attributes
-    ----------
-    frequency_hz, damping_open, residue, damping_closed : (k,) float
-        Per mode, ascending frequency.
-    damping_open_window : (k,) float
-        The open-loop damping by the same rule (worst open-loop pole within ``window``):
-        the reference of :attr:`others_ratio`. On an identified model a well damped
-        spurious mode next to a lightly damped one would otherwise read as a 95 % loss.
-    dominant : (k,) bool
-    stable : bool
-    spectral_radius : float
-    """
-
-    frequency_hz: np.ndarray
-    damping_open: np.ndarray
-    residue: np.ndarray
-    damping_closed: np.ndarray
-    damping_open_window: np.ndarray
-    dominant: np.ndarray
-    stable: bool
-    spectral_radius: float
-
-    @property
-    def dominant_damping(self) -> np.ndarray:
-        return self.damping_closed[self.dominant]
-
-    @property
-    def dominant_frequency_hz(self) -> np.ndarray:
-        return self.frequency_hz[self.dominant]
-
-    @property
-    def others_ratio(self) -> float:
-        """Least closed- to open-loop damping ratio of the non-dominant modes (inf if none)."""
-        o = ~self.dominant
-        return (float(np.min(self.damping_closed[o] / self.damping_open_window[o])) if o.any()
-                else np.inf)
-
-
-def plant_modes(plant, controller_like, band=(40.0, 450.0), n_dominant: int = 3):
-    """``(frequency [Hz], damping, residue, dominant)`` of the plant's modes in ``band`` seen
-    from the D/A inputs to the sensors named by ``controller_like`` (a controller or any
-    system with the sensor names as inputs and the D/A names as outputs)."""
-    p_in, p_out = list(plant.input_labels), list(plant.output_labels)
-    iu = [p_in.index(s) for s in controller_like.output_labels]
-    iy = [p_out.index(s) for s in controller_like.input_labels]
-    md = modal_data(plant.A, np.asarray(plant.B)[:, iu], np.asarray(plant.C)[iy], plant.dt)
-    keep = np.flatnonzero((md.poles.imag > 0) & (md.damping < MODE_DAMPING_MAX)
-                          & (md.frequency_hz >= band[0]) & (md.frequency_hz <= band[1]))
-    keep = keep[np.argsort(md.frequency_hz[keep])]
-    f, z, r = md.frequency_hz[keep], md.damping[keep], md.residue[keep]
-    dom = np.zeros(f.size, bool)
-    dom[np.argsort(-r)[:n_dominant]] = True
-    return f, z, r, dom
-
-
 def mode_damping(plant, controller, band=(40.0, 450.0), n_dominant: int = 3,
-                 window: float = 0.03) -> ModeDamping:
-    """The plant's modes in ``band`` under ``controller`` (:class:`ModeDamping`)."""
-    f, z, r, dom = plant_modes(plant, controller, band, n_dominant)
-    lam = np.linalg.eigvals(np.asarray(closed_loop(plant, controller).A))
-    rho = float(np.max(np.abs(lam)))
-    zcl = _window_damping(lam, f, z, plant.dt, window)
-    zol = _window_damping(np.linalg.eigvals(np.asarray(plant.A)), f, z, plant.dt, window)
-    return ModeDamping(f, z, r, zcl, zol, dom, rho < 1, rho)
-
-
-def _window_damping(lam, f, z, dt, window):
-    """Per mode (f, z): the least damping of the poles ``lam`` within ``window`` of f, or
-    of the pole nearest the mode in the s-plane if none is."""
-    fc, zc = freq_damping(lam, dt)
-    up = lam.imag > 0
-    s_cl = np.log(lam[up].astype(complex)) / dt
-    out = np.empty(f.size)
-    for i, (fi, zi) in enumerate(zip(f, z)):
-        near = up & (np.abs(fc / fi - 1) <= window)
-        if near.any():
-            out[i] = zc[near].min()
-        else:
-            s0 = 2 * np.pi * fi * (-zi + 1j * np.sqrt(1 - zi**2))
-            out[i] = zc[up][np.argmin(np.abs(s_cl - s0))]
-    return out
+                 window: float = 0.03) -> DampingTable:
+    """The plant's modes in ``band`` under ``controller``, as the supervisor grades them:
+    :func:`trussid.lqg.evaluate.damping_table` with its ``pairing="window"`` (issue 27's
+    definition: an identified model's eigenvectors are not trusted)."""
+    return damping_table(plant, controller, band=band, pairing="window", window=window,
+                         n_dominant=n_dominant)
 
 
 # --------------------------------------------------------------------------- supervisor
+
+#: The adaptive loop's default dither band [Hz] (:class:`AdaptSettings`).
+DITHER_BAND = (0.0, 400.0)
 
 
 @dataclass(frozen=True)
@@ -143,12 +60,11 @@ class SupervisorSettings:
     ----------
     target_damping : float
         The redesign's state-feedback damping of its target modes [-].
-    accept_damping : float
-        Least damping of every dominant mode of the model under the new controller [-].
-    others_ratio : float
-        Least closed- to open-loop damping ratio of the model's other modes in ``band``.
-    min_margin_db : float
-        Least MIMO disk gain margin on the model [dB] (balanced, at the plant input).
+    thresholds : trussid.lqg.grading.Thresholds
+        What the model must show under the new controller (the nominal thresholds of every
+        graded loop): every dominant mode at least ``dominant_nominal`` damping, the other
+        modes in ``band`` at least ``other_ratio_nominal`` of theirs, a MIMO disk gain
+        margin of at least ``mimo_gm_nominal_db`` (balanced, at the plant input).
     max_prediction_loss_db : float
         Fresh data: the model's one-step prediction ratio on the fresh record may fall at
         most this much below its ratio on its own identification record [dB].
@@ -158,18 +74,18 @@ class SupervisorSettings:
         Detection: the running controller's least dominant damping predicted on the new
         model fell below this fraction of ``target_damping``.
     band : (float, float)
-        Modes of the model considered [Hz]: the dither's band, where the model is
-        identified (a 36-state model can hold a spurious lightly damped mode above it).
+        Modes of the model considered [Hz]: the graded band
+        (:data:`trussid.lqg.grading.DEFAULT_BAND`) up to the top of the dither's band
+        (:data:`DITHER_BAND`), where the model is identified (a 36-state model can hold a
+        spurious lightly damped mode above it).
     """
 
     target_damping: float = 0.07
-    accept_damping: float = 0.05
-    others_ratio: float = 0.8
-    min_margin_db: float = 6.0
+    thresholds: Thresholds = THRESHOLDS
     max_prediction_loss_db: float = 3.0
     detect_shift: float = 0.01
     detect_damping: float = 0.95
-    band: tuple = (40.0, 400.0)
+    band: tuple = (DEFAULT_BAND[0], min(DEFAULT_BAND[1], DITHER_BAND[1]))
 
 
 @dataclass
@@ -196,8 +112,7 @@ def redesign(fit: ClosedLoopModel, rec: ClosedLoopRecord,
     # poorly identified (a spurious 420 Hz one showed up on the testbed)
     lo, hi = excited_band(u, 1.0 / rec.dt)
     band = (max(settings.band[0], lo), min(settings.band[1], hi))
-    f, _, _, dom = plant_modes(fit.model, _io_shape(fit.model), band)
-    fd = f[dom]
+    fd = _model_modes(fit.model, band).dominant_frequency_hz
     bands = [("default", None)]
     if fd.size:
         bands.append(("three largest residues", (0.985 * fd.min(), 1.015 * fd.max())))
@@ -221,22 +136,24 @@ def redesign(fit: ClosedLoopModel, rec: ClosedLoopRecord,
     return out
 
 
-def _io_shape(model):
-    """A stand-in with the model's sensors as inputs and its D/A as outputs (for
-    :func:`plant_modes` on a model alone)."""
-    return control.ss([], [], [], np.zeros((model.ninputs, model.noutputs)), model.dt,
+def _model_modes(model, band) -> DampingTable:
+    """A model's own modes in ``band`` (its loop with no controller: every sensor to every
+    D/A through a zero gain), graded as :func:`mode_damping` grades them."""
+    zero = control.ss([], [], [], np.zeros((model.ninputs, model.noutputs)), model.dt,
                       inputs=list(model.output_labels), outputs=list(model.input_labels))
+    return mode_damping(model, zero, band)
 
 
 def check_candidate(model, candidate, running,
                     settings: SupervisorSettings = SupervisorSettings()) -> Verdict:
     """The model checks of a new controller ``candidate`` against the ``running`` one.
 
-    Accepted when, on ``model``: the loop is stable; every dominant mode reaches
-    ``accept_damping`` and the least dominant damping is above the running controller's
-    (on the same model); the other modes keep ``others_ratio`` of their damping; the MIMO
-    disk gain margin is at least ``min_margin_db``.
+    Accepted when, on ``model``: the loop is stable; every dominant mode reaches the
+    thresholds' ``dominant_nominal`` and the least dominant damping is above the running
+    controller's (on the same model); the other modes keep ``other_ratio_nominal`` of their
+    damping; the MIMO disk gain margin is at least ``mimo_gm_nominal_db``.
     """
+    T = settings.thresholds
     new = mode_damping(model, candidate, settings.band)
     old = mode_damping(model, running, settings.band)
     fig = {"stable": new.stable, "spectral_radius": new.spectral_radius,
@@ -248,17 +165,17 @@ def check_candidate(model, candidate, running,
     if not new.stable:
         reasons.append(f"unstable on the model (|z| = {new.spectral_radius:.4f})")
         return Verdict(False, reasons, fig)
-    if new.dominant_damping.min() < settings.accept_damping:
+    if new.dominant_damping.min() < T.dominant_nominal:
         reasons.append(f"a dominant mode at {100 * new.dominant_damping.min():.2f} % "
-                       f"(< {100 * settings.accept_damping:.1f} %)")
+                       f"(< {100 * T.dominant_nominal:.1f} %)")
     if new.dominant_damping.min() <= old.dominant_damping.min():
         reasons.append("no better than the running controller on the model")
-    if new.others_ratio < settings.others_ratio:
+    if new.others_ratio < T.other_ratio_nominal:
         reasons.append(f"another mode keeps {new.others_ratio:.2f} of its damping")
-    dm = disk_margins(model, candidate)["mimo"]
-    fig["disk_margin_db"] = dm["gain_db"]
-    if dm["gain_db"] < settings.min_margin_db:
-        reasons.append(f"MIMO disk margin {dm['gain_db']:.1f} dB (< {settings.min_margin_db:g})")
+    dm = disk_margins(model, candidate).mimo
+    fig["disk_margin_db"] = dm.gain_db
+    if dm.gain_db < T.mimo_gm_nominal_db:
+        reasons.append(f"MIMO disk margin {dm.gain_db:.1f} dB (< {T.mimo_gm_nominal_db:g})")
     return Verdict(not reasons, reasons, fig)
 
 
@@ -316,7 +233,7 @@ class AdaptSettings:
     order: int = 36
     block_rows: tuple = (40, 80)
     dither_rms: float = 2.0
-    dither_band: tuple = (0.0, 400.0)
+    dither_band: tuple = DITHER_BAND
     noise_rms: object = 0.0
     adc_full_scale: object = None   # the lab's converters: required (adapt() checks)
     dac_full_scale: float | None = None
@@ -513,6 +430,6 @@ def _rho(truth, controller) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(np.asarray(closed_loop(truth, controller).A)))))
 
 
-__all__ = ["MODE_DAMPING_MAX", "ModeDamping", "plant_modes", "mode_damping",
+__all__ = ["MODE_DAMPING_MAX", "DITHER_BAND", "mode_damping",
            "SupervisorSettings", "Verdict", "redesign", "check_candidate", "check_fresh",
            "AdaptSettings", "Event", "AdaptRun", "detect", "adapt"]

@@ -24,13 +24,15 @@ from trussid.adapt.experiment import closed_loop_record, trial_rms
 from trussid.adapt.identify import identify_n4sid, identify_plid, nearest_modes
 from trussid.adapt.supervisor import AdaptSettings, adapt, mode_damping
 from trussid.lqg.evaluate import disk_margins
+from trussid.lqg.grading import design_controller
+from trussid.lqg.loop import restrict
 from trussid.plid.metrics import frf_error
 from trussid.plid.modelfile import save_model
+from trussid.testbed.perturbed import perturbed_testbed
 from trussid.testbed.plant import testbed_plant
 
-from .control import design_controller, perturbed_testbed
 
-#: (file-system name, label, :func:`trussid.campaign.control.perturbed_testbed` changes)
+#: (file-system name, label, :func:`trussid.testbed.perturbed.perturbed_testbed` changes)
 CHANGES = (
     ("udf_mass_minus10", "UDF mass -10 %", {"udf__mass": ("x", 0.90)}),
     ("udf_mass_plus10", "UDF mass +10 %", {"udf__mass": ("x", 1.10)}),
@@ -130,7 +132,7 @@ def nominal_closed_loop(truth, controller, s: AdaptDemoSettings, noise_v: float,
         f"A/D clipped {rec.adc_clipped}")
     fits = {"plid": identify_plid(rec, s.order, block_rows=s.block_rows),
             "n4sid": identify_n4sid(rec, s.order, block_rows=s.block_rows)}
-    ref = _io(truth, rec)
+    ref = restrict(truth, rec.input_names, rec.output_names)
     frf = {k: frf_error(f.model, ref, s.frf_band)["rms_db"] for k, f in fits.items()}
     if open_loop_model is not None:
         frf["open_loop"] = frf_error(open_loop_model, ref, s.frf_band)["rms_db"]
@@ -142,18 +144,9 @@ def nominal_closed_loop(truth, controller, s: AdaptDemoSettings, noise_v: float,
                              full_scale, bits)
 
 
-def _io(truth, rec):
-    p_in, p_out = list(truth.input_labels), list(truth.output_labels)
-    iu = [p_in.index(n) for n in rec.input_names]
-    iy = [p_out.index(n) for n in rec.output_names]
-    return control.ss(truth.A, np.asarray(truth.B)[:, iu], np.asarray(truth.C)[iy],
-                      np.asarray(truth.D)[np.ix_(iy, iu)], truth.dt)
-
-
 def _truth_dominant(truth, controller):
     md = mode_damping(truth, controller)
-    return [(float(f), float(z)) for f, z in zip(md.frequency_hz[md.dominant],
-                                                 md.damping_open[md.dominant])]
+    return [(float(r.frequency_hz), float(r.damping_open)) for r in md.dominant]
 
 
 @dataclass
@@ -164,8 +157,8 @@ class ChangeResult:
     label: str
     truth: object
     run: object                   # trussid.adapt.AdaptRun
-    before: object                # ModeDamping: nominal controller on the changed truth
-    after: object                 # ModeDamping: final controller on the changed truth
+    before: object                # trussid.lqg.evaluate.DampingTable: nominal controller on the changed truth
+    after: object                 # DampingTable: final controller on the changed truth
     margin_before_db: float
     margin_after_db: float | None
     reidentified: list            # [(truth f, truth damping, model f, model damping)]
@@ -185,11 +178,11 @@ def run_change(name, label, truth, controller, reference_hz, s: AdaptDemoSetting
     run = adapt(truth, controller, reference_hz, a, progress=progress)
     before = mode_damping(truth, controller)
     after = mode_damping(truth, run.controller)
-    mb = disk_margins(truth, controller)["mimo"]["gain_db"]
-    ma = disk_margins(truth, run.controller)["mimo"]["gain_db"] if after.stable else None
+    mb = disk_margins(truth, controller).mimo.gain_db
+    ma = disk_margins(truth, run.controller).mimo.gain_db if after.stable else None
     last = run.models[-1].model
-    fd = before.frequency_hz[before.dominant]
-    zd = before.damping_open[before.dominant]
+    fd = before.dominant_frequency_hz
+    zd = [r.damping_open for r in before.dominant]
     reid = [(float(f), float(z), *nearest_modes(last, [f])[0]) for f, z in zip(fd, zd)]
     return ChangeResult(name, label, truth, run, before, after, mb, ma, reid,
                         time.process_time() - c0)

@@ -64,14 +64,15 @@ from trussid._util.files import atomic_directory, atomic_path
 from trussid._util.jsonio import json_safe
 from trussid.campaign.adapt import demo_section as adapt_demo_section
 from trussid.campaign.adapt import write_files as write_adapt_files
-from trussid.campaign.control import LoopSettings, demo_section
+from trussid.campaign.control import demo_section
 from trussid.campaign.html_report import write_report_html
 from trussid.campaign.report import report_markdown
-from trussid.campaign.structure import DEFAULT_SNR_DB
-from trussid.campaign.summary import (AuditedIdentifiedMode, AuditedTrueMode, ClosedLoopSection,
+from trussid.campaign.structure import DEFAULT_SNR_DB, STRUCTURAL_DAMPING_MAX
+from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
                                       DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
-                                      PlantSummary, Provenance, ReportFiles)
+                                      PlantSummary, ReportProvenance, ReportFiles)
 from trussid.geometry.lab import G0, lab_record
+from trussid.lqg.grading import LoopSettings
 from trussid.plid.datafile import with_channels, write_data
 from trussid.plid.estimator import PLID, PLIDWarning
 from trussid.plid.evaluate import compare
@@ -80,7 +81,9 @@ from trussid.plid.frf import frequency_response, h1
 from trussid.plid.metrics import choose_predictor, prediction_ratio_db
 from trussid.plid.modal import mac, modal_table
 from trussid.plid.modelfile import save_model
-from trussid.plid.multipass import Stabilised, default_via, fit_model
+from trussid.plid.frontend import fit_model
+from trussid.plid.provenance import Stabilised
+from trussid.plid.reduced import default_via
 from trussid.plid.stability import stabilise
 from trussid.plid.subspace import n4sid
 from trussid.plid.uncertainty import mode_intervals
@@ -133,7 +136,7 @@ class DemoSettings:
     seed : int
         Seed of everything random (each record derives its own).
     direct : {False, True, "auto"}
-        Direct term D of the identified models (:func:`trussid.plid.multipass.
+        Direct term D of the identified models (:func:`trussid.plid.reduced.
         identify_reduced`): the testbed's sensors see the structure through the lab's
         low-pass filters (no feed-through, False); accelerometers on a bare structure
         respond at once to a force ("auto": the data decide).
@@ -346,7 +349,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     """Identify an order-``order`` model from one record: the one switchable call.
 
     Runs the project's identification recipe for under-modelled structures,
-    :func:`trussid.plid.multipass.identify_reduced`: the PLID recipe :func:`trussid.plid.multipass.identify`
+    :func:`trussid.plid.reduced.identify_reduced`: the PLID recipe :func:`trussid.plid.recipe.identify`
     (an N4SID prior with D = 0 in a rotation observer basis, refined by PLID) at ``order``
     and at the higher orders ``via``, the latter reduced to ``order`` by input-weighted
     balanced truncation and refined by PLID; the candidate with the best one-step
@@ -530,9 +533,6 @@ def _mode_checks(poles, modes, model, truth) -> list[ModeCheck]:
     return rows
 
 
-#: A true or identified pole with a damping ratio above this is not a structural mode (the
-#: plant's filter and amplifier poles are real: damping 1).
-MODE_DAMPING_MAX = 0.5
 #: Relative frequency error within which an identified mode counts as the true one found.
 FOUND_TOLERANCE = 0.05
 #: Identified modes below this damping ratio are listed wherever they are (a controller
@@ -555,7 +555,7 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
     Returns
     -------
     ModeAudit
-        ``true_modes_in_band``: every true structural mode (damping <= MODE_DAMPING_MAX) in
+        ``true_modes_in_band``: every true structural mode (damping <= STRUCTURAL_DAMPING_MAX) in
         ``band`` with ``found`` (matched within FOUND_TOLERANCE in frequency) and the
         identified frequency and damping; ``missing``: the frequencies not found;
         ``filter_poles_in_band``: true poles that are not modes (excluded from the count);
@@ -566,18 +566,18 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
     lo, hi = band
     true_modes = sorted({(r.true_frequency_hz, r.true_damping) for r in poles
                          if r.true_frequency_hz is not None
-                         and r.true_damping <= MODE_DAMPING_MAX})
+                         and r.true_damping <= STRUCTURAL_DAMPING_MAX})
     f_true = np.array([f for f, _ in true_modes]) if true_modes else np.zeros(0)
     rows, filters = [], 0
     for r in poles:
         ft = r.true_frequency_hz
         if ft is None or not lo <= ft <= hi:
             continue
-        if r.true_damping > MODE_DAMPING_MAX:
+        if r.true_damping > STRUCTURAL_DAMPING_MAX:
             filters += 1
             continue
         fi = r.frequency_hz
-        found = (fi is not None and r.damping <= MODE_DAMPING_MAX
+        found = (fi is not None and r.damping <= STRUCTURAL_DAMPING_MAX
                  and abs(fi - ft) <= FOUND_TOLERANCE * ft)
         rows.append(AuditedTrueMode(true_frequency_hz=ft, true_damping=r.true_damping,
                                     found=bool(found), frequency_hz=fi if found else None,
@@ -592,7 +592,7 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
     identified, spurious, light = [], [], []
     for r in poles:
         fi = r.frequency_hz
-        if fi is None or r.damping > MODE_DAMPING_MAX:
+        if fi is None or r.damping > STRUCTURAL_DAMPING_MAX:
             continue
         near, rel = nearest(fi)
         entry = AuditedIdentifiedMode(frequency_hz=fi, damping=r.damping, nearest_true_hz=near,
@@ -610,11 +610,11 @@ def mode_audit(poles: list, band, excited) -> ModeAudit:
                      missing=[r.true_frequency_hz for r in rows if not r.found],
                      filter_poles_in_band=filters,
                      spurious=sorted(spurious, key=key), lightly_damped=sorted(light, key=key),
-                     rules={"structural_damping_max": MODE_DAMPING_MAX,
+                     rules={"structural_damping_max": STRUCTURAL_DAMPING_MAX,
                             "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING})
 
 
-def provenance(settings: "DemoSettings", command: str | None = None) -> Provenance:
+def provenance(settings: "DemoSettings", command: str | None = None) -> ReportProvenance:
     """Who made the report, how and where: trussid version, source commit (when the package
     runs from a git checkout), seed, command line, machine, load and date (UTC)."""
     import os
@@ -644,7 +644,7 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> Provenan
         load = list(os.getloadavg())
     except OSError:
         load = None
-    return Provenance(trussid_version=trussid_version, commit=commit, seed=settings.seed,
+    return ReportProvenance(trussid_version=trussid_version, commit=commit, seed=settings.seed,
                       command=command, machine=platform.node(), platform=platform.platform(),
                       cpus=os.cpu_count(), python=platform.python_version(),
                       load_average_start=load,
@@ -887,7 +887,8 @@ def _adapt_section(tp, fits, records, settings, timings, say):
 def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings, prov, t0,
                   t_start, control=None, adapted=None) -> DemoSummary:
     """Every file of the report into ``out`` (the temporary directory); the summary.
-    ``control``: the closed-loop section ``(markdown, figures, summary)`` or None;
+    ``control``: the closed-loop section and its figures (:func:`trussid.campaign.control.
+    demo_section`) or None;
     ``adapted``: :func:`trussid.campaign.adapt.demo_section`'s result or None."""
     files = write_files(out, records, fits, truth, tp.lab)
     figures = {}  # file name -> Figure, drawn again interactively in report.html
@@ -908,8 +909,8 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
         format_version=1, provenance=prov, settings=settings, plant=plant_section(tp),
         experiments=experiment_summary(records, settings), models=models, files=files,
         timings_s=timings,
-        control=None if control is None else ClosedLoopSection(control[0], control[2]),
-        adapt=None if adapted is None else ClosedLoopSection(adapted[0], adapted[2]))
+        control=None if control is None else control[0],
+        adapt=None if adapted is None else AdaptSection(adapted[0], adapted[2]))
     timings["report"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_start
     with atomic_path(out / "summary.json") as tmp:

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import math
 
-from trussid.campaign.summary import DemoSummary, Provenance
+from trussid.campaign.loop_report import closed_loop_markdown
+from trussid.campaign.structure import STRUCTURAL_DAMPING_MAX
+from trussid.campaign.summary import ClosedLoopSection, DemoSummary, ReportProvenance
 
 __all__ = ["report_markdown", "provenance_lines", "lacks_lines"]
 
@@ -134,8 +136,12 @@ def report_markdown(s: DemoSummary) -> str:
         lo, hi = st.frf_band
         checks = {(round(c.true_frequency_hz, 9), round(c.frequency_hz, 9)): c
                   for c in m.mode_checks}
+        not_modes = 0
         for r in m.poles:
-            if r.true_frequency_hz is not None and lo <= r.true_frequency_hz <= hi:
+            if (r.true_frequency_hz is not None and lo <= r.true_frequency_hz <= hi
+                    and r.true_damping > STRUCTURAL_DAMPING_MAX):
+                not_modes += 1  # a filter's or amplifier's pole, not a structural mode
+            elif r.true_frequency_hz is not None and lo <= r.true_frequency_hz <= hi:
                 c = (checks.get((round(r.true_frequency_hz, 9), round(r.frequency_hz, 9)))
                      if r.frequency_hz is not None else None)
                 fi = c.frequency_ci95_hz if c else None
@@ -146,6 +152,10 @@ def report_markdown(s: DemoSummary) -> str:
                          f"{_f(r.damping, '.5f')} | "
                          f"{f'{zi[0]:.5f}-{zi[1]:.5f}' if zi else '-'} | "
                          f"{_f(c.mac if c else None, '.3f')} |")
+        if not_modes:
+            L += ["", f"Not listed: {not_modes} true pole(s) in the band damped above "
+                      f"{STRUCTURAL_DAMPING_MAX:g} (the lab's filter and amplifier poles, not "
+                      "structural modes)."]
         L.append("")
     L += ["### Convergence", "", "![convergence](convergence.png)", "",
           "The top panel is the *mean-normalised* one-step ratio of each model's last PLID "
@@ -155,11 +165,18 @@ def report_markdown(s: DemoSummary) -> str:
           "Models: " + ", ".join(s.files.models), "",
           "All metrics: `summary.json`.", ""]
     md = "\n".join(L)
-    return (md + ("\n" + s.control.markdown if s.control is not None else "")
+    return (md + ("\n" + control_markdown(s.control) if s.control is not None else "")
             + ("\n" + s.adapt.markdown if s.adapt is not None else ""))
 
 
-def provenance_lines(pv: Provenance) -> list:
+def control_markdown(section: ClosedLoopSection) -> str:
+    """The closed-loop section, rendered from its typed summary (or why there is none)."""
+    if section.summary is None:
+        return f"## Closed loop: active damping\n\nNo controller designed: {section.error}.\n"
+    return closed_loop_markdown(section.summary, "##", section.figures)
+
+
+def provenance_lines(pv: ReportProvenance) -> list:
     """The report's provenance paragraph."""
     load = pv.load_average_start
     return ["## Provenance", "",

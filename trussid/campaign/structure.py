@@ -25,6 +25,9 @@ from trussid.geometry.lab import LabSpec
 
 #: Sensor noise under each output's RMS in the all-channel record [dB].
 DEFAULT_SNR_DB = 60.0
+#: A true or identified pole with a damping ratio above this is not a structural mode (the
+#: plant's filter and amplifier poles are real: damping 1).
+STRUCTURAL_DAMPING_MAX = 0.5
 #: Sample rate [Hz] and modal damping of a deck whose IO file and LAB file give none.
 DEFAULT_RATE, DEFAULT_DAMPING = 1000.0, 0.02
 

@@ -14,15 +14,17 @@ from dataclasses import dataclass, field
 
 from trussid._util.jsonio import json_safe
 from trussid.geometry.lab import LabSpec
-from trussid.plid.multipass import Stabilised
+from trussid.lqg.grading import LoopSettings
+from trussid.plid.provenance import Stabilised
 
-__all__ = ["Provenance", "PlantSummary", "ExperimentRow", "AuditedTrueMode",
+__all__ = ["ReportProvenance", "PlantSummary", "ExperimentRow", "AuditedTrueMode",
            "AuditedIdentifiedMode", "ModeAudit", "ModelSummary", "ReportFiles",
-           "ClosedLoopSection", "DemoSummary"]
+           "ControllerSummary", "DesignSummary", "ClosedLoopSummary", "ClosedLoopSection",
+           "AdaptSection", "DemoSummary"]
 
 
 @dataclass(frozen=True)
-class Provenance:
+class ReportProvenance:
     """Who made the report, how and where."""
 
     trussid_version: str | None
@@ -187,9 +189,93 @@ class ReportFiles:
 
 
 @dataclass(frozen=True)
+class ControllerSummary:
+    """A controller's size and channels."""
+
+    states: int
+    sensors: list
+    actuators: list
+
+
+@dataclass(frozen=True)
+class DesignSummary:
+    """How the LQG was designed (:class:`trussid.lqg.LQGDesign` without its systems).
+
+    Attributes
+    ----------
+    form : str
+    target_modes : tuple of trussid.lqg.design.TargetMode
+    design_states : int
+        States of the design model.
+    target_damping : float
+        The state feedback's damping of the target modes [-].
+    estimator : str
+        How the estimator gain was chosen.
+    info : dict
+        Everything else :func:`trussid.lqg.design_lqg` recorded (its ``info`` without the
+        model's mode table).
+    """
+
+    form: str
+    target_modes: tuple
+    design_states: int
+    target_damping: float
+    estimator: str
+    info: dict
+
+
+@dataclass(frozen=True)
+class ClosedLoopSummary:
+    """A controller graded on one or more plants (:func:`trussid.lqg.grading.robustness`),
+    without the systems: ``summary.json``'s ``control`` and what the closed-loop report is
+    rendered from (:func:`trussid.campaign.loop_report.closed_loop_markdown`).
+
+    Attributes
+    ----------
+    nominal : str
+        The nominal plant's label.
+    settings : trussid.lqg.grading.LoopSettings
+        How the loops were exercised and graded (thresholds included).
+    rows : dict
+        ``{plant label: trussid.lqg.grading.LoopEvaluation}``.
+    checks : dict
+        ``{plant label: trussid.lqg.grading.Checks}``.
+    baselines : dict
+        ``{kind: trussid.lqg.grading.Baseline}``.
+    timings_s : dict
+    controller : ControllerSummary
+    design : DesignSummary or None
+        When the study designed the controller.
+    design_file : dict or None
+        What a controller file records of its design (``trussid control``'s JSON).
+    """
+
+    nominal: str
+    settings: LoopSettings
+    rows: dict
+    checks: dict
+    baselines: dict
+    timings_s: dict
+    controller: ControllerSummary
+    design: DesignSummary | None = None
+    design_file: dict | None = None
+
+
+@dataclass(frozen=True)
 class ClosedLoopSection:
-    """The closed-loop section: its Markdown and its summary (``summary.json``'s
-    ``control``), from :func:`trussid.campaign.control.demo_section`."""
+    """The closed-loop section of the demo (:func:`trussid.campaign.control.demo_section`):
+    its summary (``summary.json``'s ``control``) and figure files, or why no controller was
+    designed."""
+
+    summary: ClosedLoopSummary | None
+    figures: list = field(default_factory=list)
+    error: str | None = None
+
+
+@dataclass(frozen=True)
+class AdaptSection:
+    """The adaptive section (:func:`trussid.campaign.adapt.demo_section`): its Markdown and
+    its summary (``summary.json``'s ``adapt``)."""
 
     markdown: str
     summary: dict
@@ -200,7 +286,7 @@ class DemoSummary:
     """Everything the demo reports; ``summary.json`` is :meth:`to_dict`."""
 
     format_version: int
-    provenance: Provenance
+    provenance: ReportProvenance
     settings: object              # trussid.campaign.demo.DemoSettings
     plant: PlantSummary
     experiments: list             # of ExperimentRow
@@ -208,16 +294,21 @@ class DemoSummary:
     files: ReportFiles
     timings_s: dict
     control: ClosedLoopSection | None = None
-    adapt: ClosedLoopSection | None = None   # closed-loop identification, adaptive redesign
+    adapt: AdaptSection | None = None   # closed-loop identification, adaptive redesign
 
     def to_dict(self) -> dict:
         """The JSON form: every field by its name; ``control`` is the closed-loop summary
-        and ``adapt`` the adaptive one (each left out when not run)."""
+        (``{"error": ...}`` when no controller was designed) and ``adapt`` the adaptive one
+        (each left out when not run)."""
         out = json_safe(self)
-        for key in ("control", "adapt"):
-            section = getattr(self, key)
-            if section is None:
-                del out[key]
-            else:
-                out[key] = json_safe(section.summary)
+        if self.control is None:
+            del out["control"]
+        elif self.control.summary is None:
+            out["control"] = {"error": self.control.error}
+        else:
+            out["control"] = json_safe(self.control.summary)
+        if self.adapt is None:
+            del out["adapt"]
+        else:
+            out["adapt"] = json_safe(self.adapt.summary)
         return out

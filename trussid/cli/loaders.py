@@ -102,7 +102,7 @@ def testbed_structure(path: Path | None) -> LoadedStructure:
              f"{', '.join(f'{t / INCH:.3f}' for t in s.walls)} in; strut ends (base / top): {ends}; "
              f"base {tb.base.support}",
              f"mass: {tbm.model.mass_formulation}; beam theory: {tbm.model.beam_theory}",
-             "labels: where each mode's kinetic and strain energy sits (fem.labels)"]
+             "labels: where each mode's kinetic and strain energy sits (trussid.testbed.labels)"]
     return LoadedStructure(model=tbm.model, source="default testbed" if path is None else str(path),
                            notes=notes, testbed=tbm)
 

@@ -8,9 +8,17 @@ from trussid._util.lazy import lazy_exports
 
 _LAZY = {
     "LQGDesign": "design", "design_lqg": "design", "controller_matrices": "design",
-    "select_modes": "design", "lqr_for_damping": "design",
+    "select_modes": "design", "lqr_for_damping": "design", "TargetMode": "design",
+    "DesignCheck": "design", "verify_design": "design",
+    "Loop": "loop", "restrict": "loop", "match_names": "loop", "check_pair": "loop",
     "closed_loop": "evaluate", "damping_table": "evaluate", "disk_margins": "evaluate",
     "h2_norm": "evaluate", "simulate_loop": "evaluate", "frequency_response": "evaluate",
+    "ModeRow": "evaluate", "DampingTable": "evaluate", "Margin": "evaluate",
+    "ChannelMargin": "evaluate", "DiskMargins": "evaluate", "LoopSimulation": "evaluate",
+    "LoopSettings": "grading", "Thresholds": "grading", "THRESHOLDS": "grading",
+    "plant_loop_settings": "grading", "LoopEvaluation": "grading", "evaluate_loop": "grading",
+    "Checks": "grading", "check": "grading", "design_controller": "grading",
+    "Robustness": "grading", "robustness": "grading",
     "decentralised": "baselines", "tune_baseline": "baselines",
     "modal_data": "modal", "modal_truncation": "modal",
     "ControlError": "errors",

@@ -17,6 +17,8 @@ import numpy as np
 from .errors import ControlError
 from .evaluate import damping_table
 
+__all__ = ["KINDS", "decentralised", "tune_baseline"]
+
 KINDS = ("static", "static+delay", "bandpass", "bandpass+delay")
 
 
@@ -62,9 +64,9 @@ def tune_baseline(model, kind: str, band=(150.0, 250.0), gains=None) -> tuple[fl
     for g in gains:
         c = decentralised(kind, g, model.dt, ins, outs, band)
         t = damping_table(model, c, band=(0.0, 0.5 / model.dt))
-        if not t["stable"]:
+        if not t.stable:
             continue
-        dom = [r["damping_worst_visible"] for r in t["rows"] if r["dominant"]]
+        dom = [r.damping_worst_visible for r in t.dominant]
         z = min(dom) if dom else -np.inf
         if z > best_z:
             best, best_z = float(g), z

@@ -48,9 +48,49 @@ from .errors import ControlError
 from .evaluate import damping_table
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
 
+__all__ = ["FORMS", "ESTIMATORS", "TargetMode", "DesignCheck", "LQGDesign", "check_model",
+           "excited_band", "select_modes", "lqr_for_damping", "design_lqg", "verify_design",
+           "controller_matrices"]
+
 FORMS = ("predictor", "filter")
 ESTIMATORS = ("record", "model")
 
+
+@dataclass(frozen=True)
+class TargetMode:
+    """A target mode of a design: the identified model's mode and what the state feedback
+    reached on it.
+
+    Attributes
+    ----------
+    block : int
+        Its block in :func:`trussid.lqg.modal.real_modal_basis` of the model.
+    frequency_hz, damping, residue : float
+        The identified mode [Hz], [-] and its residue (in the record's input levels).
+    complex : bool
+        A complex pair (always, for a target).
+    state_feedback_damping : float
+        Damping the state feedback gives it on the design model [-].
+    weight : float
+        Its LQR weight.
+    """
+
+    block: int
+    frequency_hz: float
+    damping: float
+    residue: float
+    complex: bool
+    state_feedback_damping: float
+    weight: float
+
+
+@dataclass(frozen=True)
+class DesignCheck:
+    """A design closed around the whole model it was designed from (:func:`verify_design`):
+    the loop's spectral radius and, per target mode, its worst visible damping [-]."""
+
+    spectral_radius: float
+    target_damping_reached: list
 
 
 @dataclass
@@ -68,7 +108,7 @@ class LQGDesign:
     K : (n, p) float
         One-step predictor gain of the design model.
     form : str
-    target_modes : list of dict
+    target_modes : tuple of TargetMode
         Frequency [Hz], identified damping, residue and the state-feedback damping reached.
     info : dict
         Everything else (weights, estimator choice, iterations).
@@ -79,7 +119,7 @@ class LQGDesign:
     F: np.ndarray
     K: np.ndarray
     form: str
-    target_modes: list
+    target_modes: tuple
     info: dict = field(default_factory=dict)
 
 
@@ -113,6 +153,8 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
         Discrete identified model.
     band : (float, float), optional
         Every complex mode with a frequency in ``[lo, hi]`` Hz.
+    max_damping : float
+        Only complex modes damped below this are candidates [-].
     dominant_fraction : float
         Without ``band``: the complex modes with damping below ``max_damping`` inside the
         ``excited`` band whose residue is at least this fraction of the largest such residue
@@ -272,7 +314,7 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     >>> u = excitation("white", 2000, fs=1000.0, seed=1)
     >>> y = simulate(plant, u) + 1e-3 * np.random.default_rng(0).standard_normal((2000, 1))
     >>> design = design_lqg(plant, u, y, target_damping=0.05)
-    >>> [round(m["frequency_hz"], 1) for m in design.target_modes]
+    >>> [round(m.frequency_hz, 1) for m in design.target_modes]
     [50.0, 120.0]
     >>> loop = modal_table(closed_loop(plant, design.controller))
     >>> print(np.round(loop.frequencies_hz, 1), np.round(100 * loop.damping, 1))
@@ -344,8 +386,8 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     controller = control.ss(*ctrl, model.dt, inputs=names_in, outputs=names_out,
                             name=f"lqg_{form}")
     _, zeta_est = freq_damping(np.linalg.eigvals(A - Kd @ C), model.dt)
-    targets = [dict(rows[b], state_feedback_damping=float(z), weight=float(w))
-               for b, z, w in zip(sel, zeta_sf, q)]
+    targets = tuple(TargetMode(**rows[b], state_feedback_damping=float(z), weight=float(w))
+                    for b, z, w in zip(sel, zeta_sf, q))
     info = {"form": form, "estimator": estimator, "estimator_choice": kinfo,
             "target_damping": target_damping, "band": None if band is None else list(band),
             "dominant_fraction": dominant_fraction, "n_modes": n_modes,
@@ -367,7 +409,7 @@ def _levels(x) -> np.ndarray:
     return np.where(r > 0, r, 1.0)
 
 
-def verify_design(model, design: LQGDesign, min_fraction: float = 0.5) -> dict:
+def verify_design(model, design: LQGDesign, min_fraction: float = 0.5) -> DesignCheck:
     """The designed controller on the whole model it was designed from: refuse a design that
     is unstable there, or that leaves a target mode below ``min_fraction`` of the target
     damping (:class:`ControlError` naming the pole or the mode).
@@ -376,16 +418,24 @@ def verify_design(model, design: LQGDesign, min_fraction: float = 0.5) -> dict:
     and the feed-through are all in this loop, so a design can fail here although its state
     feedback reached every target.
 
+    Parameters
+    ----------
+    model : control.StateSpace
+        The identified model the design was made from.
+    design : LQGDesign
+    min_fraction : float
+        Least fraction of the target damping every target mode must reach [-].
+
     Returns
     -------
-    dict
-        ``spectral_radius`` and, per target mode, the worst visible closed-loop damping
+    DesignCheck
+        The spectral radius and, per target mode, the worst visible closed-loop damping
         (:func:`trussid.lqg.evaluate.damping_table`) on the model.
     """
     nyq = 0.5 / model.dt
     tab = damping_table(model, design.controller, band=(0.0, nyq))
-    lam = tab["closed_loop_poles"]
-    if not tab["stable"]:
+    lam = tab.closed_loop_poles
+    if not tab.stable:
         k = int(np.argmax(np.abs(lam)))
         f, z = freq_damping(lam[k:k + 1], model.dt)
         raise ControlError(
@@ -395,21 +445,20 @@ def verify_design(model, design: LQGDesign, min_fraction: float = 0.5) -> dict:
     target = design.info["target_damping"]
     reached = []
     for t in design.target_modes:
-        rows = tab["rows"]
-        r = min(rows, key=lambda r: abs(r["frequency_hz"] - t["frequency_hz"]))
-        reached.append(float(r["damping_worst_visible"]))
+        r = min(tab.rows, key=lambda r: abs(r.frequency_hz - t.frequency_hz))
+        reached.append(float(r.damping_worst_visible))
     worst = int(np.argmin(reached)) if reached else None
     if worst is not None and reached[worst] < min_fraction * target:
         t = design.target_modes[worst]
         raise ControlError(
             f"the design falls short on the model it was designed from: the "
-            f"{t['frequency_hz']:.1f} Hz target mode reaches {100 * reached[worst]:.2f} % "
+            f"{t.frequency_hz:.1f} Hz target mode reaches {100 * reached[worst]:.2f} % "
             f"damping, less than {100 * min_fraction:g} % of the {100 * target:.1f} % asked "
             f"(the other targets: "
-            + ", ".join(f"{x['frequency_hz']:.1f} Hz {100 * z:.2f} %"
+            + ", ".join(f"{x.frequency_hz:.1f} Hz {100 * z:.2f} %"
                         for x, z in zip(design.target_modes, reached) if x is not t)
             + "); try another --band or --target-damping")
-    return {"spectral_radius": tab["spectral_radius"], "target_damping_reached": reached}
+    return DesignCheck(tab.spectral_radius, reached)
 
 
 def controller_matrices(A, B, C, F, K, form: str = "predictor", D=None):

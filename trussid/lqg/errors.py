@@ -2,6 +2,8 @@
 
 from trussid._util.errors import UserError
 
+__all__ = ["ControlError"]
+
 
 class ControlError(UserError):
     """A design or an evaluation that cannot be done as asked: a continuous or unstable

@@ -15,6 +15,8 @@ import numpy as np
 
 from trussid.plid.modal import pole_parameters
 
+__all__ = ["freq_damping", "ModalData", "modal_data", "real_modal_basis", "modal_truncation"]
+
 
 def freq_damping(z, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """Frequency [Hz] and damping ratio [-] of discrete poles ``z`` (ZOH equivalents): the

@@ -33,13 +33,15 @@ from trussid.geometry.spec import Testbed
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.evaluate import compare
 from trussid.plid.frf import frequency_response
-from trussid.plid.multipass import identify, identify_reduced
+from trussid.plid.recipe import identify
+from trussid.plid.reduced import identify_reduced
 from trussid.plid.subspace import n4sid
 from trussid.study.deck import DeckModesEvaluator
 from trussid.study.errors import StudyError
 from trussid.study.plants import PLANTS, record
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.model import build_testbed, design_at_walls, wall_basis, wall_modes
+from trussid.testbed.model import build_testbed
+from trussid.testbed.walls import design_at_walls, wall_basis, wall_modes
 from trussid.testbed.plant import testbed_plant
 from trussid.testbed.sensitivity import wall_sensitivities
 
@@ -146,7 +148,7 @@ def _walls(ctx, params):
 @dataclass(frozen=True)
 class WallContext:
     """What every point of a wall study shares: the testbed model at the reference walls
-    and its wall basis (:func:`trussid.testbed.model.wall_basis`)."""
+    and its wall basis (:func:`trussid.testbed.walls.wall_basis`)."""
 
     tbm: object
     basis: object
@@ -171,7 +173,7 @@ class CaseContext:
 class ModesEvaluator(Evaluator):
     """Natural frequencies [Hz] of the testbed at the point's walls, and each mode's label.
 
-    Frequencies from the wall basis (:func:`trussid.testbed.model.wall_modes`: only the
+    Frequencies from the wall basis (:func:`trussid.testbed.walls.wall_modes`: only the
     strut terms of K and M change between designs); labels from where each mode's energy
     sits (:func:`trussid.testbed.labels.label_testbed_modes`) on the model at those walls.
     """
@@ -343,8 +345,8 @@ class IdentifyEvaluator(Evaluator):
 
     Parameters of a point: ``seed`` (record seed; the validation record uses ``seed +
     1000``), ``noise`` (``"60dB"``-style SNR, ``"12bit"`` converters or ``"none"``),
-    ``order``, ``method`` (``plid-subspace``, ``plid-scratch``: :func:`plid.multipass.identify`
-    with that start; ``plid-reduced``: :func:`plid.multipass.identify_reduced`; ``n4sid``:
+    ``order``, ``method`` (``plid-subspace``, ``plid-scratch``: :func:`plid.recipe.identify`
+    with that start; ``plid-reduced``: :func:`plid.reduced.identify_reduced`; ``n4sid``:
     :func:`plid.subspace.n4sid` at each of ``block_rows``, the best by the true FRF RMS error
     reported — an oracle choice that favours the comparator), ``n_samples``.
 

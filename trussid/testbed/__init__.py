@@ -1,7 +1,9 @@
 """The thesis testbed as an application of :mod:`trussid.fem`: model, walls, labels, plant.
 
 - :mod:`.model` - :func:`build_testbed` (a :class:`trussid.geometry.Testbed` to an FE
-  model and the map of what is what), the wall-thickness basis and sweeps;
+  model and the map of what is what);
+- :mod:`.walls` - the wall-thickness basis and sweeps, and the model's eigen solution;
+- :mod:`.perturbed` - the perturbed truths a controller is graded on;
 - :mod:`.labels` - each mode named by where its energy sits;
 - :mod:`.sensitivity` - analytic frequency sensitivities to each strut's wall;
 - :mod:`.chain` - the lab's electronics (amplifier, filters), from its
@@ -16,8 +18,8 @@ from trussid._util.lazy import lazy_exports
 
 _LAZY = {
     "TestbedMap": "model", "TestbedModel": "model", "build_testbed": "model",
-    "solve_testbed_modes": "model", "WallBasis": "model", "wall_basis": "model",
-    "wall_matrices": "model", "wall_modes": "model", "design_at_walls": "model",
+    "solve_testbed_modes": "walls", "WallBasis": "walls", "wall_basis": "walls",
+    "wall_matrices": "walls", "wall_modes": "walls", "design_at_walls": "walls",
     "ModeLabels": "labels", "label_testbed_modes": "labels",
     "wall_sensitivities": "sensitivity", "testbed_sensitivities": "sensitivity",
     "LabChain": "chain", "lab_plant": "chain",

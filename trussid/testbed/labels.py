@@ -209,7 +209,7 @@ def label_testbed_modes(tbm, modes) -> ModeLabels:
 
     Parameters
     ----------
-    tbm : fem.testbed.TestbedModel
+    tbm : trussid.testbed.TestbedModel
     modes : fem.modal.Modes
         Modes of ``tbm.model`` (``shapes_full`` and ``frequencies_hz`` are used).
 

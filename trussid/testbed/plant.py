@@ -21,7 +21,8 @@ from trussid.fem.sensors import Sensor
 from trussid.geometry.lab import LabSpec
 from trussid.geometry.spec import Testbed
 from trussid.testbed.chain import LabChain, lab_plant
-from trussid.testbed.model import TestbedModel, build_testbed, solve_testbed_modes
+from trussid.testbed.model import TestbedModel, build_testbed
+from trussid.testbed.walls import solve_testbed_modes
 
 @dataclass
 class TestbedPlant:

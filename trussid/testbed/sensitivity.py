@@ -13,7 +13,7 @@ linear in the tube's area ``A_t`` and second moment ``I_t`` (``J_t = 2 I_t``); s
     dK/dt_i = A_t'(t_i) dK/dA_t,i + I_t'(t_i) dK/dI_t,i     (and the same for M)
 
 with ``A_t' = 2 pi (r - t)``, ``I_t' = pi (r - t)^3`` and the ``dK/dA_t`` ... matrices the
-element matrices evaluated with unit properties (:func:`trussid.testbed.model.wall_basis`). Nothing
+element matrices evaluated with unit properties (:func:`trussid.testbed.walls.wall_basis`). Nothing
 is differenced numerically.
 
 The formula holds for distinct eigenvalues; for a repeated one the derivative of an
@@ -28,7 +28,8 @@ import warnings
 
 import numpy as np
 
-from trussid.testbed.model import WallBasis, tube_property_derivatives, wall_basis, wall_modes
+from trussid.testbed.model import tube_property_derivatives
+from trussid.testbed.walls import WallBasis, wall_basis, wall_modes
 
 #: Relative frequency separation below which a pair of modes is reported as repeated.
 CLOSE = 1e-7
@@ -77,7 +78,7 @@ def wall_sensitivities(basis: WallBasis, walls, n_modes: int = 30) -> tuple[np.n
     Parameters
     ----------
     basis : WallBasis
-        From :func:`trussid.testbed.model.wall_basis`.
+        From :func:`trussid.testbed.walls.wall_basis`.
     walls : (6,) float
         Wall thicknesses [m].
     n_modes : int

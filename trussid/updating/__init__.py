@@ -31,7 +31,7 @@ a global search):
 
 1. *Global*, on a Ritz-reduced model (the lowest modes at the nominal walls and at all walls
    scaled by 0.85 and 1.15 as a basis, carried
-   as a :class:`trussid.testbed.model.WallBasis` (:meth:`WallBasis.projected`) so that :func:`trussid.testbed.model.wall_modes` and
+   as a :class:`trussid.testbed.walls.WallBasis` (:meth:`WallBasis.projected`) so that :func:`trussid.testbed.walls.wall_modes` and
    :func:`trussid.testbed.sensitivity.eigenvalue_sensitivities` apply unchanged; frequency error about
    3e-7 relative for walls within +-15 %): :func:`trussid.plid.greybox.fit_parameters` with its
    seeded multi-start over the prior box ``nominal * (1 +- prior_range)``, then pairwise

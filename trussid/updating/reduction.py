@@ -6,19 +6,19 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as la
 
-from trussid.testbed.model import WallBasis, wall_matrices, wall_modes
+from trussid.testbed.walls import WallBasis, wall_matrices, wall_modes
 from trussid.testbed.sensitivity import eigenvalue_sensitivities
 
 __all__ = ["reduced_wall_basis", "ModelModes"]
 
 
 def reduced_wall_basis(basis: WallBasis, n_vectors: int = 40, designs=(1.0, 0.85, 1.15)):
-    """A Ritz-reduced copy of a :class:`trussid.testbed.model.WallBasis`.
+    """A Ritz-reduced copy of a :class:`trussid.testbed.walls.WallBasis`.
 
     The reduced DOFs are the amplitudes of ``V``: the lowest ``n_vectors`` modes of the
     model at each of ``designs`` (all walls scaled by the factor), orthonormalised; the
     basis is projected on them by :meth:`WallBasis.projected`, so the public
-    :func:`trussid.testbed.model.wall_modes` and
+    :func:`trussid.testbed.walls.wall_modes` and
     :func:`trussid.testbed.sensitivity.eigenvalue_sensitivities` work on it unchanged. The
     basis stays affine in the tube properties, hence exact in how the walls enter; its only
     error is the Ritz error of the fixed subspace. Modes at the scaled designs are included
@@ -28,7 +28,7 @@ def reduced_wall_basis(basis: WallBasis, n_vectors: int = 40, designs=(1.0, 0.85
 
     Returns
     -------
-    reduced : trussid.testbed.model.WallBasis
+    reduced : trussid.testbed.walls.WallBasis
     V : (n, r) float
         The projection (reduced shapes ``q`` expand to ``V q``).
     """

@@ -15,7 +15,8 @@ from trussid.plid.greybox import fit_parameters
 from trussid.plid.modal import mac as modal_assurance
 from trussid.plid.modal import mode_groups, pair_modes
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.model import WallBasis, build_testbed, design_at_walls, wall_basis, wall_modes
+from trussid.testbed.model import build_testbed
+from trussid.testbed.walls import WallBasis, design_at_walls, wall_basis, wall_modes
 from trussid.updating.errors import UpdateError
 from trussid.updating.fit import (WALL_NAMES, WallPairing, cluster_span, damping_estimate, global_fit,
                                   wall_intervals)
@@ -127,7 +128,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         Identified natural frequencies [Hz] (any order; modes of any kind: strut bending,
         UDF rigid-body, ...). At least 7 are needed when ``frequency_std_hz`` is not given
         (6 walls plus a degree of freedom for the scatter).
-    tb_nominal : geometry.testbed.Testbed, optional
+    tb_nominal : trussid.geometry.Testbed, optional
         The model to update (default: the default testbed); its walls are the start.
     damping : (k,) float, optional
         Identified damping ratios [-] of the same modes: gives the damping estimate.
@@ -140,7 +141,7 @@ def update_walls(measured_freqs_hz, tb_nominal=None, *, damping=None, frequency_
         Identified mode shapes at ``sensors`` (for MAC pairing).
     sensors : list of fem.sensors.Sensor, optional
         Where ``shapes`` were measured (any quantity: MAC ignores scale).
-    tbm : fem.testbed.TestbedModel, optional
+    tbm : trussid.testbed.TestbedModel, optional
         ``build_testbed(tb_nominal)`` if already built (Euler-Bernoulli).
     n_model_modes : int, optional
         Model modes considered for pairing (default: those up to 1.5 times the highest
@@ -327,7 +328,7 @@ def _unresolved(full_modes: ModelModes, start: dict, f, zeta, sh, allowed, zeta_
 
 def _labels(tbm, basis, walls, n_model, idx_used, j, k_all) -> list:
     """The label of the model mode paired with each measured mode, on the design at the
-    updated walls (:func:`trussid.testbed.model.design_at_walls`: the same wall-basis modes
+    updated walls (:func:`trussid.testbed.walls.design_at_walls`: the same wall-basis modes
     the fit paired, so mode ``j`` is the one paired)."""
     design, modes = design_at_walls(tbm, basis, walls, n_model)
     ml = label_testbed_modes(design, modes).labels

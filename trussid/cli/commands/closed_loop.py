@@ -5,7 +5,7 @@ Without PLANT, on the default testbed's FE truth and the seven perturbed truths 
 x1.5, modal damping 0.1 %; ``--stretch`` adds UDF mass +-10 %), graded by issue 14's
 thresholds. With PLANT (a discrete model file whose inputs and outputs carry the
 controller's names, or those names without the ``u_``/``y_`` prefix of a CSV record), on
-that plant alone, graded in its own units (:func:`trussid.campaign.control.
+that plant alone, graded in its own units (:func:`trussid.lqg.grading.
 plant_loop_settings`): every mode up to Nyquist, excitation white to 0.4 of the sample rate
 at the identification record's levels, behind the converters of the lab the plant file
 records (``trussid plant`` and the demo's ``plant_true.npz`` record theirs; ideal
@@ -56,7 +56,7 @@ def _check_pairs(plants, ctrl, designed: bool, path) -> None:
     control` say that it may be a model (the newcomer's mistake in audit 3 read "controller
     input 'ch1' is not a plant output", naming the wrong cause)."""
     from trussid._util.errors import UserError
-    from trussid.lqg.evaluate import check_pair
+    from trussid.lqg.loop import check_pair
 
     for label, plant in plants:
         try:
@@ -70,12 +70,15 @@ def _check_pairs(plants, ctrl, designed: bool, path) -> None:
 
 
 def run(args) -> int:
+    import dataclasses
+
     import numpy as np
     from tqdm import tqdm
 
     from trussid._util.errors import UserError
-    from trussid.campaign.control import (LoopSettings, plant_loop_settings, robustness,
-                                          truths, write_report)
+    from trussid.campaign.loop_report import write_report
+    from trussid.lqg.grading import Baseline, LoopSettings, plant_loop_settings, robustness
+    from trussid.testbed.perturbed import truths
     from trussid.geometry.lab import recorded_lab
     from trussid.geometry.spec import Testbed
     from trussid.plid.modelfile import load_model
@@ -87,7 +90,7 @@ def run(args) -> int:
         raise UserError(f"--samples must be at least 100, got {args.samples}")
     import json
 
-    from trussid.lqg.evaluate import match_names
+    from trussid.lqg.loop import match_names
 
     ctrl, meta = load_model(args.controller, which="discrete")
     ex = meta["extra"]
@@ -122,21 +125,21 @@ def run(args) -> int:
     base = {}
     if not args.no_baselines and "baseline_kinds" in ex:
         for k, g, b in zip(ex["baseline_kinds"], ex["baseline_gains"], ex["baseline_bands"]):
-            base[str(k)] = {"gain": float(g), "band": [float(v) for v in np.ravel(b)]}
+            base[str(k)] = Baseline(float(g), [float(v) for v in np.ravel(b)])
     bar = tqdm(total=len(plants) + len(base), desc="closed loops", unit="step")
     study = robustness(ctrl, plants, base, settings, progress=lambda msg: bar.update(1))
     bar.close()
     if design:
-        study["design_info"] = design
+        study = dataclasses.replace(study, design_info=design)
     files = write_report(out, study)
-    for label, ok in study["checks"].items():
-        r = study["rows"][label]
-        failed = [k for k, v in ok.items() if not v]
-        dom = ", ".join(f"{100 * d['worst']:.2f}" for d in r["dominant"])
-        print(f"{label:28s} stable {'yes' if r['stable'] else 'NO '}  dominant worst "
+    for label, ok in study.checks.items():
+        r = study.rows[label]
+        failed = ok.failed
+        dom = ", ".join(f"{100 * d.worst:.2f}" for d in r.dominant)
+        print(f"{label:28s} stable {'yes' if r.stable else 'NO '}  dominant worst "
               f"[{dom}] %  {'pass' if not failed else 'FAIL ' + ', '.join(failed)}")
     print(f"report: {out}/{files[0]} ({len(files)} files)")
-    unstable = [label for label, r in study["rows"].items() if not r["stable"]]
+    unstable = [label for label, r in study.rows.items() if not r.stable]
     if unstable:
         # said loudly, not only in a table row: the controller must not go on the structure
         print(f"trussid closed-loop: the closed loop is UNSTABLE on {', '.join(unstable)} "

@@ -60,7 +60,7 @@ def run(args) -> int:
     import numpy as np
 
     from trussid._util.errors import UserError
-    from trussid.campaign.control import design_controller
+    from trussid.lqg.grading import design_controller
     from trussid._util.jsonio import json_safe
     from trussid.plid.datafile import read_data
     from trussid.plid.modelfile import load_model, save_model
@@ -87,20 +87,20 @@ def run(args) -> int:
     if base:
         kinds = list(base)
         extra.update(baseline_kinds=np.array(kinds),
-                     baseline_gains=np.array([base[k]["gain"] for k in kinds]),
-                     baseline_bands=np.array([base[k]["band"] for k in kinds]))
+                       baseline_gains=np.array([base[k].gain for k in kinds]),
+                     baseline_bands=np.array([base[k].band for k in kinds]))
     c = des.controller
     save_model(args.out, c, input_names=list(c.input_labels), output_names=list(c.output_labels),
                extra=extra)
     print(f"controller: {c.nstates} states, {c.ninputs} sensors ({', '.join(c.input_labels)}) "
           f"-> {c.noutputs} actuators ({', '.join(c.output_labels)}), {des.form} form, "
           f"dt {c.dt:g} s")
-    reached = des.info.get("on_model", {}).get("target_damping_reached") or [None] * len(
-        des.target_modes)
+    check = des.info.get("on_model")  # a DesignCheck when the design was verified
+    reached = check.target_damping_reached if check else [None] * len(des.target_modes)
     for t, z in zip(des.target_modes, reached):
         on_model = "" if z is None else f", closed loop on the model {100 * z:.2f} %"
-        print(f"  target {t['frequency_hz']:7.1f} Hz: identified damping "
-              f"{100 * t['damping']:.3f} %, state feedback "
-              f"{100 * t['state_feedback_damping']:.2f} %{on_model}")
+        print(f"  target {t.frequency_hz:7.1f} Hz: identified damping "
+              f"{100 * t.damping:.3f} %, state feedback "
+              f"{100 * t.state_feedback_damping:.2f} %{on_model}")
     print(f"written: {args.out}")
     return 0

@@ -50,7 +50,7 @@ def run(args) -> int:
     labels = None
     if loaded.testbed is not None:
         from trussid.testbed.labels import label_testbed_modes
-        from trussid.testbed.model import solve_testbed_modes
+        from trussid.testbed.walls import solve_testbed_modes
 
         # The testbed's own solver keeps the sub-hertz suspension modes (solve_modes rounds
         # eigenvalues below 1e-11 of max K_ii/M_ii to zero, which catches them here).

@@ -113,7 +113,7 @@ def run(args) -> int:
     if tbm is not None:
         # as `trussid modes` does: the testbed's own solver keeps its sub-hertz suspension
         # modes, which solve_modes would round to zero
-        from trussid.testbed.model import solve_testbed_modes
+        from trussid.testbed.walls import solve_testbed_modes
 
         modes = solve_testbed_modes(tbm, wanted, system=system)
     else:
