@@ -69,9 +69,21 @@ IN_FLIGHT = 2
 #: (mmap) and 128 MiB (trim) let freed blocks be reused (<1 fault per design).
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
               "MALLOC_TRIM_THRESHOLD_": str(128 * 2**20), "MALLOC_MMAP_THRESHOLD_": str(32 * 2**20)}
-#: Dask settings of those workers: no statistical profiler (it samples every thread's stack
-#: every 10 ms, CPU taken from the evaluation for a dashboard a study does not use).
-WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
+#: Dask settings of a study's processes (workers, and the scheduler and client that a local
+#: or batch-system cluster runs in the driver). Dask's timers run per wall second whatever
+#: the work, and on this cluster they were the per-design cost of the workers beyond the
+#: evaluation (benchmarks/results/study.md: 6.3 % of a core idle, 1.3 % with these):
+#: no statistical profiler (it samples every thread's stack every 10 ms, for a dashboard a
+#: study does not use); the event-loop watchdog ("tick", 20 ms: 50 wake-ups a second, each
+#: taking the GIL from the evaluation) once a second; the memory monitor (pause, spill,
+#: restart; 100 ms) and the host statistics (500 ms) less often: a worker's memory does not
+#: grow by much within a second of points; no GIL sampler (with ``gilknocker`` installed it
+#: takes the GIL every millisecond).
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
+                 "distributed.admin.tick.interval": "1s",
+                 "distributed.worker.memory.monitor-interval": "1s",
+                 "distributed.admin.system-monitor.interval": "5s",
+                 "distributed.admin.system-monitor.gil.enabled": False}
 
 
 @dataclass
