@@ -434,7 +434,8 @@ def markdown(results: dict, kept: str = "") -> str:
     """The results as the tables of study.md, then ``kept`` (the hand-written diagnosis)."""
     m = results["meta"]
     lines = ["# Study engine: serial loop vs Dask workers (issues 15, 26, 35)", "",
-             f"`python benchmarks/bench_study.py{' --quick' if m.get('quick') else ''}` at commit {m['commit']}, "
+             f"`python benchmarks/bench_study.py {m.get('argv', '--quick' if m.get('quick') else '')}`".replace(" `", "`")
+             + f" at commit {m['commit']}, "
              f"{m['started']} to {m['finished']}; {m['machine']}; Python {m['python']}. Load averages (1 min) "
              "before/after each run are in the table: on a shared machine wall-clock rates depend on what else "
              "ran; CPU seconds much less.", ""]
@@ -566,6 +567,7 @@ def main(argv=None):
                             text=True).stdout.strip()
     meta = {"machine": f"{platform.machine()} {os.cpu_count()} cpus, shared with other agents",
             "python": platform.python_version(), "commit": commit, "quick": args.quick, "grid": grid,
+            "argv": " ".join(argv if argv is not None else sys.argv[1:]),
             "started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}
     scratch = Path(tempfile.mkdtemp(prefix="bench_study_"))
     results = {"meta": meta}
