@@ -69,7 +69,7 @@ IN_FLIGHT = 2
 #: (mmap) and 128 MiB (trim) let freed blocks be reused (<1 fault per design).
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
               "MALLOC_TRIM_THRESHOLD_": str(128 * 2**20), "MALLOC_MMAP_THRESHOLD_": str(32 * 2**20)}
-#: Dask settings of a study's processes (workers, and the scheduler and client that a local
+#: Dask settings of a study's processes (workers and nannies, and the scheduler that a local
 #: or batch-system cluster runs in the driver). Dask's timers run per wall second whatever
 #: the work, and on this cluster they were the per-design cost of the workers beyond the
 #: evaluation (benchmarks/results/study.md: 6.3 % of a core idle, 1.3 % with these):
