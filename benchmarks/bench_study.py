@@ -31,9 +31,10 @@ that background at the rate an unloaded machine gives it, over the serial loop's
 machine). The 1e6-design estimate for 64 workers uses the measured per-point and per-task
 costs. Writes ``study.json`` and ``study.md`` into ``--out`` (study.md keeps its
 hand-written diagnosis section below :data:`KEEP_MARK`). ``--quick`` (CI): a 6^3 = 216
-design grid, no fits, no 1-worker or before run. The full run takes about 7 min on the
-quiet 2-core machine (serial 8000 x 10.5 ms = 84 s, three 2-worker runs of ~45 s, fits
-~2 min, cluster starts and idle measurements).
+design grid, no fits, no 1-worker or before run, no whole-command runs. The full run
+takes about 8-9 min on the quiet 2-core machine (serial 8000 x 10.5 ms = 84 s, three
+2-worker runs of ~45 s, the whole ``trussid study`` command serial and on 2 workers ~2.3
+min, the fits ~2 min, cluster starts, warm-ups and idle measurements).
 """
 
 from __future__ import annotations
