@@ -207,3 +207,21 @@ def test_the_cli_refuses_a_bad_cluster_file_in_one_line_before_running(tmp_path)
     assert res.returncode == 2 and "needs memory" in res.stderr and "Traceback" not in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "d").exists()
+
+
+def test_the_exported_worker_environment_gives_dask_the_engines_settings():
+    """Workers started by hand or by a job script read the study's Dask settings from the
+    exported variables (issue 35: the timers), as local workers get them from the engine."""
+    import dask
+
+    from trussid.study.engine import WORKER_CONFIG
+
+    env = dict(line.removeprefix("export ").split("=", 1) for line in worker_exports())
+    # the shell strips one level of quotes: export X='1s' gives X=1s
+    env = {k: v.strip("'") for k, v in env.items() if k.startswith("DASK_")}
+    got = dask.config.collect_env(env)
+    for key, value in WORKER_CONFIG.items():
+        node = got
+        for part in key.split("."):
+            node = node[part] if part in node else node[part.replace("-", "_")]
+        assert node == value, key

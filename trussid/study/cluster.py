@@ -29,6 +29,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import dask
 from distributed import Client
 
 from trussid.study.engine import WORKER_CONFIG, WORKER_ENV
@@ -121,7 +122,9 @@ def jobqueue_cluster(cfg: ClusterConfig):
     opts.setdefault("processes", opts["cores"])
     opts["job_script_prologue"] = worker_exports() + list(opts.get("job_script_prologue") or [])
     try:
-        return cls(**opts)
+        # the scheduler runs here: it gets the study's Dask settings too (timers)
+        with dask.config.set(WORKER_CONFIG):
+            return cls(**opts)
     except (TypeError, ValueError) as exc:  # an unknown keyword, a malformed memory size...
         # dask-jobqueue's first line names the keyword; the rest repeats every keyword
         raise StudyError(f"{cfg.source}: [cluster]: {str(exc).strip().splitlines()[0]}") from None

@@ -69,9 +69,21 @@ IN_FLIGHT = 2
 #: (mmap) and 128 MiB (trim) let freed blocks be reused (<1 fault per design).
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
               "MALLOC_TRIM_THRESHOLD_": str(128 * 2**20), "MALLOC_MMAP_THRESHOLD_": str(32 * 2**20)}
-#: Dask settings of those workers: no statistical profiler (it samples every thread's stack
-#: every 10 ms, CPU taken from the evaluation for a dashboard a study does not use).
-WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
+#: Dask settings of a study's processes (workers and nannies, and the scheduler that a local
+#: or batch-system cluster runs in the driver). Dask's timers run per wall second whatever
+#: the work, and on this cluster they were the per-design cost of the workers beyond the
+#: evaluation (benchmarks/results/study.md: 6.3 % of a core idle, 1.3 % with these):
+#: no statistical profiler (it samples every thread's stack every 10 ms, for a dashboard a
+#: study does not use); the event-loop watchdog ("tick", 20 ms: 50 wake-ups a second, each
+#: taking the GIL from the evaluation) once a second; the memory monitor (pause, spill,
+#: restart; 100 ms) and the host statistics (500 ms) less often: a worker's memory does not
+#: grow by much within a second of points; no GIL sampler (with ``gilknocker`` installed it
+#: takes the GIL every millisecond).
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
+                 "distributed.admin.tick.interval": "1s",
+                 "distributed.worker.memory.monitor-interval": "1s",
+                 "distributed.admin.system-monitor.interval": "5s",
+                 "distributed.admin.system-monitor.gil.enabled": False}
 
 
 @dataclass
@@ -296,10 +308,15 @@ class BatchSizer:
     """Points per task from the measured cost of a point (guided self-scheduling).
 
     Before any batch came back, ``first`` points (the evaluator's hint). Then, with ``c``
-    the mean wall time of a point so far [s], ``R`` the points not yet submitted and ``T``
+    the mean CPU time of a point so far [s], ``R`` the points not yet submitted and ``T``
     the worker threads: ``min(TASK_SECONDS / c, max(R / (2 T), MIN_TASK_SECONDS / c))``,
     at least 1. Large tasks while much remains; smaller ones at the end, so that no worker
     is left with a long task while the others idle. ``fixed`` overrides all of it.
+
+    CPU, not wall time: on a loaded machine a point's wall time grows with the load (ten
+    times on the shared 2-core machine) while its CPU does not; sized by wall time the
+    batches shrank to a few points and the per-task costs (scheduler, transfer, table,
+    Parquet part: ~10 ms of CPU a task there) became a tenth of the work (issue 35).
 
     Parameters
     ----------
@@ -318,13 +335,13 @@ class BatchSizer:
         self.points, self.seconds = 0, 0.0
 
     def observe(self, points: int, seconds: float) -> None:
-        """Record a finished batch: ``points`` evaluated in ``seconds`` of wall, summed."""
+        """Record a finished batch: ``points`` evaluated in ``seconds`` of CPU, summed."""
         self.points += points
         self.seconds += seconds
 
     @property
     def point_seconds(self) -> float | None:
-        """Mean wall time of a point so far [s] (None before the first batch)."""
+        """Mean CPU time of a point so far [s] (None before the first batch)."""
         return self.seconds / self.points if self.points else None
 
     def size(self, remaining: int, threads: int) -> int:
@@ -346,14 +363,17 @@ def _peak_rss_mb() -> float:
 
 
 @contextlib.contextmanager
-def local_cluster(workers: int):
+def local_cluster(workers: int, config: dict | None = None):
     """A LocalCluster of ``workers`` processes, one thread each, set up for studies.
 
-    The workers get :data:`WORKER_ENV` and :data:`WORKER_CONFIG`, set only while the cluster
-    is created (``dask.config.set`` as a context). Yields the cluster; closes it on exit.
+    The workers get :data:`WORKER_ENV`, and the scheduler, nannies and workers the Dask
+    settings ``config`` (default :data:`WORKER_CONFIG`), set only while the cluster is
+    created (``dask.config.set`` as a context; each server reads them when it starts).
+    Yields the cluster; closes it on exit.
     """
+    config = WORKER_CONFIG if config is None else config
     pre_spawn = {**dask.config.get("distributed.nanny.pre-spawn-environ", {}), **WORKER_ENV}
-    with dask.config.set({**WORKER_CONFIG, "distributed.nanny.pre-spawn-environ": pre_spawn}):
+    with dask.config.set({**config, "distributed.nanny.pre-spawn-environ": pre_spawn}):
         # silence_logs: Dask's own log lines about its processes (a slow worker shutdown on
         # a loaded machine; after Ctrl-C, workers losing the scheduler they were
         # heartbeating to) are not the user's business: what matters reaches the user as
@@ -489,7 +509,7 @@ def run_study(spec: StudySpec, out, *, client=None, scheduler: str | None = None
         c0 = time.thread_time()
         store.write_table(res.table)
         run.driver_write_cpu_s += time.thread_time() - c0
-        sizer.observe(res.points, res.eval_s)
+        sizer.observe(res.points, res.eval_cpu_s)
         run.add(res)
         if progress is not None:
             progress(res)

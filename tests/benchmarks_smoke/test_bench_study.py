@@ -1,0 +1,45 @@
+"""The study benchmark's guard (issue 35): CPU per design on the workers against the serial
+loop's, the idle background taken out at the run's wall time and put back at an unloaded
+machine's rate; a drift past the allowed overhead fails it."""
+
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _bench():
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import bench_study
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    return bench_study
+
+
+def _results(worker_cpu_s: float) -> dict:
+    serial = {"points": 1000, "wall_s": 10.0, "cpu_s": 10.0, "points_per_s": 100.0, "cpu_s_per_point": 0.010}
+    # 1000 designs in 5 s on 2 workers; idle, the workers take 1 % of a core (both)
+    run = {"workers": 2, "points": 1000, "wall_s": 5.0, "points_per_s": 200.0, "cpu_driver_s": 0.2,
+           "cpu_workers_s": worker_cpu_s, "cpu_s_per_point": (worker_cpu_s + 0.2) / 1000,
+           "idle_cpu_per_s_driver": 0.01, "idle_cpu_per_s_workers": 0.01}
+    return {"wall_study": {"serial": serial, "workers2": run}}
+
+
+def test_the_guard_passes_the_serial_cost_and_fails_a_drift_past_the_allowed_overhead():
+    b = _bench()
+    for worker_cpu_s, ok in ((10.3, True), (12.0, False), (20.0, False)):
+        res = _results(worker_cpu_s)
+        b.derive(res["wall_study"])
+        (g,) = b.guards(res, quick=False)
+        # less the background over the run (0.01 x 5 s), plus it at the unloaded rate (0.01 / 2)
+        assert abs(g["value"] - ((worker_cpu_s - 0.05) / 1000 / 0.010 + 0.005)) < 1e-12
+        assert g["bound"] == 1 + b.ALLOWED and g["ok"] is ok, (worker_cpu_s, g)
+
+
+def test_the_quick_form_allows_more_for_a_small_study_on_a_busy_machine():
+    b = _bench()
+    res = _results(12.0)  # 1.2 x the serial loop's CPU per design
+    b.derive(res["wall_study"])
+    (g,) = b.guards(res, quick=True)
+    assert g["ok"] and g["bound"] == 1 + b.ALLOWED_QUICK
