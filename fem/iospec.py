@@ -131,7 +131,7 @@ def _vector(entry, key, where):
     d = np.asarray(v, dtype=float)
     if not (np.isfinite(d).all() and np.linalg.norm(d) > 0):
         raise ModelError(f"{where}: '{key}' must be a non-zero finite 3-vector, got {v!r}")
-    return tuple(d / np.linalg.norm(d))
+    return tuple(float(x) for x in d / np.linalg.norm(d))  # plain floats: readable reprs
 
 
 def read_io(path) -> IOSpec:

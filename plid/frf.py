@@ -139,7 +139,7 @@ def h1(u, y, fs: float, nperseg: int = 1024, window="hann", noverlap=None) -> FR
     >>> plant = control.c2d(control.ss(G), 1e-3)
     >>> u = excitation("white", 2000, fs=1000.0, seed=1)
     >>> est = h1(u, simulate(plant, u), fs=1000.0, nperseg=500)
-    >>> est.H.shape, est.f[5]                     # 2 Hz resolution
+    >>> est.H.shape, float(est.f[5])              # 2 Hz resolution
     ((251, 1, 1), 10.0)
     >>> true = frequency_response(plant, [10.0])[0, 0, 0]
     >>> print(f"|H1| {abs(est.H[5, 0, 0]):.2f}, true {abs(true):.2f}, error {100 * abs(est.H[5, 0, 0] / true - 1):.1f} %")
