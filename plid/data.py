@@ -58,6 +58,8 @@ class IOData:
     notes: list = field(default_factory=list)
 
     def __post_init__(self):
+        if self.fs is not None:  # a plain float (read from a file it is a numpy scalar)
+            self.fs = float(self.fs)
         self.u = np.asarray(self.u, dtype=float)
         self.y = np.asarray(self.y, dtype=float)
         if self.fs is not None:  # validated later (validate_data names a missing rate)
