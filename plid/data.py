@@ -62,8 +62,6 @@ class IOData:
             self.fs = float(self.fs)
         self.u = np.asarray(self.u, dtype=float)
         self.y = np.asarray(self.y, dtype=float)
-        if self.fs is not None:  # validated later (validate_data names a missing rate)
-            self.fs = float(self.fs)  # a plain float whatever the file held (numpy 2: np.float64)
         if self.u.ndim == 1:
             self.u = self.u[:, None]
         if self.y.ndim == 1:
