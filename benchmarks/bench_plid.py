@@ -27,7 +27,7 @@ Methods:
   best per measure *by the truth* is reported (an oracle choice that favours N4SID).
   The real ``nfoursid`` (``NFourSID.subspace_identification`` +
   ``system_identification(rank=12)``) is timed once per case at the best block rows.
-- ``PLID default``: :func:`trussid.plid.multipass.identify` with its defaults, i.e. what
+- ``PLID default``: :func:`trussid.plid.recipe.identify` with its defaults, i.e. what
   ``trussid identify`` runs: a subspace (N4SID, D = 0) PRIOR, block rows chosen from the
   data alone, then one direct PLID pass.
 - ``PLID scratch``: ``identify(start="scratch")``: no prior, four passes.

@@ -16,7 +16,7 @@ Methods, same data in the same run:
   block rows 20, 30, 40, 60 and 80 (those giving enough rows); the best by the true FRF error is
   reported (an oracle choice: it favours the comparator).
 - ``N4SID D=0``: the same state sequence, least squares without D.
-- ``PLID subspace``: :func:`trussid.plid.multipass.identify` with ``start="subspace"`` (prior from
+- ``PLID subspace``: :func:`trussid.plid.recipe.identify` with ``start="subspace"`` (prior from
   N4SID with D=0, block rows chosen from the data alone; rotation basis; one direct pass,
   Q = 0, prior variance 1e-4, R estimated from the data).
 - ``PLID scratch``: ``start="scratch"`` (no prior; rotation basis at output-spectrum

@@ -5,7 +5,7 @@ A known plant: four lightly damped modes (42, 97, 181, 263 Hz; damping 1.0, 2.0,
 one force input, two displacement outputs, zero-order hold at 1 kHz (seeded mode shapes).
 Records: 2000 samples of white input, white output noise at 40, 30 and 20 dB below each
 output's RMS, ``--records`` seeded records per level (default 70: 210 in all). Each record
-is identified by ``plid.multipass.identify`` with its defaults (what ``trussid identify``
+is identified by ``plid.recipe.identify`` with its defaults (what ``trussid identify``
 runs) at the true order 8; :func:`trussid.plid.uncertainty.mode_intervals` gives the
 intervals; identified modes are paired with the true ones by frequency. A case is one
 (record, mode); coverage is the share of cases whose true value lies inside the interval

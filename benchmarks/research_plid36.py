@@ -2,13 +2,13 @@
 with the best N4SID (oracle block rows, as benchmarks/bench_plid_thesis.py).
 
 Recipe (identification data only):
-  1. m42 = plid.multipass.identify(u, y, 42, dt)            (PLID, subspace start, defaults)
+  1. m42 = plid.recipe.identify(u, y, 42, dt)            (PLID, subspace start, defaults)
   2. modal form of m42; complex pairs ranked by ||C v|| ||w^T B||: the 18 largest are candidates,
      the 2 real states of largest contribution are kept. Candidate k = the 17 pairs without pair k
      + the 2 real states (36 states), B refitted by output error (plid.subspace.refit_input_matrix).
   3. choose k by the smallest MAX log-magnitude distance, over 30-790 Hz and all 9 channels, between
      H1(u, y) and H1(u, y_sim_k) on the identification record (Welch, 1024 points).
-  4. final model = one PLID pass (plid.multipass.multipass, Q = 0, square-root form, R from the
+  4. final model = one PLID pass (plid.passes.multipass, Q = 0, square-root form, R from the
      candidate's output error) from the chosen candidate, in the observer basis (F, C) = (A - K C, C)
      of the candidate itself (K places F's poles at radius 0.9), prior variance 1e-4 on the Abar
      entries (identify's default) and 1e-2 on the B entries (scaled units). If the result had a pole
@@ -36,7 +36,9 @@ import scipy.linalg
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from plid_cases import case_b, record                       # noqa: E402
 from bench_plid_thesis import measure, N_ID, N_VAL           # noqa: E402
-from trussid.plid.multipass import identify, multipass, Pass, _noise_estimate   # noqa: E402
+from trussid.plid._steps import noise_estimate as _noise_estimate  # noqa: E402
+from trussid.plid.passes import Pass, multipass  # noqa: E402
+from trussid.plid.recipe import identify  # noqa: E402
 from trussid.plid.subspace import n4sid, refit_input_matrix          # noqa: E402
 from trussid.plid.bases import basis_for, model_frequencies          # noqa: E402
 from trussid.plid.experiment import simulate                         # noqa: E402

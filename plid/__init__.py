@@ -9,7 +9,7 @@ from trussid.plid.errors import DataError, IdentificationError
 
 _LAZY = {
     "PLID": "estimator", "PLIDResult": "estimator",
-    "identify": "multipass", "identify_reduced": "multipass", "Identification": "multipass",
+    "identify": "recipe", "identify_reduced": "reduced", "Identification": "provenance",
     "ObserverBasis": "canonical", "rotation_basis": "bases",
     "n4sid": "subspace", "order_table": "order",
     "stabilise": "stability", "check_stability": "stability", "require_stable": "stability",

@@ -1,7 +1,7 @@
 """Order-selection help: prediction error and frequency-response change against order.
 
 For each candidate order the data are identified (by default with
-:func:`trussid.plid.multipass.identify`; ``method="subspace"`` uses the quick N4SID prior alone)
+:func:`trussid.plid.recipe.identify`; ``method="subspace"`` uses the quick N4SID prior alone)
 and two numbers are tabulated:
 
 - the one-step signal-to-prediction-error ratio [dB] on validation data (the last
@@ -31,7 +31,7 @@ from trussid.plid.frf import frequency_response
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.metrics import (default_noise_covariances, one_step_predict, prediction_burn_in,
                                   prediction_ratio_db, predictor_gain)
-from trussid.plid.multipass import identify
+from trussid.plid.recipe import identify
 from trussid.plid.subspace import subspace_prior
 
 __all__ = ["OrderRow", "order_table", "format_table", "order_warnings"]
@@ -79,7 +79,7 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
     band : (lo, hi) Hz, optional
         Band of the FRF change; default (1 %, 49 %) of fs.
     method : {"plid", "subspace"}
-        ``"plid"``: :func:`trussid.plid.multipass.identify` (subspace start); ``"subspace"``: the
+        ``"plid"``: :func:`trussid.plid.recipe.identify` (subspace start); ``"subspace"``: the
         N4SID prior only (quicker).
     block_rows : int or list, optional
         N4SID block rows (default: :func:`trussid.plid.subspace.subspace_prior` tries several).

@@ -6,7 +6,7 @@ The innovations form of an identified model is ::
     x[k+1] = A x[k] + B u[k] + K e[k],   y[k] = C x[k] + D u[k] + e[k],
 
 and its one-step predictor runs ``x[k+1] = (A - K C) x[k] + (B - K D) u[k] + K y[k]``.
-:func:`trussid.plid.multipass.identify` fits ``A, B, C, D`` for simulation (PLID's
+:func:`trussid.plid.recipe.identify` fits ``A, B, C, D`` for simulation (PLID's
 criterion); a predictor gain picked from a few one-parameter families of Kalman gains
 (:func:`trussid.plid.metrics.best_predictor`) cannot represent a coloured disturbance, and
 that is where the one-step fit was lost on measured data (``docs/plid.md``, "The predictor

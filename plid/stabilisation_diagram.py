@@ -14,7 +14,7 @@ from tqdm.auto import tqdm
 from trussid.plid.data import ModeShapes
 from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.modal import mac, modal_table
-from trussid.plid.multipass import identify as plid_identify
+from trussid.plid.recipe import identify as plid_identify
 
 __all__ = ["Stabilisation", "mark_stability", "stabilisation"]
 
@@ -99,7 +99,7 @@ def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
         Model orders, ascending.
     identify : callable, optional
         ``identify(u, y, order, dt) -> control.StateSpace``; default PLID
-        (:func:`trussid.plid.multipass.identify`, its ``.model``).
+        (:func:`trussid.plid.recipe.identify`, its ``.model``).
     tol_f, tol_zeta : float
         Largest relative change of frequency and of damping from the nearest pole one
         order step below for the pole to count as stable in them (defaults 1 % and 5 %, the

@@ -1,7 +1,7 @@
 """95 % intervals for an identified model's modal frequencies and damping ratios.
 
 First-order (delta-method) propagation of the parameter covariance. The PLID pass of
-:func:`trussid.plid.multipass.identify` ends with the posterior covariance of its parameters
+:func:`trussid.plid.recipe.identify` ends with the posterior covariance of its parameters
 ``theta = [vec Abar, vec B]`` (:attr:`trussid.plid.estimator.PLIDResult.theta_cov`), in the
 observer basis where ``A = F + Abar C``: a minimal parametrisation, so the covariance is
 proper. A pole moves by ``dz = w^H dAbar C v / (w^H v)``; ``s = ln z / dt`` gives the

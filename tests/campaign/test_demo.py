@@ -69,7 +69,7 @@ def test_the_excitation_band_is_the_same_at_any_plant_rate():
 def test_a_stabilised_winner_reports_the_poles_reflected_in_itself(monkeypatch):
     """Review 3.7, first defect: the demo counted the reflected poles on the winner's
     higher-order PLID pass instead of on the reduced model that was stabilised."""
-    import trussid.plid.multipass as mp
+    import trussid.plid.frontend as mp
     from trussid.campaign import demo
     from trussid.plid.multipass import Identification, Provenance, Stabilised
 

@@ -218,7 +218,7 @@ def test_identify_reduced_refuses_via_orders_that_do_not_reduce(simo):
 
 def test_identify_reduced_survives_a_failed_candidate_and_names_total_failure(simo,
                                                                               monkeypatch):
-    import trussid.plid.multipass as mp
+    import trussid.plid.reduced as mp
 
     u, y = data(simo, 2000, snr_db=60, seed=5)
     real = mp.identify
@@ -271,7 +271,7 @@ def test_a_stabilised_candidate_counts_the_poles_reflected_in_itself():
     """Not in the higher-order PLID pass it was reduced from (review 3.7, first defect)."""
     import control
 
-    import trussid.plid.multipass as mp
+    import trussid.plid.reduced as mp
 
     dt = 1e-3
     rng = np.random.default_rng(0)

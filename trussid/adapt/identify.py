@@ -21,7 +21,7 @@ import numpy as np
 from trussid.lqg.modal import modal_data
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.metrics import choose_predictor
-from trussid.plid.multipass import identify
+from trussid.plid.recipe import identify
 from trussid.plid.subspace import subspace_prior
 
 from .experiment import ClosedLoopRecord
@@ -58,7 +58,7 @@ def _named(sys, rec: ClosedLoopRecord):
 
 
 def identify_plid(rec: ClosedLoopRecord, order: int, *, block_rows=(40, 80)) -> ClosedLoopModel:
-    """PLID direct method (:func:`trussid.plid.multipass.identify`: N4SID prior, one PLID
+    """PLID direct method (:func:`trussid.plid.recipe.identify`: N4SID prior, one PLID
     pass, ``D = 0`` since the lab chain is strictly proper, unstable poles reflected, the
     predictor gain with the best one-step prediction of the record)."""
     t0, c0 = time.perf_counter(), time.process_time()

@@ -79,7 +79,9 @@ from trussid.plid.frf import frequency_response, h1
 from trussid.plid.metrics import choose_predictor, prediction_ratio_db
 from trussid.plid.modal import mac, modal_table
 from trussid.plid.modelfile import save_model
-from trussid.plid.multipass import Stabilised, default_via, fit_model
+from trussid.plid.frontend import fit_model
+from trussid.plid.provenance import Stabilised
+from trussid.plid.reduced import default_via
 from trussid.plid.stability import stabilise
 from trussid.plid.subspace import n4sid
 from trussid.plid.uncertainty import mode_intervals
@@ -132,7 +134,7 @@ class DemoSettings:
     seed : int
         Seed of everything random (each record derives its own).
     direct : {False, True, "auto"}
-        Direct term D of the identified models (:func:`trussid.plid.multipass.
+        Direct term D of the identified models (:func:`trussid.plid.reduced.
         identify_reduced`): the testbed's sensors see the structure through the lab's
         low-pass filters (no feed-through, False); accelerometers on a bare structure
         respond at once to a force ("auto": the data decide).
@@ -345,7 +347,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     """Identify an order-``order`` model from one record: the one switchable call.
 
     Runs the project's identification recipe for under-modelled structures,
-    :func:`trussid.plid.multipass.identify_reduced`: the PLID recipe :func:`trussid.plid.multipass.identify`
+    :func:`trussid.plid.reduced.identify_reduced`: the PLID recipe :func:`trussid.plid.recipe.identify`
     (an N4SID prior with D = 0 in a rotation observer basis, refined by PLID) at ``order``
     and at the higher orders ``via``, the latter reduced to ``order`` by input-weighted
     balanced truncation and refined by PLID; the candidate with the best one-step

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 from trussid._util.jsonio import json_safe
 from trussid.geometry.lab import LabSpec
-from trussid.plid.multipass import Stabilised
+from trussid.plid.provenance import Stabilised
 
 __all__ = ["Provenance", "PlantSummary", "ExperimentRow", "AuditedTrueMode",
            "AuditedIdentifiedMode", "ModeAudit", "ModelSummary", "ReportFiles",

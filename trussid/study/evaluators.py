@@ -33,7 +33,8 @@ from trussid.geometry.spec import Testbed
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.evaluate import compare
 from trussid.plid.frf import frequency_response
-from trussid.plid.multipass import identify, identify_reduced
+from trussid.plid.recipe import identify
+from trussid.plid.reduced import identify_reduced
 from trussid.plid.subspace import n4sid
 from trussid.study.deck import DeckModesEvaluator
 from trussid.study.errors import StudyError
@@ -343,8 +344,8 @@ class IdentifyEvaluator(Evaluator):
 
     Parameters of a point: ``seed`` (record seed; the validation record uses ``seed +
     1000``), ``noise`` (``"60dB"``-style SNR, ``"12bit"`` converters or ``"none"``),
-    ``order``, ``method`` (``plid-subspace``, ``plid-scratch``: :func:`plid.multipass.identify`
-    with that start; ``plid-reduced``: :func:`plid.multipass.identify_reduced`; ``n4sid``:
+    ``order``, ``method`` (``plid-subspace``, ``plid-scratch``: :func:`plid.recipe.identify`
+    with that start; ``plid-reduced``: :func:`plid.reduced.identify_reduced`; ``n4sid``:
     :func:`plid.subspace.n4sid` at each of ``block_rows``, the best by the true FRF RMS error
     reported — an oracle choice that favours the comparator), ``n_samples``.
 

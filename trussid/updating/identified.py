@@ -14,7 +14,7 @@ import scipy.linalg as la
 from trussid.plid.errors import DataError
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.modal import pair_modes, pole_parameters, pole_std
-from trussid.plid.multipass import identify
+from trussid.plid.recipe import identify
 from trussid.updating.errors import UpdateError
 from trussid.updating.results import IdentifiedModes
 
@@ -81,7 +81,7 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
                     identify_kwargs=None):
     """Identify a model with PLID and extract its strongest modes, with uncertainties.
 
-    The record is identified with :func:`trussid.plid.multipass.identify`; its ``n_modes``
+    The record is identified with :func:`trussid.plid.recipe.identify`; its ``n_modes``
     strongest modes in ``band`` are the estimates. Their standard deviations come from
 
     - ``uncertainty="plid"``: PLID's posterior parameter covariance, propagated to each
@@ -106,7 +106,7 @@ def modes_from_data(u, y, dt: float, order: int, *, band, n_modes: int | None = 
     n_segments : int
     max_damping : float
     identify_kwargs : dict, optional
-        Passed to :func:`trussid.plid.multipass.identify` (default here ``form="sqrt"``).
+        Passed to :func:`trussid.plid.recipe.identify` (default here ``form="sqrt"``).
 
     Returns
     -------

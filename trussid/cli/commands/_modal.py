@@ -76,7 +76,7 @@ def modal_outputs(args, data, model, start: str, form: str, summary: dict) -> li
 def _stabilisation(args, data, start, form, summary) -> list[str]:
     from trussid.plid.frf import h1
     from trussid.plid.stabilisation_diagram import stabilisation
-    from trussid.plid.multipass import identify
+    from trussid.plid.recipe import identify
     from trussid.plots import save_figure, stabilisation_figure
 
     orders = orders_arg(args.stabilisation_orders, args.order, data.n_outputs)

@@ -5,7 +5,7 @@ writes the identified discrete model with its one-step predictor gain K
 (:mod:`trussid.plid.modelfile`) and reports the identified poles and the one-step
 signal-to-prediction-error ratio of the final model on the same data (in-sample, after the
 burn-in of :func:`trussid.plid.metrics.prediction_burn_in`; definitions in
-:mod:`trussid.plid.metrics`). The recipe is :func:`trussid.plid.multipass.fit_model`.
+:mod:`trussid.plid.metrics`). The recipe is :func:`trussid.plid.frontend.fit_model`.
 """
 
 from __future__ import annotations
@@ -32,9 +32,9 @@ def names_arg(values):
 
 
 def via_arg(text, order: int, p: int, start: str):
-    """``--via``: None, ``auto`` (:func:`trussid.plid.multipass.default_via`) or a comma list."""
+    """``--via``: None, ``auto`` (:func:`trussid.plid.reduced.default_via`) or a comma list."""
     from trussid.plid.errors import DataError
-    from trussid.plid.multipass import default_via
+    from trussid.plid.reduced import default_via
 
     if text is None:
         return None
@@ -106,7 +106,7 @@ def add_parser(subparsers):
                    help="also identify at these higher orders (comma separated, or 'auto' "
                    "for 2 and 2.4 times N), reduce each to N by input-weighted balanced "
                    "truncation, refine by PLID, and keep the candidate with the best "
-                   "one-step prediction on the data (plid.multipass.identify_reduced; "
+                   "one-step prediction on the data (plid.reduced.identify_reduced; "
                    "what trussid demo uses: for a structure with more significant modes "
                    "than N/2). --start subspace or scratch only")
     p.add_argument("--stabilisation", metavar="PLOT.png", default=None,
@@ -216,7 +216,7 @@ def run(args) -> int:
     from trussid.plid.errors import DataError, IdentificationError
     from trussid.plid.metrics import modal_parameters, prediction_burn_in, prediction_ratio_db
     from trussid.plid.modelfile import save_model
-    from trussid.plid.multipass import fit_model
+    from trussid.plid.frontend import fit_model
     from trussid.plid.stability import UnstableModelWarning, check_stability
     from trussid.plid.uncertainty import mode_intervals
 
@@ -310,7 +310,7 @@ def _print_summary(s: dict, via: bool) -> None:
     if "structure" in s:
         print(f"structure: {s['structure']}")
     if "direct_term" in s:
-        d = s["direct_term"]  # a plid.multipass.DirectTerm
+        d = s["direct_term"]  # a plid.provenance.DirectTerm
         t = d.test
         why = (f" (held-out output error {t['held_out_nmse_with']:.3g} with D against "
                f"{t['held_out_nmse_without']:.3g} without)" if t else "")

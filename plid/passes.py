@@ -1,0 +1,87 @@
+"""Multi-pass batch PLID: the pass schedule (:class:`Pass`, :data:`SCRATCH_SCHEDULE`) and
+:func:`multipass`, which runs it.
+
+A *pass* is one :class:`trussid.plid.estimator.PLID` run over the whole record. Later passes start
+from the previous pass's model (converted exactly into the same basis) with a re-inflated
+parameter covariance, and with their own state noise ``Q`` and parameter drift
+``Q_theta``, so a schedule can shrink them pass by pass (``docs/plid.md``). The recipes that
+use it are :func:`trussid.plid.recipe.identify` and
+:func:`trussid.plid.reduced.identify_reduced`.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+
+import control
+
+from trussid.plid.canonical import ObserverBasis
+from trussid.plid.errors import IdentificationError
+from trussid.plid.estimator import PLID, PLIDWarning
+
+__all__ = ["Pass", "SCRATCH_SCHEDULE", "multipass"]
+
+
+@dataclass(frozen=True)
+class Pass:
+    """Settings of one pass (scaled units, see :class:`trussid.plid.estimator.PLID`)."""
+
+    Q: float = 0.0
+    Q_theta: float = 0.0
+    prior_theta_var: float = 1e4
+
+
+SCRATCH_SCHEDULE = (Pass(1e-6, 0.0, 1e4), Pass(1e-7, 0.0, 1e-2), Pass(1e-8, 0.0, 1e-3),
+                    Pass(0.0, 0.0, 1e-4))
+
+
+def multipass(u, y, order: int, dt: float, schedule, *, basis: ObserverBasis | None = None,
+              prior: control.StateSpace | None = None, R=1e-4, N=0.0, form: str = "direct",
+              progress: bool | None = False, history_every: int = 0):
+    """Run the passes of ``schedule`` in turn.
+
+    Parameters
+    ----------
+    u, y : arrays (N, m), (N, p)
+        Data.
+    order : int
+    dt : float
+        Sample time [s].
+    schedule : sequence of Pass
+    basis : ObserverBasis, optional
+        Default the block shift.
+    prior : control.StateSpace, optional
+        Start of the first pass (else theta = 0).
+    R, N : covariances (scaled units) for every pass.
+    form : {"direct", "sqrt"}
+
+    Returns
+    -------
+    result : PLIDResult
+        Of the last pass.
+    history : list of dict
+        Per pass: its settings, seconds, whether it stayed finite.
+    """
+    history = []
+    res = None
+    current = prior
+    for k, ps in enumerate(schedule):
+        t0 = time.perf_counter()
+        est = PLID(order, form=form, dt=dt, Q=ps.Q, R=R, N=N, Q_theta=ps.Q_theta,
+                   prior=current, prior_theta_var=ps.prior_theta_var, basis=basis,
+                   history_every=history_every, progress=progress)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PLIDWarning)
+            r = est.fit(u, y)
+        history.append({"pass": k, "Q": ps.Q, "Q_theta": ps.Q_theta,
+                        "prior_theta_var": ps.prior_theta_var, "finite": r.finite,
+                        "seconds": time.perf_counter() - t0})
+        if not r.finite:
+            break
+        res = r
+        current = r.model
+    if res is None:
+        raise IdentificationError("PLID diverged in its first pass (estimate not finite)")
+    return res, history

@@ -1,0 +1,120 @@
+"""What an identification recipe returns: :class:`Identification` and its typed
+:class:`Provenance` (with :class:`Stabilised` and :class:`DirectTerm`).
+
+The recipes that fill them are :func:`trussid.plid.recipe.identify`,
+:func:`trussid.plid.reduced.identify_reduced` and :func:`trussid.plid.frontend.fit_model`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+import control
+import numpy as np
+
+from trussid.plid.canonical import ObserverBasis
+from trussid.plid.estimator import PLIDResult
+from trussid.plid.subspace import SubspaceChoice
+
+__all__ = ["Stabilised", "DirectTerm", "Provenance", "Identification"]
+
+
+@dataclass
+class Stabilised:
+    """Whether poles outside the unit circle were reflected in (:func:`trussid.plid.stabilise`)."""
+
+    applied: bool = False
+    reflected_poles: int = 0
+
+
+@dataclass
+class DirectTerm:
+    """How the direct term D was decided, and its estimate.
+
+    Attributes
+    ----------
+    mode : {"auto", True, False}
+        What was asked for.
+    estimated : bool
+        Whether D was estimated (else D = 0, or the prior's D).
+    test : dict or None
+        The held-out evidence of :func:`trussid.plid.subspace.direct_term_test`
+        (``held_out_nmse_without``, ``held_out_nmse_with``, ``margin``, ``folds``).
+    D, D_std : list of lists
+        The direct term (p x m) and its standard errors (None when not estimated).
+    """
+
+    mode: object
+    estimated: bool
+    test: dict | None
+    D: list
+    D_std: list | None
+
+
+@dataclass
+class Provenance:
+    """How an identification was made: what the recipe ran, tried, chose and measured.
+
+    Every field is None (or empty) when the recipe that made the model has no such step;
+    :meth:`as_dict` keeps the steps that ran, for a JSON record.
+
+    Attributes
+    ----------
+    subspace : SubspaceChoice or None
+        The N4SID prior's choice of block rows (:func:`trussid.plid.subspace.subspace_prior`).
+    subspace_seconds, recursion_seconds, recursion_cpu_seconds, seconds : float or None
+        Wall seconds of the prior, wall and CPU seconds of the PLID recursion alone (the
+        CPU figure stays meaningful on a loaded machine), wall seconds of the whole fit.
+    passes : list of dict
+        The PLID passes run (``Q``, ``Q_theta``, ``prior_theta_var``, ...).
+    stabilised : Stabilised or None
+    direct : DirectTerm or None
+    predictor : dict or None
+        How the one-step predictor gain was chosen
+        (:func:`trussid.plid.metrics.best_predictor`: ``chosen``, ``identification_ratio_db``,
+        ``skip``, ...).
+    structure : str or None
+        An order that is not a multiple of the outputs: how the model was reduced to it.
+    candidates, chosen, via : list, str, list or None
+        :func:`identify_reduced`: every candidate's row, the winner's label, the via orders.
+    K_source : str or None
+        Where the returned predictor gain came from (:func:`fit_model`).
+    warnings : list of str
+        The estimator's warnings (:func:`fit_model`).
+    """
+
+    subspace: SubspaceChoice | None = None
+    subspace_seconds: float | None = None
+    passes: list = field(default_factory=list)
+    recursion_seconds: float | None = None
+    recursion_cpu_seconds: float | None = None
+    stabilised: Stabilised | None = None
+    direct: DirectTerm | None = None
+    predictor: dict | None = None
+    seconds: float | None = None
+    structure: str | None = None
+    candidates: list | None = None
+    chosen: str | None = None
+    via: list | None = None
+    K_source: str | None = None
+    warnings: list = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        """The fields that are set (not None), in declaration order, nested dataclasses as
+        they are (:func:`trussid._util.jsonio.json_safe` turns them into dicts)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if getattr(self, f.name) is not None}
+
+
+@dataclass
+class Identification:
+    """What :func:`identify` produced."""
+
+    result: PLIDResult
+    model: control.StateSpace
+    K: np.ndarray | None          # one-step predictor gain of ``model`` (original units)
+    start: str
+    basis: ObserverBasis
+    R: np.ndarray
+    prior: control.StateSpace | None
+    provenance: Provenance = field(default_factory=Provenance)
