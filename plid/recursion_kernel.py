@@ -444,6 +444,8 @@ def run_direct(pb: Problem, st: DirectState, us: np.ndarray, ys: np.ndarray, E: 
 @_njit
 def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r):
     """All p whitened Carlson updates on their generators, then ``L[:, :J] <- L T``."""
+    # Long: the p scalar updates share their generators (f, a, w, V) and the product with
+    # L uses them all; split, the same work arrays would only be passed around.
     p, n = Hw.shape
     d = L.shape[0]
     for k in range(p):
