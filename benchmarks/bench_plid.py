@@ -32,10 +32,14 @@ Methods:
   data alone, then one direct PLID pass.
 - ``PLID scratch``: ``identify(start="scratch")``: no prior, four passes.
 
-``speed`` (acceptance 7): samples per second of one :class:`trussid.plid.estimator.PLID` pass
-(``fit``) over 3000 samples of simulated 60 dB data, (states, inputs, outputs) =
-(12,1,3), (30,1,3), (30,3,3), direct and square-root forms, the engine's default shift
-basis and the rotation basis ``identify`` uses. Wall clock (``time.perf_counter``) and
+``speed`` (acceptance 7; issue 34, acceptance 2): samples per second of one
+:class:`trussid.plid.estimator.PLID` pass (``fit``) over 3000 samples of simulated 60 dB
+data, (states, inputs, outputs) = (12,1,3), (30,1,3), (36,3,3), direct and square-root
+forms, the engine's default shift basis and the rotation basis ``identify`` uses, each with
+the compiled kernels (:mod:`trussid.plid.recursion_kernel`) and the reference numpy steps
+(``compiled=False``) in the same run, with the largest relative difference of their theta.
+Then the first-call cost of the kernels in a fresh process (numba compiles them once and
+caches them on disk). Wall clock (``time.perf_counter``) and
 process CPU time (``time.process_time``), best and median of 3 repetitions, with the load
 average: the machine is shared, so wall clock measures the contention as much as the code.
 """
@@ -216,9 +220,18 @@ def accuracy_tables(results) -> str:
 # ----------------------------------------------------------------------------- acceptance 7
 
 
-def speed(n_samples=3000, repeats=3, log=print, shapes=((12, 1, 3), (30, 1, 3), (30, 3, 3))):
+#: The issue's streaming targets (issue 34, acceptance 2), CPU samples per second of one core.
+SPEED_TARGETS = {(30, 1, 3): 12000.0, (36, 3, 3): 8000.0}
+
+
+def speed(n_samples=3000, repeats=3, log=print, shapes=((12, 1, 3), (30, 1, 3), (36, 3, 3)),
+          engines=("compiled", "reference")):
+    """Samples per second of one PLID pass: the compiled kernels beside the reference numpy
+    steps (``compiled=False``) in the same run, and how far their estimates differ."""
+    # Long: one table row per (shape, basis, form, engine), each timed and compared in place.
     from trussid.plid.bases import basis_for, model_frequencies
     from trussid.plid.estimator import PLID
+    from trussid.plid.recursion_kernel import HAVE_NUMBA
 
     out = []
     for n, m, p in shapes:
@@ -229,38 +242,84 @@ def speed(n_samples=3000, repeats=3, log=print, shapes=((12, 1, 3), (30, 1, 3), 
                  "rotation": basis_for(n, p, FS, model_frequencies(case.plant, n // 2, FS))}
         for bname, basis in bases.items():
             for form in ("direct", "sqrt"):
-                walls, cpus, loads = [], [], []
-                for _ in range(repeats):
-                    est = PLID(n, form=form, dt=1 / FS, R=1e-6, basis=basis, progress=False)
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore")
-                        w0, c0 = time.perf_counter(), time.process_time()
-                        res = est.fit(u, y)
-                        walls.append(time.perf_counter() - w0)
-                        cpus.append(time.process_time() - c0)
-                    loads.append(os.getloadavg()[0])
-                row = {"states": n, "inputs": m, "outputs": p, "basis": bname, "form": form,
-                       "samples": n_samples, "finite": bool(res.finite),
-                       "wall_sps_best": n_samples / min(walls),
-                       "wall_sps_median": n_samples / float(np.median(walls)),
-                       "cpu_sps_best": n_samples / min(cpus),
-                       "cpu_sps_median": n_samples / float(np.median(cpus)),
-                       "load_avg_1min": loads}
-                out.append(row)
-                log(f"  ({n},{m},{p}) {bname:8s} {form:6s}: wall {row['wall_sps_best']:.0f} "
-                    f"(median {row['wall_sps_median']:.0f}), CPU {row['cpu_sps_best']:.0f} "
-                    f"(median {row['cpu_sps_median']:.0f}) samples/s; load "
-                    f"{', '.join(f'{x:.1f}' for x in loads)}")
+                theta = {}
+                for engine in engines:
+                    if engine == "compiled" and not HAVE_NUMBA:
+                        continue
+                    walls, cpus, loads = [], [], []
+                    for _ in range(repeats):
+                        est = PLID(n, form=form, dt=1 / FS, R=1e-6, basis=basis, progress=False,
+                                   compiled=engine == "compiled")
+                        if engine == "compiled":
+                            # compile (or load the cache) outside the clock
+                            warm = n * (m + p) + 1
+                            est.fit(u[:warm], y[:warm])
+                        with warnings.catch_warnings():
+                            warnings.simplefilter("ignore")
+                            w0, c0 = time.perf_counter(), time.process_time()
+                            res = est.fit(u, y)
+                            walls.append(time.perf_counter() - w0)
+                            cpus.append(time.process_time() - c0)
+                        loads.append(os.getloadavg()[0])
+                    theta[engine] = res.theta
+                    target = SPEED_TARGETS.get((n, m, p))
+                    row = {"states": n, "inputs": m, "outputs": p, "basis": bname, "form": form,
+                           "engine": engine, "samples": n_samples, "finite": bool(res.finite),
+                           "wall_sps_best": n_samples / min(walls),
+                           "wall_sps_median": n_samples / float(np.median(walls)),
+                           "cpu_sps_best": n_samples / min(cpus),
+                           "cpu_sps_median": n_samples / float(np.median(cpus)),
+                           "target_cpu_sps": target,
+                           "load_avg_1min": loads}
+                    if engine == "reference" and "compiled" in theta:
+                        a, b = theta["compiled"], theta["reference"]
+                        row["theta_rel_diff_compiled"] = float(np.max(np.abs(a - b))
+                                                               / np.max(np.abs(b)))
+                    out.append(row)
+                    log(f"  ({n},{m},{p}) {bname:8s} {form:6s} {engine:9s}: wall "
+                        f"{row['wall_sps_best']:.0f} (median {row['wall_sps_median']:.0f}), CPU "
+                        f"{row['cpu_sps_best']:.0f} (median {row['cpu_sps_median']:.0f}) "
+                        f"samples/s; load {', '.join(f'{x:.1f}' for x in loads)}")
     return out
 
 
+def compile_cost(log=print) -> dict:
+    """CPU seconds of the first compiled PLID pass in a fresh process: with an empty numba
+    cache (the first run after installing) and with the cache filled (every later process)."""
+    import subprocess
+    import tempfile
+
+    code = "\n".join([
+        "import time", "import numpy as np", "from trussid.plid.estimator import PLID",
+        "r = np.random.default_rng(0)", "u = r.standard_normal((200, 1))",
+        "y = np.column_stack([np.convolve(u[:, 0], [0, 1, .5])[:200]] * 3)",
+        "for form in ('direct', 'sqrt'):",
+        "    c = time.process_time()",
+        "    PLID(6, form=form, progress=False).fit(u, y)",
+        "    print(time.process_time() - c)"])
+    res = {}
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        for label in ("cold cache", "warm cache"):
+            txt = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                                 text=True, check=True).stdout.split()
+            res[label] = {"direct_cpu_s": float(txt[0]), "sqrt_cpu_s": float(txt[1])}
+            log(f"  first PLID pass in a fresh process, {label}: direct {float(txt[0]):.2f} s, "
+                f"sqrt {float(txt[1]):.2f} s CPU")
+    return res
+
+
 def speed_table(rows) -> str:
-    lines = ["| (states, inputs, outputs) | basis | form | wall samples/s best (median) | "
-             "CPU samples/s best (median) | load avg (1 min) |", "|---|---|---|---|---|---|"]
+    lines = ["| (states, inputs, outputs) | basis | form | engine | wall samples/s best (median) | "
+             "CPU samples/s best (median) | target | theta rel. diff to compiled | "
+             "load avg (1 min) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
+        tgt = f"{r['target_cpu_sps']:.0f}" if r.get("target_cpu_sps") else ""
+        diff = f"{r['theta_rel_diff_compiled']:.1e}" if "theta_rel_diff_compiled" in r else ""
         lines.append(f"| ({r['states']},{r['inputs']},{r['outputs']}) | {r['basis']} | "
-                     f"{r['form']} | {r['wall_sps_best']:.0f} ({r['wall_sps_median']:.0f}) | "
-                     f"{r['cpu_sps_best']:.0f} ({r['cpu_sps_median']:.0f}) | "
+                     f"{r['form']} | {r.get('engine', 'reference')} | "
+                     f"{r['wall_sps_best']:.0f} ({r['wall_sps_median']:.0f}) | "
+                     f"{r['cpu_sps_best']:.0f} ({r['cpu_sps_median']:.0f}) | {tgt} | {diff} | "
                      f"{min(r['load_avg_1min']):.1f}-{max(r['load_avg_1min']):.1f} |")
     return "\n".join(lines)
 
@@ -309,6 +368,8 @@ def main(argv=None):
     if "speed" in args.which:
         report["speed"] = speed(1000, 1, shapes=((12, 1, 3),)) if args.quick else speed()
         print(speed_table(report["speed"]))
+        if not args.quick:
+            report["compile"] = compile_cost()
     report["machine_end"] = machine()
     report["wall_seconds"] = time.perf_counter() - t_start
     print(f"total {report['wall_seconds']:.0f} s, load at end {report['machine_end']['load_avg']}")

@@ -515,12 +515,18 @@ def cli_check(name, res, log=print):
     return out
 
 
-def profile_subframe(out):
-    """cProfile of one PLID fit on the subframe set at order 30 (after a warm-up)."""
+def profile_subframe(out, reference_recursion=False):
+    """cProfile of one PLID fit on the subframe set at order 30 (after a warm-up); with
+    ``reference_recursion`` the recursion runs the reference numpy steps instead of the
+    compiled kernels (the "before" of issue 34's profile pair)."""
     import cProfile
     import pstats
 
     from trussid.plid import identify
+    from trussid.plid import recursion_kernel
+
+    if reference_recursion:
+        recursion_kernel.HAVE_NUMBA = False
 
     u, y = load("subframe")
     (ui, yi), _ = split(u, y)
@@ -532,6 +538,7 @@ def profile_subframe(out):
     pr.disable()
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     buf = io.StringIO()
+    buf.write(f"recursion: {'reference numpy steps' if reference_recursion else 'compiled kernels'}\n")
     buf.write(f"PLID identify, subframe set, order 30, {ui.shape[0]} samples; wall {wall:.2f} s, "
               f"CPU {cpu:.2f} s (under cProfile); load average {os.getloadavg()}; "
               f"environment {environment()}\n\n")
@@ -546,6 +553,8 @@ def main(argv=None):
     ap.add_argument("--sets", default=",".join(DATASETS))
     ap.add_argument("--methods", default=",".join(METHODS))
     ap.add_argument("--profile", metavar="OUT.txt", help="only profile one subframe PLID fit")
+    ap.add_argument("--reference-recursion", action="store_true",
+                    help="with --profile: run the recursion in the reference numpy steps")
     ap.add_argument("--out", default=os.path.join(RESULTS, "realdata"),
                     help="results stem (.md and .json are written)")
     ap.add_argument("--from-json", metavar="FILE",
@@ -557,7 +566,7 @@ def main(argv=None):
                     "(the comparators do not depend on trussid's commit); the report says so")
     a = ap.parse_args(argv)
     if a.profile:
-        profile_subframe(a.profile)
+        profile_subframe(a.profile, a.reference_recursion)
         return 0
     if a.from_json:
         with open(a.from_json) as fh:

@@ -52,8 +52,9 @@ from trussid.plid.canonical import ObserverBasis, check_order, from_statespace, 
 from trussid.plid._validate import as_2d
 from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.recursion_common import Problem
-from trussid.plid.recursion_direct import direct_covariance, direct_init, direct_step
-from trussid.plid.recursion_sqrt import sqrt_covariance, sqrt_init, sqrt_step
+from trussid.plid.recursion_direct import direct_covariance, direct_init
+from trussid.plid.recursion_kernel import history_rows, run_direct, run_sqrt
+from trussid.plid.recursion_sqrt import sqrt_covariance, sqrt_init
 
 __all__ = ["PLID", "PLIDResult", "PLIDWarning"]
 
@@ -209,6 +210,13 @@ class PLID:
         OpenBLAS threads while the recursion runs (restored afterwards). Default 1: the
         per-sample products are small and threads only add synchronisation (20 times
         slower on a loaded 2-core machine). None leaves the setting alone.
+    compiled : bool or None
+        Run the recursion in the compiled kernels of :mod:`trussid.plid.recursion_kernel`
+        (None, the default: when numba is installed) or in the reference numpy steps
+        (False). Both give the same numbers to rounding (the tests check 1e-9); ``fit``
+        and ``update`` of one estimator always take the same path, so that streaming
+        stays bit for bit equal to ``fit``. The kernels compile on their first use in a
+        fresh environment (a few CPU seconds, cached on disk afterwards).
 
     Examples
     --------
@@ -235,7 +243,8 @@ class PLID:
                  basis: ObserverBasis | None = None, u_scale=None, y_scale=None,
                  history_every: int = 10, passes: int = 1, pass_decay: float = 0.1,
                  pass_inflation: float = 100.0,
-                 progress: bool | None = None, blas_threads: int | None = 1):
+                 progress: bool | None = None, blas_threads: int | None = 1,
+                 compiled: bool | None = None):
         if form not in _FORMS:
             raise IdentificationError(f"form must be one of {_FORMS}, got {form!r}")
         if int(order) != order or order < 1:
@@ -263,6 +272,7 @@ class PLID:
         self.pass_inflation = float(pass_inflation)
         self.progress = progress
         self.blas_threads = blas_threads
+        self.compiled = compiled
         self.reset()
 
     # ------------------------------------------------------------------ set-up
@@ -333,7 +343,6 @@ class PLID:
         z0, P0 = self._prior(pb, theta0, theta_cov0)
         self._pb = pb
         self._st = (sqrt_init if self.form == "sqrt" else direct_init)(pb, z0, P0)
-        self._step = sqrt_step if self.form == "sqrt" else direct_step
         self._innov = []
         self._hist, self._hist_k = [], []
         self._k = 0
@@ -391,11 +400,9 @@ class PLID:
                 _limit_blas(self.blas_threads), bar:
             for k0 in range(0, n_s, chunk):
                 k1 = min(n_s, k0 + chunk)
-                for k in range(k0, k1):
-                    self._one(us[k], ys[k], E[k])
+                self._block(us[k0:k1], ys[k0:k1], E[k0:k1])
                 bar.update(k1 - k0)
         self._innov.append(E)
-
     #: Samples x parameters^2 above which a pass takes more than about two seconds: the
     #: recursion updates a q x q covariance per sample; measured 2400 samples/s at q = 120
     #: (30-state SIMO, direct form) on the 2-core development machine, i.e. ~3.5e7 per s.
@@ -407,22 +414,28 @@ class PLID:
         q = self._pb.q if self._pb is not None else self.order
         return n_s * float(q) ** 2 > self.PROGRESS_WORK
 
-    def _one(self, us_k, ys_k, e_out) -> None:
+    def _block(self, us, ys, E) -> None:
+        """Samples ``us[k], ys[k]`` (scaled) through the recursion; innovations into ``E``.
+
+        A step whose covariance is already broken (NaN/inf, which only the direct form
+        can reach) carries on in NaN, so that the result reports it (finite=False)
+        instead of raising mid-run (:class:`~trussid.plid.recursion_kernel.KernelRun`).
+        """
         pb, st = self._pb, self._st
-        try:
-            self._step(pb, st, us_k, ys_k, e_out)
-        except (np.linalg.LinAlgError, ValueError):
-            # Only a covariance already broken (NaN/inf, which only the direct form can
-            # reach) makes LAPACK or scipy refuse; carry on in NaN so that the result
-            # reports it (finite=False) instead of raising mid-run.
-            st.z[:] = np.nan
-        self._k += 1
-        if self.form == "direct" and self._first_bad is None:
-            if not np.diagonal(st.P).min() > 0:
-                self._first_bad = self._k
-        if self.history_every and self._k % self.history_every == 0:
-            self._hist.append(st.z[:pb.q].copy())
-            self._hist_k.append(self._k)
+        every = self.history_every
+        hist = np.empty((history_rows(self._k, us.shape[0], every), pb.q))
+        if self.form == "direct":
+            run = run_direct(pb, st, us, ys, E, hist, every, self._k,
+                             track=self._first_bad is None, use_kernel=self.compiled)
+            if self._first_bad is None and run.first_bad >= 0:
+                self._first_bad = self._k + run.first_bad + 1
+        else:
+            run_sqrt(pb, st, us, ys, E, hist, every, self._k, use_kernel=self.compiled)
+        if every:
+            first = (self._k // every + 1) * every
+            self._hist.extend(hist)
+            self._hist_k.extend(range(first, first + every * hist.shape[0], every))
+        self._k += us.shape[0]
 
     def update(self, u_k, y_k) -> np.ndarray:
         """Process one sample (streaming) and return its innovation ``y_k - C x^-``.
@@ -444,12 +457,12 @@ class PLID:
         if u_k.size != self._pb.m or y_k.size != self._pb.p:
             raise DataError(f"sample {self._k} has {u_k.size} inputs and {y_k.size} outputs; "
                             f"expected {self._pb.m} and {self._pb.p}")
-        e = np.empty(self._pb.p)
+        e = np.empty((1, self._pb.p))
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"), \
                 _limit_blas(self.blas_threads):
-            self._one(u_k / self._su, y_k / self._sy, e)
-        self._innov.append(e[None, :])
-        return e * self._sy
+            self._block((u_k / self._su)[None, :], (y_k / self._sy)[None, :], e)
+        self._innov.append(e)
+        return e[0] * self._sy
 
     # ------------------------------------------------------------------ results
     def covariance(self) -> np.ndarray:

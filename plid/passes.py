@@ -66,26 +66,62 @@ def multipass(u, y, order: int, dt: float, schedule, *, basis: ObserverBasis | N
     result : PLIDResult
         Of the last pass.
     history : list of dict
-        Per pass: its settings, seconds, whether it stayed finite.
+        Per pass: its settings (with its form), seconds, whether it stayed finite. A first
+        pass that diverged is restarted from the same prior in the square-root form, then
+        also with a 100 times tighter parameter prior; each attempt has its record, the
+        restarts with their ``restart`` reason.
     """
     history = []
     res = None
     current = prior
     for k, ps in enumerate(schedule):
-        t0 = time.perf_counter()
-        est = PLID(order, form=form, dt=dt, Q=ps.Q, R=R, N=N, Q_theta=ps.Q_theta,
-                   prior=current, prior_theta_var=ps.prior_theta_var, basis=basis,
-                   history_every=history_every, progress=progress)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", PLIDWarning)
-            r = est.fit(u, y)
-        history.append({"pass": k, "Q": ps.Q, "Q_theta": ps.Q_theta,
-                        "prior_theta_var": ps.prior_theta_var, "finite": r.finite,
-                        "seconds": time.perf_counter() - t0})
+        r, rec = _pass(u, y, order, dt, ps, k, current, basis, R, N, form, progress,
+                       history_every)
+        if not r.finite and k == 0:
+            # Safeguard of the first pass (issue 34): the direct form can lose positive
+            # definiteness and diverge (a measured drive record, "PLID diverged in its
+            # first pass"); the square-root form cannot, and a tighter parameter prior
+            # keeps the estimate near its start. Restart from the same prior, and say so.
+            for retry_form, var, why in _RESTARTS:
+                if form == "sqrt" and retry_form == "sqrt" and var == 1.0:
+                    continue
+                history.append(rec)
+                ps2 = Pass(ps.Q, ps.Q_theta, ps.prior_theta_var * var)
+                r, rec = _pass(u, y, order, dt, ps2, k, current, basis, R, N, retry_form,
+                               progress, history_every)
+                rec["restart"] = why
+                if r.finite:
+                    break
+        history.append(rec)
         if not r.finite:
             break
         res = r
         current = r.model
     if res is None:
-        raise IdentificationError("PLID diverged in its first pass (estimate not finite)")
+        raise IdentificationError("PLID diverged in its first pass (estimate not finite), "
+                                  "also when restarted from its prior in the square-root "
+                                  "form with a tighter parameter prior")
     return res, history
+
+
+#: Restarts of a first pass that diverged: (form, factor on prior_theta_var, reason).
+_RESTARTS = (
+    ("sqrt", 1.0, "the pass diverged (estimate not finite): restarted from the same prior "
+                  "in the square-root form, which keeps the covariance positive definite"),
+    ("sqrt", 1e-2, "the pass diverged again: restarted from the same prior in the "
+                   "square-root form with a 100 times tighter parameter prior"),
+)
+
+
+def _pass(u, y, order, dt, ps, k, current, basis, R, N, form, progress, history_every):
+    """One PLID pass and its history record."""
+    t0 = time.perf_counter()
+    est = PLID(order, form=form, dt=dt, Q=ps.Q, R=R, N=N, Q_theta=ps.Q_theta,
+               prior=current, prior_theta_var=ps.prior_theta_var, basis=basis,
+               history_every=history_every, progress=progress)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PLIDWarning)
+        r = est.fit(u, y)
+    return r, {"pass": k, "form": form, "Q": ps.Q, "Q_theta": ps.Q_theta,
+               "prior_theta_var": ps.prior_theta_var, "finite": r.finite,
+               "seconds": time.perf_counter() - t0}

@@ -15,13 +15,14 @@ Follows ``docs/plid.md`` exactly, on ``z = [theta; x]``:
 sum of ``p + m`` scaled row blocks, never a dense product, so a sample costs
 O((n + q) n (p + m)) for the time update and O((n + q)^2 p) for the measurement update.
 
-Speed (issue 16): the step is bound by those flops and by the passes over the dense
-``(n + q)^2`` covariance, not by Python's per-call overhead. On the subframe problem of
-``benchmarks/bench_realdata.py`` (n = 30, q = 150, p = 3, m = 2) this numpy step took 207 us
-of CPU per sample, and the same arithmetic written as one numba-compiled loop over all
-samples 210 us (equal results to 1e-14; measured on the shared 2-core machine at load 17),
-so no compiled kernel is used. ``G P`` below is the x-row block of the transition in one
-product; the Isserlis term is one (p^2) x (n^2) product.
+Speed: this numpy step is the reference. It is bound by about 40 small numpy calls per
+sample, not by its flops (``../shared/docs/plid-research.md``, section 1); compiling the same
+dense arithmetic gained nothing (issue 16: 207 against 210 us per sample). What
+:class:`~trussid.plid.estimator.PLID` runs by default is
+:func:`trussid.plid.recursion_kernel.run_direct`, a compiled loop that uses the structure
+(sparse ``C``, block-diagonal ``F``, rows of the symmetric ``P``): 2.7-3x this step's speed,
+equal to it to rounding (``benchmarks/results/plid_speed_kernel.md``). ``G P`` below is the
+x-row block of the transition in one product; the Isserlis term is one (p^2) x (n^2) product.
 """
 
 from __future__ import annotations

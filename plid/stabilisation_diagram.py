@@ -15,6 +15,7 @@ from trussid.plid.data import ModeShapes
 from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.modal import mac, modal_table
 from trussid.plid.recipe import identify as plid_identify
+from trussid.plid.uncertainty import mode_intervals
 
 __all__ = ["Stabilisation", "mark_stability", "stabilisation"]
 
@@ -44,6 +45,11 @@ class Stabilisation:
     models : list
         The identified models, by order.
     seconds : list of float
+    frequency_std, damping_std : list of ndarray
+        Per order and mode: the first-order standard deviation of its frequency [Hz] and
+        damping ratio (:func:`trussid.plid.uncertainty.mode_intervals`, from the PLID pass's
+        parameter covariance); NaN where there is none (an ``identify`` that returns a bare
+        model, a reflected pole). The figure draws ``Z95`` times them as error bars.
     """
 
     orders: list
@@ -54,6 +60,8 @@ class Stabilisation:
     tolerances: dict = field(default_factory=dict)
     models: list = field(default_factory=list)
     seconds: list = field(default_factory=list)
+    frequency_std: list = field(default_factory=list)
+    damping_std: list = field(default_factory=list)
 
     def stable_poles(self, order: int | None = None, min_run: int = 1) -> ModeShapes:
         """The modes stable in all three at ``order`` (default: the highest order) over at
@@ -98,8 +106,9 @@ def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
     orders : sequence of int
         Model orders, ascending.
     identify : callable, optional
-        ``identify(u, y, order, dt) -> control.StateSpace``; default PLID
-        (:func:`trussid.plid.recipe.identify`, its ``.model``).
+        ``identify(u, y, order, dt)`` returning a ``control.StateSpace``, or an
+        :class:`~trussid.plid.provenance.Identification` (its ``.model``, and the modal
+        intervals from its PLID pass); default PLID (:func:`trussid.plid.recipe.identify`).
     tol_f, tol_zeta : float
         Largest relative change of frequency and of damping from the nearest pole one
         order step below for the pole to count as stable in them (defaults 1 % and 5 %, the
@@ -120,7 +129,7 @@ def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
     """
     if identify is None:
         def identify(u_, y_, n_, dt_):
-            return plid_identify(u_, y_, n_, dt_, progress=False).model
+            return plid_identify(u_, y_, n_, dt_, progress=False)
 
     orders = [int(n) for n in orders]
     if not orders or sorted(orders) != orders or orders[0] < 1:
@@ -134,10 +143,11 @@ def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
     for n in bar:
         t0 = time.perf_counter()
         try:
-            model = identify(u, y, n, dt)
+            got = identify(u, y, n, dt)
         except (IdentificationError, DataError) as exc:
             res.failed.append((n, str(exc)))
             continue
+        model, intervals = _model_and_intervals(got)
         if output_names is not None or input_names is not None:
             model = control.ss(model.A, model.B, model.C, model.D, model.dt,
                                inputs=input_names, outputs=output_names)
@@ -150,6 +160,9 @@ def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
         res.runs.append(np.array([run_prev[j] + 1 if st == "s" else 0
                                   for st, j in zip(status, match)], dtype=int))
         res.models.append(model)
+        fstd, zstd = _stds_of(modes, intervals)
+        res.frequency_std.append(fstd)
+        res.damping_std.append(zstd)
         res.seconds.append(time.perf_counter() - t0)
         prev = modes
     bar.close()
@@ -157,3 +170,26 @@ def stabilisation(u, y, dt: float, orders, identify=None, tol_f: float = 0.01,
         raise IdentificationError("no order gave a model: " + "; ".join(
             f"order {n}: {why}" for n, why in res.failed))
     return res
+
+
+def _model_and_intervals(got):
+    """The model an ``identify`` returned, and its modes' intervals when it returned an
+    identification (a bare model has none)."""
+    if isinstance(got, control.StateSpace):
+        return got, []
+    return got.model, mode_intervals(got.model, got.result.model, got.result.theta_cov)
+
+
+def _stds_of(modes: ModeShapes, intervals) -> tuple[np.ndarray, np.ndarray]:
+    """Standard deviations of each mode's frequency and damping, matched by frequency
+    (the same poles: the modal table and the intervals read them from one model)."""
+    fstd = np.full(modes.n_modes, np.nan)
+    zstd = np.full(modes.n_modes, np.nan)
+    if intervals:
+        f_int = np.array([iv.frequency_hz for iv in intervals])
+        for k, f in enumerate(modes.frequencies_hz):
+            j = int(np.argmin(np.abs(f_int - f)))
+            if abs(f_int[j] - f) <= 1e-6 * max(abs(f), 1e-12):
+                fstd[k] = intervals[j].frequency_std_hz
+                zstd[k] = intervals[j].damping_ratio_std
+    return fstd, zstd

@@ -39,6 +39,26 @@ def test_stabilisation_diagram_puts_every_pole_at_its_order_and_frequency(tmp_pa
     assert (tmp_path / "stab.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_stabilisation_diagram_draws_the_95_percent_intervals_as_error_bars():
+    from trussid.plid.uncertainty import Z95
+
+    stab = _stab()
+    stab.frequency_std = [np.full(m.n_modes, np.nan) for m in stab.modes]
+    stab.frequency_std[2] = np.array([0.1, 0.5, np.nan])      # order 8: two poles with one
+    fig = stabilisation_figure(stab)
+    ax = fig.axes[0]
+    bars = [c for c in ax.collections if len(c.get_segments())]
+    assert len(bars) == 1
+    segs = sorted((float(s[0][0]), float(s[1][0]), float(s[0][1])) for s in bars[0].get_segments())
+    np.testing.assert_allclose(segs, [(10 - Z95 * 0.1, 10 + Z95 * 0.1, 8),
+                                      (40 - Z95 * 0.5, 40 + Z95 * 0.5, 8)])
+    assert "95 % frequency interval" in ax.get_legend_handles_labels()[1]
+    # the poles themselves are where they were
+    points = sorted((float(x), float(y)) for line in ax.lines
+                    for x, y in zip(line.get_xdata(), line.get_ydata()))
+    assert len(points) == 8
+
+
 def test_mac_plot_shows_each_value_and_the_frequencies(tmp_path, rng):
     phi = rng.standard_normal((5, 3))
     M = mac(phi, phi)

@@ -15,6 +15,7 @@ from trussid._util.files import atomic_path
 from trussid.plid.evaluate import frf_grid
 from trussid.plid.frf import frequency_response
 from trussid.plid.metrics import modal_parameters, one_step_predict
+from trussid.plid.uncertainty import Z95
 
 
 def save_figure(fig: Figure, path, dpi: int = 110) -> None:
@@ -458,6 +459,17 @@ def stabilisation_figure(stab, frf=None, title: str = "stabilisation diagram",
             ax.plot(modes.frequencies_hz[sel], np.full(int(sel.sum()), n), ls="none",
                     label=label, **st)
             top = max(top, float(np.max(modes.frequencies_hz[sel])))
+    # 95 % frequency intervals as horizontal error bars (no caps: they would be lines)
+    stds = getattr(stab, "frequency_std", None) or []
+    bars = False
+    for n, modes, fstd in zip(stab.orders, stab.modes, stds):
+        ok = np.isfinite(fstd)
+        if np.any(ok):
+            ax.errorbar(modes.frequencies_hz[ok], np.full(int(ok.sum()), n),
+                        xerr=Z95 * fstd[ok], fmt="none", ecolor="0.35", elinewidth=0.9,
+                        capsize=0, zorder=1,
+                        label=None if bars else "95 % frequency interval")
+            bars = True
     ax.set_xlim(0, fmax or top * 1.02 or 1.0)
     ax.set_ylim(min(stab.orders) - 1, max(stab.orders) + 1)
     ax.set_xlabel("frequency [Hz]")

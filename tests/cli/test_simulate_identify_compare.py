@@ -204,6 +204,34 @@ def test_compare_with_validation_data(work, identified, capsys):
     assert m["prediction"]["overall"] > 20.0
 
 
+def test_compare_without_a_band_measures_over_the_plants_modes_and_prints_it(work, identified):
+    # Issue 34: from 0 Hz to Nyquist the headline maximum sits at anti-resonances and far
+    # from the modes; the default band is the plant's modes' band, printed with the figure.
+    out = work / "cmp_default_band"
+    res = run("compare", work / "model.npz", work / "plant.npz", "--out", out)
+    assert res.returncode == 0, res.stderr
+    m = json.loads((out / "metrics.json").read_text())
+    lo, hi = MODES[0][0] / 1.25, MODES[-1][0] * 1.25
+    np.testing.assert_allclose(m["band"], [lo, hi], rtol=1e-3)   # the modes' discrete image
+    assert "plant's modes" in m["band_source"]
+    assert f"FRF error over {lo:.4g}-{hi:.4g} Hz (the plant's modes" in res.stdout
+    full = work / "cmp_full_band"
+    assert run("compare", work / "model.npz", work / "plant.npz", "--out", full,
+               "--band", 0, FS / 2).returncode == 0
+    mf = json.loads((full / "metrics.json").read_text())
+    assert mf["band_source"] == "--band" and mf["frf"]["max_db"] >= m["frf"]["max_db"]
+
+
+def test_compare_with_data_and_no_band_measures_over_the_excited_band(work, identified, capsys):
+    out = work / "cmp_data_band"
+    assert main(["compare", str(work / "model.npz"), str(work / "data.npz"), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    m = json.loads((out / "metrics.json").read_text())
+    assert "excited band" in m["band_source"] and "(the excited band" in text
+    # the simulated record is white: the excited band is (nearly) all of 0-Nyquist
+    assert m["band"][0] < 0.05 * FS / 2 and m["band"][1] > 0.95 * FS / 2
+
+
 # ------------------------------------------------------------------ bad input (subprocess)
 
 

@@ -403,3 +403,34 @@ def test_order_equal_to_the_outputs_uses_a_real_pole_basis(simo):
     u, y = data(simo, 1200, snr_db=40, seed=16)
     ident = identify(u, y, 2, 1 / FS)
     assert ident.model.nstates == 2 and "real" in ident.basis.name
+
+
+def test_a_first_pass_that_diverges_is_restarted_from_its_prior_in_the_square_root_form(
+        simo, monkeypatch):
+    # The direct form can lose positive definiteness and blow up (a measured drive record:
+    # "PLID diverged in its first pass"). Made to diverge here by hand, the pass must be
+    # rerun from the same prior in the square-root form, and the provenance must say so.
+    import trussid.plid.estimator as est_mod
+    from trussid.plid.bases import basis_for, model_frequencies
+
+    def diverging(real):
+        def run(pb, st, *a, **k):
+            out = real(pb, st, *a, **k)
+            st.z[:] = np.nan
+            return out
+        return run
+
+    monkeypatch.setattr(est_mod, "run_direct", diverging(est_mod.run_direct))
+    u, y = data(simo, 800, snr_db=60, seed=5)
+    basis = basis_for(6, 2, FS, model_frequencies(simo, 3, FS))
+    res, hist = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-4)], basis=basis, prior=simo,
+                          R=1e-6, form="direct")
+    assert [(h["form"], h["finite"]) for h in hist] == [("direct", False), ("sqrt", True)]
+    assert "square-root form" in hist[1]["restart"]
+    same, _ = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-4)], basis=basis, prior=simo,
+                        R=1e-6, form="sqrt")
+    assert res.form == "sqrt" and np.array_equal(res.theta, same.theta)
+    # a pass that diverges however it is restarted is still an error that says what was tried
+    monkeypatch.setattr(est_mod, "run_sqrt", diverging(est_mod.run_sqrt))
+    with pytest.raises(IdentificationError, match="also when restarted from its prior"):
+        multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-4)], basis=basis, prior=simo, R=1e-6)

@@ -75,3 +75,40 @@ def test_stabilisation_with_no_model_at_all_says_why(rng):
     with pytest.raises(IdentificationError, match="no order gave a model: order 2: always"):
         stabilisation(np.ones((10, 1)), np.ones((10, 1)), 1.0, [2], identify=never,
                       progress=False)
+
+
+def test_a_plid_diagram_carries_each_poles_interval_from_its_identification(rng):
+    # Issue 34: the intervals in the stabilisation diagram. With a PLID identify each pole
+    # of each order carries the first-order standard deviations of its identification
+    # (plid.uncertainty.mode_intervals; their coverage is measured by
+    # benchmarks/bench_uncertainty.py), matched to the diagram's modes by frequency.
+    from trussid.plid.recipe import identify
+    from trussid.plid.uncertainty import mode_intervals
+
+    sys, f_true, _ = structure()
+    u = rng.standard_normal((3000, 2))
+    y = control.forced_response(sys, U=u.T).outputs.T
+    y = y + 1e-2 * np.std(y) * rng.standard_normal(y.shape)
+
+    def ident(u_, y_, n, dt):
+        return identify(u_, y_, n, dt, form="sqrt", progress=False)
+
+    stab = stabilisation(u, y, sys.dt, [6, 8], progress=False, identify=ident)
+    assert len(stab.frequency_std) == len(stab.damping_std) == len(stab.orders) == 2
+    f, s = stab.modes[0].frequencies_hz, stab.frequency_std[0]
+    np.testing.assert_allclose(f, f_true, rtol=1e-4)            # order 6: the three modes
+    ivs = mode_intervals(stab.models[0], *(lambda i: (i.result.model, i.result.theta_cov))(
+        ident(u, y, 6, sys.dt)))
+    np.testing.assert_allclose(s, [iv.frequency_std_hz for iv in ivs], rtol=1e-12)
+    np.testing.assert_allclose(stab.damping_std[0], [iv.damping_ratio_std for iv in ivs],
+                               rtol=1e-12)
+    assert np.all(s > 0) and np.all(s < 1e-3 * f)
+    assert all(x.size == m.n_modes for x, m in zip(stab.frequency_std, stab.modes))
+
+
+def test_a_bare_model_identify_gives_no_intervals(rng):
+    sys, _, _ = structure()
+    u = rng.standard_normal((2000, 2))
+    y = control.forced_response(sys, U=u.T).outputs.T
+    stab = stabilisation(u, y, sys.dt, [6], identify=_n4sid, progress=False)
+    assert np.all(np.isnan(stab.frequency_std[0])) and stab.frequency_std[0].size == 3

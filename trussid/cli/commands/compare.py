@@ -45,8 +45,9 @@ def add_parser(subparsers):
                    "(.csv, .npz, .mat)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     p.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"),
-                   help="frequency band of the FRF error and plots [Hz] (default 0 to "
-                   "Nyquist; a band over two decades or more is plotted on a log axis)")
+                   help="frequency band of the FRF error and plots [Hz] (default: against a "
+                   "plant its modes' band, against data the excited band, as printed; a "
+                   "band over two decades or more is plotted on a log axis)")
     p.add_argument("--fs", type=float, metavar="HZ", help="sampling frequency of a data file "
                    "that has neither fs nor a time column")
     p.add_argument("--inputs", nargs="+", metavar="NAME", help="data input channels to use")
@@ -131,7 +132,7 @@ def _load_reference(args, model, meta, kind, ref_path):
 def run(args) -> int:
     import control
 
-    from trussid.plid.evaluate import compare, frf_grid
+    from trussid.plid.evaluate import Band, compare, default_band, frf_grid
     from trussid.plid.frf import frequency_response
     from trussid.plid.modelfile import load_model
     from trussid.plots import bode_figure, pole_map_figure, save_figure
@@ -143,16 +144,21 @@ def run(args) -> int:
     ref_path = Path(args.reference)
     kind = _reference_kind(ref_path)
     nyq = 0.5 / model.dt
-    band = tuple(args.band) if args.band else (0.0, nyq)
-    if not 0 <= band[0] < band[1] <= nyq * (1 + 1e-9):
-        raise UserError(f"--band {band[0]:g} {band[1]:g}: need 0 <= LO < HI <= Nyquist "
-                        f"({nyq:g} Hz)")
+    if args.band:
+        band = tuple(args.band)
+        if not 0 <= band[0] < band[1] <= nyq * (1 + 1e-9):
+            raise UserError(f"--band {band[0]:g} {band[1]:g}: need 0 <= LO < HI <= Nyquist "
+                            f"({nyq:g} Hz)")
     truth, (u, y, y_clean, K, est) = _load_reference(args, model, meta, kind, ref_path)
+    chosen = (Band(*args.band, "--band") if args.band
+              else default_band(2 * nyq, plant=truth, u=u if truth is None else None))
+    band = chosen.as_tuple()
     c = compare(model, truth, u=u, y=y, y_clean=y_clean, K=K, gain="model file",
                 estimate=est, band=band)
     metrics = {"model": str(args.model), "reference": str(ref_path), "reference_kind": kind,
                "input_names": meta["input_names"], "output_names": meta["output_names"],
-               "fs": 2 * nyq, "band": list(band), "stable": c.stable,
+               "fs": 2 * nyq, "band": list(band), "band_source": chosen.source,
+               "stable": c.stable,
                "stability": meta["stability"].message(f"the model {args.model}"),
                "record": (f"seeded white-noise record of the plant, {VALIDATION_SAMPLES} "
                           "samples" if kind == "plant" else str(ref_path)),
@@ -204,8 +210,9 @@ def _print_metrics(args, metrics, c, written, out) -> None:
               "so the simulation fit below is meaningless", file=sys.stderr)
     if c.frf is not None:
         e = c.frf
-        print(f"FRF error over {band[0]:g}-{band[1]:g} Hz: max {e.max_db:.3f} dB, "
-              f"RMS {e.rms_db:.3f} dB; phase max {e.max_deg:.2f} deg, RMS {e.rms_deg:.2f} deg")
+        print(f"FRF error over {band[0]:.4g}-{band[1]:.4g} Hz ({metrics['band_source']}): "
+              f"max {e.max_db:.3f} dB, RMS {e.rms_db:.3f} dB; phase max {e.max_deg:.2f} deg, "
+              f"RMS {e.rms_deg:.2f} deg")
         print("poles: true [Hz, damping] -> model [Hz, damping]")
         for row in c.poles:
             t = ("-" if row.true_frequency_hz is None
@@ -215,8 +222,8 @@ def _print_metrics(args, metrics, c, written, out) -> None:
             print(f"  {t:>21} -> {mdl}")
     if c.frf_vs_estimate is not None:
         e = c.frf_vs_estimate
-        print(f"FRF error vs {e.reference} over {band[0]:g}-{band[1]:g} Hz: max "
-              f"{e.max_db:.3f} dB, RMS {e.rms_db:.3f} dB")
+        print(f"FRF error vs {e.reference} over {band[0]:.4g}-{band[1]:.4g} Hz "
+              f"({metrics['band_source']}): max {e.max_db:.3f} dB, RMS {e.rms_db:.3f} dB")
     r, s = c.prediction, c.simulation
     print(f"one-step signal-to-prediction-error ratio ({metrics['record']}; first {r.skip} "
           f"samples left out): {r.overall:.2f} dB")
