@@ -20,7 +20,7 @@ from trussid._util.files import atomic_path
 from trussid._util.jsonio import json_safe
 from trussid.geometry.spec import Testbed
 from trussid.lqg.baselines import decentralised, tune_baseline
-from trussid.lqg.design import design_lqg
+from trussid.lqg.procedure import design_procedure
 from trussid.lqg.errors import ControlError
 from trussid.lqg.evaluate import (closed_loop, damping_table, disk_margins, frequency_response,
                                   h2_norm, simulate_loop)
@@ -279,7 +279,7 @@ def check(row: dict, nominal: bool, thresholds: dict | None = None) -> dict:
     return ok
 
 
-def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band=None,
+def design_controller(model, u, y, *, K=None, target_damping: float | None = None, band=None,
                       form: str = "predictor", baselines: bool = True, progress=None,
                       n_modes=None):
     """The LQG from the identified ``model`` and its record, and the baselines' gains tuned
@@ -295,12 +295,18 @@ def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band
     say = progress or (lambda msg: None)
     timings = {}
     t0 = time.perf_counter()
-    des = design_lqg(model, u, y, target_damping=target_damping, band=band, form=form, K=K,
-                     n_modes=n_modes)
+    # the one design path (issue 32): the best design stable and robust on the model
+    proc = design_procedure(model, u, y, K=K, target_damping=target_damping, band=band,
+                            form=form, n_modes=n_modes)
+    des = proc.design
+    des.procedure = proc
     timings["design"] = time.perf_counter() - t0
     freqs = ", ".join(f"{t['frequency_hz']:.0f}" for t in des.target_modes)
     say(f"LQG designed on {des.design_model.nstates} states ({freqs} Hz) "
-        f"in {timings['design']:.1f} s")
+        f"in {timings['design']:.1f} s ({len(proc.attempts)} designs tried, disk margin "
+        f"{proc.disk_gain_db:.1f} dB on the model)")
+    if proc.short:
+        say("warning: " + proc.warning())
     base = {}
     if baselines and model.ninputs != model.noutputs:
         # a decentralised baseline feeds each actuator from its own sensor: with unequal
@@ -311,7 +317,13 @@ def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band
         t0 = time.perf_counter()
         f = [t["frequency_hz"] for t in des.target_modes]
         bp_band = (0.85 * min(f), 1.15 * max(f))
+        direct = np.any(np.asarray(model.D) != 0)
         for kind in BASELINE_KINDS:
+            if direct and not kind.endswith("+delay"):
+                # a baseline without the delay has a direct term: with the plant's
+                # feed-through the loop would be algebraic
+                say(f"no {kind} baseline: the model has a direct term (an algebraic loop)")
+                continue
             g, info = tune_baseline(model, kind, bp_band)
             base[kind] = {"gain": g, "band": list(bp_band), "tuning": info}
         timings["baselines_tuning"] = time.perf_counter() - t0
