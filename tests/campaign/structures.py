@@ -74,7 +74,7 @@ def pzt_tower():
                         (10 * b + c + 1, 10 * (b + 1) + (c + 1) % 3 + 1)]
     for b in range(1, 4):
         members += [(10 * b + c + 1, 10 * b + (c + 1) % 3 + 1) for c in range(3)]
-    els = _members(m, members, pos, fem.Section.tube(0.006, 0.001), fem.ALUMINIUM, 3,
+    els = _members(m, members, pos, fem.Section.tube(0.008, 0.0015), fem.ALUMINIUM, 2,
                    lambda a, b: np.cross(b - a, [0.3, 0.4, 1.0]), 1000)
     m.add_point_masses([31, 32, 33], [0.8, 0.5, 0.3])
     m.fix([1, 2, 3])
@@ -89,7 +89,7 @@ damping = 0.005
 name = "pzt_leg{k}"
 type = "strain"
 elements = [{e}]
-offset = 0.00625
+offset = 0.00825
 face_axis = "y"
 arrangement = "bending"
 n_wafers = 2
@@ -152,7 +152,7 @@ def lattice_beam():
     pairs = [(low[i], low[i + 1]) for i in range(nb)] + \
             [(up[i], up[i + 1]) for i in range(nb - 1)] + \
             [(low[i], up[i]) for i in range(nb)] + [(up[i], low[i + 1]) for i in range(nb)]
-    els = _members(m, pairs, pos, fem.Section.circle(0.004), fem.STEEL, 2,
+    els = _members(m, pairs, pos, fem.Section.circle(0.006), fem.STEEL, 2,
                    lambda a, b: np.array([0.0, 1.0, 0.0]), 1000)
     m.add_point_masses(up[3::4], 0.15)
     m.fix(low + up + list(range(1000, 1000 + len(pairs))), "246")  # planar
@@ -167,7 +167,7 @@ damping = 0.008
 name = "pzt_chord"
 type = "strain"
 elements = [""" + str(els[3][0]) + """]
-offset = 0.00425
+offset = 0.00625
 face_axis = "z"
 arrangement = "extension"
 n_wafers = 2
