@@ -305,8 +305,7 @@ def design_controller(model, u, y, *, K=None, target_damping: float | None = Non
     say(f"LQG designed on {des.design_model.nstates} states ({freqs} Hz) "
         f"in {timings['design']:.1f} s ({len(proc.attempts)} designs tried, disk margin "
         f"{proc.disk_gain_db:.1f} dB on the model)")
-    if proc.short:
-        say("warning: " + proc.warning())
+
     base = {}
     if baselines and model.ninputs != model.noutputs:
         # a decentralised baseline feeds each actuator from its own sensor: with unequal
@@ -522,6 +521,14 @@ def report_markdown(study: dict, heading: str = "##") -> str:
               f"state feedback tuned to {100 * des.info['target_damping']:.1f} % damping on "
               f"them, estimator: {des.info['estimator_choice'].get('chosen', '')}. "
               f"Controller: {ctrl.nstates} states.", ""]
+        proc = des.procedure
+        if proc is not None:  # how the default procedure got there (issue 32)
+            L += [f"Design procedure: {len(proc.attempts)} designs tried, the best stable one "
+                  f"with a {proc.disk_gain_db:.1f} dB MIMO disk margin on the identified model "
+                  f"kept; per target mode (asked {100 * proc.asked:.1f} %):", "",
+                  *[f"- {line.strip()}" for line in proc.lines()], ""]
+            if proc.short:
+                L += [f"**Warning**: {proc.warning()}.", ""]
     else:
         di = study.get("design_info") or {}
         tm = ", ".join(f"{t['frequency_hz']:.1f} Hz" for t in di.get("target_modes", []))
