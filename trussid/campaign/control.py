@@ -506,6 +506,7 @@ def summary(study: dict) -> dict:
 
 def report_markdown(study: dict, heading: str = "##") -> str:
     """The closed-loop report (Markdown): damping table, margins, robustness, baselines."""
+    # Long: a report template, read top to bottom in the order of the report.
     h = heading
     nom = study["nominal"]
     rows = study["rows"]
