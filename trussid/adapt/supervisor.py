@@ -20,7 +20,6 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
-import control
 import numpy as np
 
 from trussid.lqg.design import excited_band
