@@ -23,11 +23,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trussid.lqg.design import excited_band
-from trussid.lqg.procedure import design_procedure
 from trussid.lqg.errors import ControlError
 from trussid.lqg.evaluate import (MODE_DAMPING_MAX, DampingTable, closed_loop, damping_table,
                                   disk_margins)
 from trussid.lqg.grading import DEFAULT_BAND, THRESHOLDS, Thresholds
+from trussid.lqg.procedure import design_procedure
 from trussid.plid.metrics import prediction_ratio_db
 
 from .experiment import ClosedLoopRecord, closed_loop_record
