@@ -17,11 +17,11 @@ def _sorted(z):
 
 def test_dominant_modes_are_those_with_a_quarter_of_the_largest_residue(structure):
     sel, rows = select_modes(structure)
-    f = sorted(rows[b]["frequency_hz"] for b in sel)
+    f = sorted(rows[b].frequency_hz for b in sel)
     # the 120 Hz mode has a tenth of the input gain: its residue is 1 % of the others'
     assert np.allclose(f, [166.0, 194.0, 220.0], rtol=1e-3)
     sel, rows = select_modes(structure, band=(100, 170))
-    assert np.allclose(sorted(rows[b]["frequency_hz"] for b in sel), [120.0, 166.0], rtol=1e-3)
+    assert np.allclose(sorted(rows[b].frequency_hz for b in sel), [120.0, 166.0], rtol=1e-3)
 
 
 def test_modal_truncation_keeps_the_pole_and_the_resonance_of_the_kept_mode():

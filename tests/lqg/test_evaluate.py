@@ -195,16 +195,16 @@ def test_disk_margins_equal_a_frequency_by_frequency_computation_on_numpy_2(stru
                                         (120.0, 166.0, 194.0, 220.0)])])
     ours = disk_margins(structure, c, f)
     ref = reference_disk_margins(structure, c, f)
-    assert [lp["alpha"] for lp in ours["loops"]] == pytest.approx(ref["loop_alpha"], rel=1e-9)
-    assert ours["mimo"]["alpha"] == pytest.approx(ref["mimo_alpha"], rel=1e-7)
-    assert ours["mimo"]["frequency_hz"] == ref["mimo_frequency_hz"]
-    a = ours["mimo"]["alpha"]  # balanced disk: gain (1 + a/2)/(1 - a/2), phase 2 atan(a/2)
-    assert ours["mimo"]["gain_db"] == pytest.approx(20 * np.log10((2 + a) / (2 - a)), rel=1e-12)
-    assert ours["mimo"]["phase_deg"] == pytest.approx(np.degrees(2 * np.arctan(a / 2)), rel=1e-12)
-    assert min(lp["alpha"] for lp in ours["loops"]) > a  # one loop at a time: no less margin
+    assert [lp.alpha for lp in ours.loops] == pytest.approx(ref["loop_alpha"], rel=1e-9)
+    assert ours.mimo.alpha == pytest.approx(ref["mimo_alpha"], rel=1e-7)
+    assert ours.mimo.frequency_hz == ref["mimo_frequency_hz"]
+    a = ours.mimo.alpha  # balanced disk: gain (1 + a/2)/(1 - a/2), phase 2 atan(a/2)
+    assert ours.mimo.gain_db == pytest.approx(20 * np.log10((2 + a) / (2 - a)), rel=1e-12)
+    assert ours.mimo.phase_deg == pytest.approx(np.degrees(2 * np.arctan(a / 2)), rel=1e-12)
+    assert min(lp.alpha for lp in ours.loops) > a  # one loop at a time: no less margin
     # slycot directly at every frequency: the bound pruning in disk_margins loses nothing
     z = np.exp(2j * np.pi * f * structure.dt)
     H = [np.asarray(c(zk)) @ np.asarray(structure(zk)) for zk in z]  # K P
     mu = [ab13md(np.linalg.inv(np.eye(3) - KP) - 0.5 * np.eye(3), np.ones(3, int),
                  2 * np.ones(3, int))[0] for KP in H]
-    assert ours["mimo"]["alpha"] == pytest.approx(1 / max(mu), rel=1e-9)
+    assert ours.mimo.alpha == pytest.approx(1 / max(mu), rel=1e-9)

@@ -54,8 +54,14 @@ def open_page(path, fragment: str = "", *, screenshot=None, dump_dom: bool = Fal
 
     Parameters
     ----------
+    path : path-like
+        The HTML file.
+    fragment : str
+        The URL fragment (no ``#``); empty: none.
     screenshot : path-like, optional
         PNG of the window after ``budget_ms`` of (virtual) time.
+    budget_ms : int
+        Chromium's virtual-time budget for the screenshot [ms].
     dump_dom : bool
         Read the page's probe from the DOM after the load event (no time budget: the DOM
         is dumped once the page has loaded, so the probe's load time is real time).
@@ -63,6 +69,8 @@ def open_page(path, fragment: str = "", *, screenshot=None, dump_dom: bool = Fal
         Window size [pixels].
     offline : bool
         Run in a network namespace without interfaces (``unshare -n``).
+    timeout : float
+        Wall time after which the browser is stopped [s] (``subprocess.TimeoutExpired``).
     """
     exe = find_chromium()
     if exe is None:

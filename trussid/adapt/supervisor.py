@@ -18,17 +18,16 @@ spectral radius at every switch (a check the supervisor cannot make in a lab).
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass, field
 
-import control
 import numpy as np
 
-from trussid.lqg.design import design_lqg, excited_band
+from trussid.lqg.design import excited_band
 from trussid.lqg.errors import ControlError
 from trussid.lqg.evaluate import (MODE_DAMPING_MAX, DampingTable, closed_loop, damping_table,
                                   disk_margins)
 from trussid.lqg.grading import DEFAULT_BAND, THRESHOLDS, Thresholds
+from trussid.lqg.procedure import design_procedure
 from trussid.plid.metrics import prediction_ratio_db
 
 from .experiment import ClosedLoopRecord, closed_loop_record
@@ -100,48 +99,30 @@ class Verdict:
 
 def redesign(fit: ClosedLoopModel, rec: ClosedLoopRecord,
              settings: SupervisorSettings = SupervisorSettings()) -> list:
-    """Candidate LQG designs from a closed-loop model and its record: the default design
-    (:func:`trussid.lqg.design_lqg`, dominant modes by residue) and one restricted to the
-    band around the model's three largest-residue modes (where a mode merges with a cluster
-    the default picks cluster modes as targets too, which can destabilise the truth).
+    """The candidate LQG design from a closed-loop model and its record: the one design
+    path of ``trussid control`` (:func:`trussid.lqg.procedure.design_procedure`), with the
+    targets chosen in the band the record excited within ``settings.band``, and the
+    supervisor's margin and spillover requirements graded on the model as it designs.
+    The procedure backs off the damping and drops targets (a mode merged into a cluster
+    is the first to go) rather than fail; the supervisor's checks follow.
 
-    Returns ``[(label, LQGDesign or ControlError)]``.
+    Returns ``[(label, LQGDesign or ControlError)]`` (one entry).
     """
     u, y = rec.plant_input, rec.measured
-    # dominant modes inside the band the record excited: a model's mode outside it is
-    # poorly identified (a spurious 420 Hz one showed up on the testbed)
+    # targets inside the band the record excited: a model's mode outside it is poorly
+    # identified (a spurious 420 Hz one showed up on the testbed)
     lo, hi = excited_band(u, 1.0 / rec.dt)
     band = (max(settings.band[0], lo), min(settings.band[1], hi))
-    fd = _model_modes(fit.model, band).dominant_frequency_hz
-    bands = [("default", None)]
-    if fd.size:
-        bands.append(("three largest residues", (0.985 * fd.min(), 1.015 * fd.max())))
-    out = []
-    for label, band in bands:
-        try:
-            with warnings.catch_warnings():
-                # design_lqg's estimator guard takes nanmin over target modes whose
-                # estimator poles are all real (adapt feasibility study, observation 2):
-                # harmless there, and the supervisor checks the result anyway
-                warnings.filterwarnings("ignore", "All-NaN slice", RuntimeWarning)
-                des = design_lqg(fit.model, u, y, target_damping=settings.target_damping,
-                                 band=band, K=fit.K)
-            out.append((label, des))
-        except ControlError as exc:  # e.g. no lightly damped mode in the band
-            out.append((label, exc))
-        except (control.ControlArgument, np.linalg.LinAlgError) as exc:
-            # design_lqg's weights turn NaN when a target block loses its complex pole
-            # (adapt feasibility study, observation 1): a failed candidate, not a crash
-            out.append((label, ControlError(f"design failed: {exc}")))
-    return out
-
-
-def _model_modes(model, band) -> DampingTable:
-    """A model's own modes in ``band`` (its loop with no controller: every sensor to every
-    D/A through a zero gain), graded as :func:`mode_damping` grades them."""
-    zero = control.ss([], [], [], np.zeros((model.ninputs, model.noutputs)), model.dt,
-                      inputs=list(model.output_labels), outputs=list(model.input_labels))
-    return mode_damping(model, zero, band)
+    try:
+        proc = design_procedure(fit.model, u, y, K=fit.K, band=band,
+                                target_damping=settings.target_damping,
+                                min_gain_db=settings.thresholds.mimo_gm_nominal_db,
+                                others_ratio=settings.thresholds.other_ratio_nominal)
+    except ControlError as exc:  # e.g. no lightly damped mode in the band
+        return [("procedure", exc)]
+    des = proc.design
+    des.procedure = proc
+    return [("procedure", des)]
 
 
 def check_candidate(model, candidate, running,

@@ -24,7 +24,7 @@ from trussid.adapt.experiment import closed_loop_record, trial_rms
 from trussid.adapt.identify import identify_n4sid, identify_plid, nearest_modes
 from trussid.adapt.supervisor import AdaptSettings, adapt, mode_damping
 from trussid.lqg.evaluate import disk_margins
-from trussid.lqg.grading import design_controller
+from trussid.lqg.procedure import design_controller
 from trussid.lqg.loop import restrict
 from trussid.plid.metrics import frf_error
 from trussid.plid.modelfile import save_model

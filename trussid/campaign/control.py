@@ -21,8 +21,8 @@ import numpy as np
 
 from trussid.lqg.errors import ControlError
 from trussid.lqg.grading import (BASELINE_KINDS, THRESHOLDS, LoopSettings, Robustness, check,
-                                 design_controller, evaluate_loop, plant_loop_settings,
-                                 robustness)
+                                 evaluate_loop, plant_loop_settings, robustness)
+from trussid.lqg.procedure import design_controller
 from trussid.testbed.perturbed import PERTURBATIONS, STRETCH, perturbed_testbed, truths
 
 from .loop_report import closed_loop_summary, figures

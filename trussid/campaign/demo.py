@@ -66,6 +66,7 @@ from trussid.campaign.adapt import demo_section as adapt_demo_section
 from trussid.campaign.adapt import write_files as write_adapt_files
 from trussid.campaign.control import demo_section
 from trussid.campaign.html_report import write_report_html
+from trussid.campaign.orders import scan_orders
 from trussid.campaign.report import report_markdown
 from trussid.campaign.structure import DEFAULT_SNR_DB, STRUCTURAL_DAMPING_MAX
 from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
@@ -140,6 +141,13 @@ class DemoSettings:
         identify_reduced`): the testbed's sensors see the structure through the lab's
         low-pass filters (no feed-through, False); accelerometers on a bare structure
         respond at once to a force ("auto": the data decide).
+    order_scan : tuple of int
+        Orders scanned for each model (:func:`trussid.campaign.orders.scan_orders`: one-step
+        prediction on the held-back quarter of its identification record); the model is
+        identified at the order the data choose. Empty (the testbed): ``simo_order`` and
+        ``mimo_order``, the documented orders.
+    order_scan_budget_s : float
+        CPU budget of each model's scan [s].
     """
 
     quick: bool = False
@@ -159,6 +167,8 @@ class DemoSettings:
     h1_nperseg: int = 1024
     seed: int = 1997
     direct: object = False
+    order_scan: tuple = ()
+    order_scan_budget_s: float = 60.0
 
 
 def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
@@ -186,11 +196,13 @@ def derived_settings(cp, quick: bool = False, **overrides):
       of Nyquist;
     - records of 6000 + 4000 samples (quick) or 16000 + 8000, at least 100 periods of
       the first mode;
-    - MIMO order twice the number of the plant's modes below Nyquist (at least 2), rounded
-      up to a multiple of the outputs (PLID's observer form), capped at 48 (quick: 36): the
-      model must hold every mode the records see, those just above the excitation band
-      too; SIMO models of every channel (quick: the first) at the same order; the direct
-      term estimated when the data show one (accelerometers).
+    - model orders chosen from the data (issue 32): multiples of the outputs (PLID's
+      observer form) from one to 48 states (quick: 36) are scanned for each model by
+      one-step prediction on the held-back quarter of its identification record
+      (:mod:`trussid.campaign.orders`), within 60 s of CPU each; the fallback, if no order
+      gives a stable model, is twice the number of the plant's modes below Nyquist, capped
+      likewise. SIMO models of every channel (quick: the first); the direct term estimated
+      when the data show one (accelerometers).
     """
     fs = 1.0 / cp.discrete.dt
     f = np.asarray(cp.modes.frequencies_hz, dtype=float)
@@ -206,6 +218,7 @@ def derived_settings(cp, quick: bool = False, **overrides):
               plot_band=(lo, 0.95 * 0.5 * fs), n_identification=max(base.n_identification, n_min),
               n_validation=max(base.n_validation, n_min // 2), mimo_order=order,
               simo_order=order,
+              order_scan=tuple(range(p, p * ((36 if quick else 48) // p) + 1, p)),
               simo_channels=(0,) if quick else tuple(range(cp.discrete.ninputs)))
     kw.update(overrides)
     return demo_settings(quick, **kw)
@@ -673,15 +686,30 @@ def h1_estimate(record: Record, nperseg: int):
 def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, dict]:
     """Each model identified from its identification record, and that record's H1 estimate."""
     fits, h1s = {}, {}
-    for name, (rid, _) in records.items():
+    for name, (rid, rval) in records.items():
         cols = list(rid.channels)
         order = settings.mimo_order if name == "mimo" else settings.simo_order
         d = rid.data
+        choice = None
+        if settings.order_scan:
+            choice = scan_orders(d.u[:, cols], d.y, d.dt, settings.order_scan,
+                                 direct=settings.direct is not False,
+                                 block_rows=max(settings.block_rows),
+                                 cpu_budget_s=settings.order_scan_budget_s,
+                                 u_val=rval.data.u[:, cols], y_val=rval.data.y)
+            if choice is not None:
+                order = choice.chosen
+                for line in choice.lines():
+                    say(f"      {name}: {line}")
+                say(f"      {name}: order {order} chosen from the data (runners-up "
+                    f"{', '.join(map(str, choice.runners_up)) or 'none'})")
         say(f"      {name}: {order} states, {len(cols)} in x {d.n_outputs} out; candidates:")
         fits[name] = identify_model(d.u[:, cols], d.y, order, d.dt,
                                     block_rows=settings.block_rows,
                                     log=lambda msg: say(f"        {msg}"),
                                     direct=settings.direct)
+        if choice is not None:
+            fits[name].info["order_scan"] = json_safe(choice)
         h1s[name] = h1_estimate(rid, settings.h1_nperseg)
         say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
             f"({fits[name].seconds:.1f} s)")

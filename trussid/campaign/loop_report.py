@@ -22,7 +22,7 @@ from trussid.lqg.modal import freq_damping
 from trussid.plid.frf import frequency_response
 from trussid.plots import bode_figure, damping_map_figure, decay_figure, save_figure, sigma_figure
 
-from .summary import ClosedLoopSummary, ControllerSummary, DesignSummary
+from .summary import ClosedLoopSummary, ControllerSummary, DesignSummary, ProcedureSummary
 
 __all__ = ["impulse_envelope", "figures", "closed_loop_summary", "closed_loop_markdown",
            "write_report"]
@@ -122,7 +122,8 @@ def closed_loop_summary(study: Robustness) -> ClosedLoopSummary:
             design_states=int(des.design_model.nstates),
             target_damping=float(des.info["target_damping"]),
             estimator=str(des.info["estimator_choice"].get("chosen", "")),
-            info={k: v for k, v in des.info.items() if k != "model_modes"})
+            info={k: v for k, v in des.info.items() if k != "model_modes"},
+            procedure=_procedure_summary(des.procedure))
     c = study.controller
     return ClosedLoopSummary(
         nominal=study.nominal, settings=study.settings, rows=dict(study.rows),
@@ -131,6 +132,15 @@ def closed_loop_summary(study: Robustness) -> ClosedLoopSummary:
         controller=ControllerSummary(int(c.nstates), list(c.input_labels),
                                      list(c.output_labels)),
         design=design, design_file=study.design_info)
+
+
+def _procedure_summary(proc) -> ProcedureSummary | None:
+    """The typed summary of a :class:`trussid.lqg.procedure.Procedure` (None: none)."""
+    if proc is None:
+        return None
+    return ProcedureSummary(attempts=len(proc.attempts), disk_gain_db=float(proc.disk_gain_db),
+                            asked=float(proc.asked), outcomes=tuple(proc.outcomes),
+                            lines=tuple(proc.lines()), warning=proc.warning())
 
 
 def _pct(x, digits=2):
@@ -169,6 +179,14 @@ def closed_loop_markdown(s: ClosedLoopSummary, heading: str = "##",
               f"state feedback tuned to {100 * des.target_damping:.1f} % damping on "
               f"them, estimator: {des.estimator}. "
               f"Controller: {ctrl.states} states.", ""]
+        proc = des.procedure
+        if proc is not None:  # how the default procedure got there (issue 32)
+            L += [f"Design procedure: {proc.attempts} designs tried, the best stable one "
+                  f"with a {proc.disk_gain_db:.1f} dB MIMO disk margin on the identified model "
+                  f"kept; per target mode (asked {100 * proc.asked:.1f} %):", "",
+                  *[f"- {line.strip()}" for line in proc.lines], ""]
+            if proc.warning:
+                L += [f"**Warning**: {proc.warning}.", ""]
     else:
         di = s.design_file or {}   # a controller file's own JSON (trussid control)
         tm = ", ".join(f"{t['frequency_hz']:.1f} Hz" for t in di.get("target_modes", []))

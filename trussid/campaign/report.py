@@ -118,6 +118,19 @@ def report_markdown(s: DemoSummary) -> str:
             txt = _f(score) if score is not None else (r.get("error") or "unstable")
             L.append(f"| {r.get('label', '')}{mark} | {txt} | {r.get('seconds', 0):.1f} |")
         L.append("")
+        scan = ident.get("order_scan")
+        if scan:  # the order chosen from the data (issue 32)
+            L += [f"Order {scan['chosen']} chosen from the data ({scan['rule']}; runners-up "
+                  f"{', '.join(map(str, scan['runners_up'])) or 'none'}; "
+                  f"{scan['cpu_seconds']:.1f} s CPU of a {scan['cpu_budget_s']:g} s budget). "
+                  "The validation column is shown only, never used to choose.", "",
+                  "| states | one-step, held-back [dB] | one-step, validation [dB] | note |",
+                  "| --- | --- | --- | --- |"]
+            for r in scan["rows"]:
+                mark = " (chosen)" if r["order"] == scan["chosen"] else ""
+                L.append(f"| {r['order']}{mark} | {_f(r['held_back_db'])} | "
+                         f"{_f(r['validation_db'])} | {r['note']} |")
+            L.append("")
     L += ["", "## Figures", ""]
     for m in s.models:
         n = m.name

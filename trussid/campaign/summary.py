@@ -214,6 +214,8 @@ class DesignSummary:
     info : dict
         Everything else :func:`trussid.lqg.design_lqg` recorded (its ``info`` without the
         model's mode table).
+    procedure : ProcedureSummary or None
+        How the default design procedure chose it (None: designed otherwise).
     """
 
     form: str
@@ -222,6 +224,36 @@ class DesignSummary:
     target_damping: float
     estimator: str
     info: dict
+    procedure: "ProcedureSummary | None" = None
+
+
+@dataclass(frozen=True)
+class ProcedureSummary:
+    """How :func:`trussid.lqg.procedure.design_procedure` reached a design (its
+    :class:`~trussid.lqg.procedure.Procedure` without the systems).
+
+    Attributes
+    ----------
+    attempts : int
+        Designs tried.
+    disk_gain_db : float
+        MIMO disk gain margin of the chosen design on the identified model [dB].
+    asked : float
+        The damping asked of each target [-].
+    outcomes : tuple of trussid.lqg.procedure.TargetOutcome
+        Per original target: what it reached on the model and what limited it.
+    lines : tuple of str
+        The per-target report, one line per target.
+    warning : str or None
+        One line when some target reached less than asked.
+    """
+
+    attempts: int
+    disk_gain_db: float
+    asked: float
+    outcomes: tuple
+    lines: tuple
+    warning: str | None
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,7 @@ Recipe (measured in ``benchmarks/results/control.md``):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import control
 import numpy as np
@@ -49,7 +49,8 @@ from .evaluate import damping_table
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
 
 __all__ = ["FORMS", "ESTIMATORS", "TargetMode", "DesignCheck", "LQGDesign", "check_model",
-           "excited_band", "select_modes", "lqr_for_damping", "design_lqg", "verify_design",
+           "excited_band", "ModelMode", "mode_rows", "LQRTuning", "select_modes",
+           "lqr_for_damping", "design_lqg", "verify_design",
            "controller_matrices"]
 
 FORMS = ("predictor", "filter")
@@ -121,6 +122,7 @@ class LQGDesign:
     form: str
     target_modes: tuple
     info: dict = field(default_factory=dict)
+    procedure: object = None  # trussid.lqg.procedure.Procedure that chose it, if any
 
 
 def check_model(model, source: str = "model") -> None:
@@ -141,6 +143,46 @@ def excited_band(u, fs: float, floor_db: float = -20.0) -> tuple[float, float]:
     S = S.sum(axis=1) if S.ndim > 1 else S
     on = f[S >= S.max() * 10 ** (floor_db / 10)]
     return float(on.min()), float(on.max())
+
+
+@dataclass(frozen=True)
+class ModelMode:
+    """One block of :func:`modal.real_modal_basis` of an identified model (:func:`mode_rows`).
+
+    Attributes
+    ----------
+    block : int
+        Its block index.
+    frequency_hz, damping : float
+        The mode [Hz], [-].
+    residue : float
+        Its input-output residue (inputs scaled, outputs divided as :func:`mode_rows` was
+        told).
+    complex : bool
+        A complex pair (False: a real pole).
+    """
+
+    block: int
+    frequency_hz: float
+    damping: float
+    residue: float
+    complex: bool
+
+
+def mode_rows(model, u_scale=None, y_scale=None) -> list:
+    """One :class:`ModelMode` per block of :func:`modal.real_modal_basis`, the residues with
+    the inputs scaled by ``u_scale`` and the outputs divided by ``y_scale``."""
+    _, blocks = real_modal_basis(model.A)
+    su = np.ones(model.ninputs) if u_scale is None else np.asarray(u_scale, dtype=float)
+    sy = np.ones(model.noutputs) if y_scale is None else np.asarray(y_scale, dtype=float)
+    md = modal_data(model.A, np.asarray(model.B) * su[None, :],
+                    np.asarray(model.C) / sy[:, None], model.dt)
+    rows = []
+    for k, (idx, lam) in enumerate(blocks):
+        i = int(np.argmin(np.abs(md.poles - lam)))
+        rows.append(ModelMode(k, float(md.frequency_hz[i]), float(md.damping[i]),
+                              float(md.residue[i]), idx.size == 2))
+    return rows
 
 
 def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping: float = 0.05,
@@ -171,44 +213,34 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
         residues are compared in these units, so that a shaker in N beside a PZT in V, or
         an accelerometer beside a strain gauge, weigh as the experiment drove and saw them.
     """
-    _, blocks = real_modal_basis(model.A)
-    su = np.ones(model.ninputs) if u_scale is None else np.asarray(u_scale, dtype=float)
-    sy = np.ones(model.noutputs) if y_scale is None else np.asarray(y_scale, dtype=float)
-    md = modal_data(model.A, np.asarray(model.B) * su[None, :],
-                    np.asarray(model.C) / sy[:, None], model.dt)
-    rows = []
-    for k, (idx, lam) in enumerate(blocks):
-        i = int(np.argmin(np.abs(md.poles - lam)))
-        rows.append({"block": k, "frequency_hz": float(md.frequency_hz[i]),
-                     "damping": float(md.damping[i]), "residue": float(md.residue[i]),
-                     "complex": idx.size == 2})
-    cand = [r for r in rows if r["complex"] and r["damping"] < max_damping]
+    rows = mode_rows(model, u_scale, y_scale)
+    cand = [r for r in rows if r.complex and r.damping < max_damping]
     if band is not None:
         lo, hi = map(float, band)
         if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
             raise ControlError(f"band: need 0 <= LO < HI [Hz], got {lo:g} {hi:g}")
-        sel = [r["block"] for r in cand if lo <= r["frequency_hz"] <= hi]
+        sel = [r.block for r in cand if lo <= r.frequency_hz <= hi]
         if sel and n_modes is not None:
-            sel = sorted(sel, key=lambda b: -rows[b]["residue"])[:int(n_modes)]
+            sel = sorted(sel, key=lambda b: -rows[b].residue)[:int(n_modes)]
         if not sel:
-            near = ", ".join(f"{r['frequency_hz']:.1f}" for r in cand)
+            near = ", ".join(f"{r.frequency_hz:.1f}" for r in cand)
             nyq = 0.5 / model.dt
             above = f" (above the Nyquist frequency {nyq:g} Hz)" if lo >= nyq else ""
             raise ControlError(f"band {lo:g}-{hi:g} Hz{above} holds no lightly damped mode of "
                                f"the model (its modes: {near} Hz)")
     else:
         if excited is not None:
-            cand = [r for r in cand if excited[0] <= r["frequency_hz"] <= excited[1]]
+            cand = [r for r in cand if excited[0] <= r.frequency_hz <= excited[1]]
         if not cand:
             raise ControlError("the model has no lightly damped complex mode to damp"
                                + ("" if excited is None else
                                   f" in the excited band {excited[0]:.0f}-{excited[1]:.0f} Hz"))
-        rmax = max(r["residue"] for r in cand)
+        rmax = max(r.residue for r in cand)
         if n_modes is not None:
-            sel = [r["block"] for r in sorted(cand, key=lambda r: -r["residue"])[:int(n_modes)]]
+            sel = [r.block for r in sorted(cand, key=lambda r: -r.residue)[:int(n_modes)]]
         else:
-            sel = [r["block"] for r in cand if r["residue"] >= dominant_fraction * rmax]
-    return sorted(sel, key=lambda b: rows[b]["frequency_hz"]), rows
+            sel = [r.block for r in cand if r.residue >= dominant_fraction * rmax]
+    return sorted(sel, key=lambda b: rows[b].frequency_hz), rows
 
 
 def _mode_damping(Acl, T_blocks, n_modes, dt):
@@ -229,42 +261,109 @@ def _mode_damping(Acl, T_blocks, n_modes, dt):
     return zeta
 
 
+@dataclass(frozen=True)
+class LQRTuning:
+    """The state feedback of :func:`lqr_for_damping` and how its iteration ended.
+
+    Attributes
+    ----------
+    F : (m, n) float
+        State-feedback gain (``u = -F x``).
+    weights : (k,) float
+        Final weight on each modal block.
+    damping : (k,) float
+        State-feedback damping of each block's mode [-] (0 where no pole was assigned).
+    iterations : int
+    reason : str
+        ``"converged"``; ``"weight limit"`` (a mode below the target whose weight reached
+        :data:`WEIGHT_RANGE` times the starting one: the actuators barely reach it);
+        ``"no progress"`` (the modes below the target gained nothing over
+        :data:`STALL_ITERATIONS` iterations: raising one mode's weight damps a close
+        neighbour instead, or the mode is not controllable from the actuators);
+        ``"iteration limit"``.
+    short : (k,) bool
+        Blocks left below the target (relative ``tol``) when the iteration stopped.
+    """
+
+    F: np.ndarray
+    weights: np.ndarray
+    damping: np.ndarray
+    iterations: int
+    reason: str
+    short: np.ndarray
+
+
+#: Largest ratio of a block's weight to the starting weight: beyond 1e12 a mode that is
+#: still short of the target is one the actuators do not reach (and the weights, growing
+#: x10 a step, would overflow to inf and turn ``Q`` into NaN: "Q must be a symmetric
+#: matrix" from the Riccati solver).
+WEIGHT_RANGE = 1e12
+#: Iterations without gain on the modes below the target after which the iteration stops.
+STALL_ITERATIONS = 12
+
+
 def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
-                    tol: float = 0.02, R=None):
+                    tol: float = 0.02, R=None) -> LQRTuning:
     """State feedback ``u = -F x`` from :func:`control.dlqr` with a weight on each modal
     block, iterated so that every block's mode reaches damping ``target`` (relative ``tol``).
 
     A mode's state-feedback damping grows monotonically with its weight; each weight is
     scaled by ``(target / zeta)^2`` (at most x10 per step) until all agree. ``R`` is the
-    input weight (default identity).
+    input weight (default identity). The iteration stops, with its reason
+    (:class:`LQRTuning`), when every mode is at the target, when a short mode's weight
+    reaches :data:`WEIGHT_RANGE` times the starting one, when the short modes gain nothing
+    for :data:`STALL_ITERATIONS` iterations, or after ``max_iter``.
     """
     n, m = B.shape
     R = np.eye(m) if R is None else np.asarray(R, dtype=float)
     # a starting weight of the size of the input matrix's effect
-    q = np.full(len(blocks), 1e-3 * np.min(np.diag(R)) / max(np.linalg.norm(B, 2) ** 2, 1e-300))
-    zeta = None
+    q0 = 1e-3 * np.min(np.diag(R)) / max(np.linalg.norm(B, 2) ** 2, 1e-300)
+    q = np.full(len(blocks), q0)
+    F = np.zeros((m, n))
+    zeta = np.zeros(len(blocks))
+    best, since, reason = -np.inf, 0, "iteration limit"
     for it in range(max_iter):
         Q = np.zeros((n, n))
         for w, idx in zip(q, blocks):
             Q[np.ix_(idx, idx)] = w * np.eye(idx.size)
         # scipy's solver: slycot's sg02ad (python-control's default once slycot is installed)
         # fails on the weakly weighted, 0.25 %-damped design models ("roundoff changed ...").
-        F, _, _ = control.dlqr(A, B, Q, R, method="scipy")
-        F = np.asarray(F)
+        try:
+            F_new, _, _ = control.dlqr(A, B, Q, R, method="scipy")
+        except (ValueError, np.linalg.LinAlgError, control.ControlArgument):
+            reason = "solver failed"
+            break
+        F = np.asarray(F_new)
         zeta = _mode_damping(A - B @ F, blocks, len(blocks), dt)
         zeta = np.where(np.isfinite(zeta), zeta, 0.0)  # unassigned: treat as undamped
         # a mode already above the target with a vanishing weight needs no feedback
         done = (np.abs(zeta / target - 1) < tol) | ((zeta > target) & (q < 1e-12 * q.max()))
         if np.all(done):
+            reason = "converged"
             break
-        q = q * np.clip((target / np.maximum(zeta, 1e-6)) ** 2, 0.1, 10.0)
-    return F, q, zeta, it + 1
+        low = zeta < target * (1 - tol)
+        if np.any(low & (q >= WEIGHT_RANGE * q0)):
+            reason = "weight limit"
+            break
+        worst = float(np.min(zeta[low])) if low.any() else target
+        if worst > best * (1 + 1e-3):
+            best, since = worst, 0
+        else:
+            since += 1
+            if since >= STALL_ITERATIONS:
+                reason = "no progress"
+                break
+        q = np.minimum(q * np.clip((target / np.maximum(zeta, 1e-6)) ** 2, 0.1, 10.0),
+                       WEIGHT_RANGE * q0)
+    short = zeta < target * (1 - tol)
+    return LQRTuning(F, q, zeta, it + 1, reason, short)
 
 
 def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
                form: str = "predictor", estimator: str = "record",
                dominant_fraction: float = 0.25, K=None, verify: bool = True,
-               min_fraction: float = 0.5, n_modes: int | None = None) -> LQGDesign:
+               min_fraction: float = 0.5, n_modes: int | None = None,
+               blocks=None) -> LQGDesign:
     """Design a discrete LQG damping controller from an identified model and its record.
 
     Parameters
@@ -292,6 +391,10 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     min_fraction : float
     n_modes : int, optional
         Target this many modes, those with the largest residue (:func:`select_modes`).
+    blocks : sequence of int, optional
+        Target exactly these blocks of :func:`modal.real_modal_basis` (complex ones; the
+        rows of :func:`mode_rows`), instead of selecting by ``band``, ``n_modes`` and
+        ``dominant_fraction``.
 
     Returns
     -------
@@ -347,13 +450,21 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     # dividing by it would hide the low ones.
     u_rms = _levels(u)
     y_rms = _levels(y)
-    sel, rows = select_modes(model, band, dominant_fraction, excited=excited, u_scale=u_rms,
-                             n_modes=n_modes)
+    if blocks is None:
+        sel, rows = select_modes(model, band, dominant_fraction, excited=excited,
+                                 u_scale=u_rms, n_modes=n_modes)
+    else:
+        rows = mode_rows(model, u_rms)
+        bad = [b for b in blocks if not (0 <= int(b) < len(rows) and rows[int(b)].complex)]
+        if bad or not len(blocks):
+            raise ControlError(f"target blocks {bad or list(blocks)}: need the indices of "
+                               f"complex modes of the model (0..{len(rows) - 1})")
+        sel = sorted({int(b) for b in blocks}, key=lambda b: rows[b].frequency_hz)
     dm, kept = modal_truncation(model, sel)
     A, B, C = (np.asarray(M, dtype=float) for M in (dm.A, dm.B, dm.C))
     blocks = [np.array([2 * k, 2 * k + 1]) for k in range(len(kept))]
-    F, q, zeta_sf, iters = lqr_for_damping(A, B, blocks, target_damping, model.dt,
-                                           R=np.diag(1.0 / u_rms**2))
+    tuning = lqr_for_damping(A, B, blocks, target_damping, model.dt, R=np.diag(1.0 / u_rms**2))
+    F, q, zeta_sf, iters = tuning.F, tuning.weights, tuning.damping, tuning.iterations
     if estimator == "model":
         if K is None:
             raise ControlError("estimator 'model': the model file has no predictor gain K")
@@ -370,8 +481,8 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
             # as the mode did (the best one-step predictor of a clean record can be slow).
             # Use the dual of the state-feedback tuning instead: a steady-state Kalman gain
             # whose predictor poles reach the target damping on every target mode.
-            Fd, _, _, _ = lqr_for_damping(A.T, C.T, blocks, target_damping, model.dt,
-                                          R=np.diag(y_rms**2))
+            Fd = lqr_for_damping(A.T, C.T, blocks, target_damping, model.dt,
+                                 R=np.diag(y_rms**2)).F
             finite = zeta_k[np.isfinite(zeta_k)]
             kinfo = dict(kinfo, rejected=kinfo.get("chosen"),
                          rejected_min_damping=float(finite.min()) if finite.size else None,
@@ -386,12 +497,13 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     controller = control.ss(*ctrl, model.dt, inputs=names_in, outputs=names_out,
                             name=f"lqg_{form}")
     _, zeta_est = freq_damping(np.linalg.eigvals(A - Kd @ C), model.dt)
-    targets = tuple(TargetMode(**rows[b], state_feedback_damping=float(z), weight=float(w))
+    targets = tuple(TargetMode(**asdict(rows[b]), state_feedback_damping=float(z), weight=float(w))
                     for b, z, w in zip(sel, zeta_sf, q))
     info = {"form": form, "estimator": estimator, "estimator_choice": kinfo,
             "target_damping": target_damping, "band": None if band is None else list(band),
             "dominant_fraction": dominant_fraction, "n_modes": n_modes,
-            "lqr_iterations": iters,
+            "lqr_iterations": iters, "lqr_stop": tuning.reason,
+            "lqr_short_hz": [rows[b].frequency_hz for b, s in zip(sel, tuning.short) if s],
             "excited_band_hz": list(excited),
             "design_states": int(A.shape[0]), "model_states": int(model.nstates),
             "estimator_min_damping": float(np.min(zeta_est)) if zeta_est.size else None,

@@ -1,8 +1,9 @@
 """Grading a controller on any discrete plant: what a loop is exercised with
 (:class:`LoopSettings`), the acceptance thresholds (:class:`Thresholds`, issue 14's by
 default), one loop's figures of merit (:func:`evaluate_loop`), its pass/fail
-(:func:`check`), a controller and its baselines on several plants (:func:`robustness`),
-and the LQG with its baselines designed from an identified model (:func:`design_controller`).
+(:func:`check`), a controller and its baselines on several plants (:func:`robustness`).
+The LQG with its baselines designed from an identified model is
+:func:`trussid.lqg.procedure.design_controller`.
 
 ``trussid control``, ``trussid closed-loop``, the demo's closed-loop section and the adaptive
 supervisor all grade with these; the testbed's perturbed truths and the report live in
@@ -18,8 +19,8 @@ import numpy as np
 
 from trussid.plid.experiment import excitation
 
-from .baselines import KINDS, decentralised, tune_baseline
-from .design import LQGDesign, design_lqg
+from .baselines import KINDS, decentralised
+from .design import LQGDesign
 from .errors import ControlError
 from .evaluate import (DampingTable, DiskMargins, ModeRow, damping_table, disk_margins, h2_norm,
                        simulate_loop)
@@ -27,8 +28,7 @@ from .loop import Loop
 
 __all__ = ["DEFAULT_BAND", "Thresholds", "THRESHOLDS", "LoopSettings", "plant_loop_settings",
            "DominantMode", "WatchedMode", "Converters", "LoopEvaluation", "evaluate_loop",
-           "CHECKS", "Checks", "check", "BASELINE_KINDS", "Baseline", "design_controller",
-           "Robustness", "robustness"]
+           "CHECKS", "Checks", "check", "BASELINE_KINDS", "Baseline", "Robustness", "robustness"]
 
 #: Plant modes graded by default [Hz] (issue 14's band on the testbed).
 DEFAULT_BAND = (40.0, 450.0)
@@ -441,60 +441,6 @@ class Baseline:
     band: list
     tuning: dict | None = None
     rows: dict = field(default_factory=dict)
-
-
-def design_controller(model, u, y, *, K=None, target_damping: float = 0.07, band=None,
-                      form: str = "predictor", baselines: bool = True, progress=None,
-                      n_modes=None):
-    """The LQG from the identified ``model`` and its record, and the baselines' gains tuned
-    on the same model (:func:`trussid.lqg.tune_baseline`).
-
-    Parameters
-    ----------
-    model : control.StateSpace
-        The identified model (discrete, named channels).
-    u, y : (N, m), (N, p) float
-        Its identification record.
-    K, target_damping, band, form, n_modes
-        As :func:`trussid.lqg.design_lqg`.
-    baselines : bool
-        Tune the decentralised baselines too (only with as many sensors as actuators).
-    progress : callable, optional
-        Called with a one-line message after each step.
-
-    Returns
-    -------
-    design : trussid.lqg.LQGDesign
-    baselines : dict
-        ``{kind: Baseline}``.
-    timings : dict
-        Wall seconds per step.
-    """
-    say = progress or (lambda msg: None)
-    timings = {}
-    t0 = time.perf_counter()
-    des = design_lqg(model, u, y, target_damping=target_damping, band=band, form=form, K=K,
-                     n_modes=n_modes)
-    timings["design"] = time.perf_counter() - t0
-    freqs = ", ".join(f"{t.frequency_hz:.0f}" for t in des.target_modes)
-    say(f"LQG designed on {des.design_model.nstates} states ({freqs} Hz) "
-        f"in {timings['design']:.1f} s")
-    base = {}
-    if baselines and model.ninputs != model.noutputs:
-        # a decentralised baseline feeds each actuator from its own sensor: with unequal
-        # counts there is no such pairing, so there is nothing to compare the LQG with
-        say(f"no decentralised baselines: they pair each actuator with one sensor, and the "
-            f"model has {model.ninputs} actuators and {model.noutputs} sensors")
-    elif baselines:
-        t0 = time.perf_counter()
-        f = [t.frequency_hz for t in des.target_modes]
-        bp_band = (0.85 * min(f), 1.15 * max(f))
-        for kind in BASELINE_KINDS:
-            g, info = tune_baseline(model, kind, bp_band)
-            base[kind] = Baseline(g, list(bp_band), info)
-        timings["baselines_tuning"] = time.perf_counter() - t0
-        say(f"baselines tuned on the model in {timings['baselines_tuning']:.1f} s")
-    return des, base, timings
 
 
 # --------------------------------------------------------------------------- several plants
