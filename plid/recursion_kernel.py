@@ -412,7 +412,9 @@ def run_direct(pb: Problem, st: DirectState, us: np.ndarray, ys: np.ndarray, E: 
         Receives the innovations ``y_k - C x_k^-``.
     hist : ndarray (rows, q)
         Receives theta after every sample whose running count (``k_done`` + index + 1) is a
-        multiple of ``hist_every`` (0: none); ``rows`` from :func:`history_rows`.
+        multiple of ``hist_every``; ``rows`` from :func:`history_rows`.
+    hist_every : int
+        Samples between two rows of ``hist`` (0: no history).
     k_done : int
         Samples processed before this block.
     track : bool
