@@ -2,7 +2,7 @@
 takes to open (load event) in headless Chromium without network (issue 36, acceptance 3).
 
 The comparator is the demo itself, in the same run: the page's writing time is timed apart
-by the demo (``timings_s["report_html"]``) and set against the demo's total (everything
+as what the demo's run takes past its summary's total (written before the page) and set against the demo's total (everything
 else it does, report.md and the PNGs included). The load time is the page's own navigation
 timing (``loadEventStart``, read by its probe), median of ``--opens`` cold starts of the
 browser, with the browser's start-up reported beside it.
@@ -65,9 +65,11 @@ def main(argv=None) -> int:
             res["demo_cpu_s"] = _cpu() - c0
             res["demo_wall_s"] = time.perf_counter() - t0
             t = summary.timings_s
-            res["report_html_s"] = t["report_html"]
+            # the summary's total stops before report.html (summary.json is written first);
+            # what the run took past it is the page (and the report folder's rename)
+            res["report_html_s"] = res["demo_wall_s"] - t["total"]
             res["demo_total_s"] = t["total"]  # everything before report.html
-            res["report_html_share"] = t["report_html"] / t["total"]
+            res["report_html_share"] = res["report_html_s"] / t["total"]
         page = out / "report.html"
         res["bytes"] = page.stat().st_size
         if find_chromium() is not None:
