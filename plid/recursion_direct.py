@@ -16,7 +16,7 @@ sum of ``p + m`` scaled row blocks, never a dense product, so a sample costs
 O((n + q) n (p + m)) for the time update and O((n + q)^2 p) for the measurement update.
 
 Speed: this numpy step is the reference. It is bound by about 40 small numpy calls per
-sample, not by its flops (``../shared/docs/plid-research.md``, section 1); compiling the same
+sample, not by its flops (the project's PLID research notes, section 1); compiling the same
 dense arithmetic gained nothing (issue 16: 207 against 210 us per sample). What
 :class:`~trussid.plid.estimator.PLID` runs by default is
 :func:`trussid.plid.recursion_kernel.run_direct`, a compiled loop that uses the structure

@@ -15,7 +15,7 @@ equal to rounding: the tests check 1e-9 relative), in one numba-compiled loop th
 - allocates nothing per sample.
 
 Why compiled: the numpy steps are bound by about 40 small numpy calls per sample, not by
-arithmetic (``../shared/docs/plid-research.md``, section 1: 175 us per sample of which two
+arithmetic (the project's PLID research notes, section 1: 175 us per sample of which two
 BLAS calls carry 69 % of the flops in 22 % of the time). Compiling the same dense
 arithmetic gained nothing (the first attempt, recorded in ``recursion_direct``); using the
 structure is what gains. ``benchmarks/bench_plid.py`` times both beside each other.

@@ -2,8 +2,7 @@
 
 from trussid._util.lazy import lazy_exports
 
-_LAZY = {"DemoSettings": "demo", "run_demo": "demo", "DemoSummary": "summary",
-         "LoopSettings": "control"}
+_LAZY = {"DemoSettings": "demo", "run_demo": "demo", "DemoSummary": "summary"}
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)
 
 __all__ = list(_LAZY)

@@ -26,9 +26,10 @@ __all__ = ["closed_loop", "ModeRow", "DampingTable", "damping_table", "TARGET_MA
            "LoopSimulation", "simulate_loop", "frequency_response", "check_pair", "match_names"]
 
 def closed_loop(plant, controller) -> control.StateSpace:
-    """The loop ``u = controller(y_measured)`` around ``plant``: :attr:`trussid.lqg.loop.Loop.
-    closed` (states ``[plant; controller]``; inputs ``d_<u>``, ``n_<y>``, then the plant's
-    other inputs; outputs the plant's outputs then ``u_<u>``)."""
+    """The loop ``u = controller(y_measured)`` around ``plant`` (``Loop.of(plant,
+    controller).closed``, :class:`trussid.lqg.loop.Loop`): states ``[plant; controller]``;
+    inputs ``d_<u>``, ``n_<y>``, then the plant's other inputs; outputs the plant's outputs
+    then ``u_<u>``."""
     return Loop.of(plant, controller).closed
 
 

@@ -171,7 +171,7 @@ def _run_html(args) -> int:
     wanted = max(args.mode, HTML_MODES)
     system = assemble(loaded.model, autospc=loaded.autospc)
     if loaded.testbed is not None:
-        from trussid.testbed.model import solve_testbed_modes  # as the images do, above
+        from trussid.testbed.walls import solve_testbed_modes  # as the images do, above
 
         modes = solve_testbed_modes(loaded.testbed, min(wanted, system.n_dof), system=system)
     else:
