@@ -34,7 +34,7 @@ import control  # noqa: E402
 
 from results_io import finish, stamp, write_json  # noqa: E402
 from trussid.campaign.adapt import adapt_settings, nominal_closed_loop  # noqa: E402
-from trussid.lqg.grading import design_controller  # noqa: E402
+from trussid.lqg.procedure import design_controller  # noqa: E402
 from trussid.campaign.demo import (build_plant, conditioner_steps, demo_settings,  # noqa: E402
                                    identify_model, run_experiments)
 
