@@ -255,8 +255,10 @@ def to_global(mat: np.ndarray, R: np.ndarray) -> np.ndarray:
 def check_beam_properties(beams, theory: str = "euler-bernoulli") -> None:
     """Raise :class:`ModelError` naming the first element with a non-physical property.
 
-    Sections and materials validate themselves, but beams added from dicts of arrays (e.g.
-    by the NASTRAN reader) arrive unchecked.
+    :class:`~trussid.fem.Section` and :class:`~trussid.fem.Material` validate themselves;
+    per-element arrays (:class:`~trussid.fem.SectionArrays`, e.g. from the NASTRAN reader)
+    may hold zeros that are legal for some elements and theories only, so their values are
+    checked here, per element.
     """
     checks = [("E", beams.E), ("G", beams.G), ("A", beams.A)]
     frame = ~np.asarray(beams.rod, bool)
