@@ -16,7 +16,7 @@ import numpy as np
 from trussid.fem.nastran.cards import (Card, ParsedDeck, integer, integer_or_blank, real, real_or_blank,
                                        _to_int, _to_real)
 from trussid.fem.nastran.coords import resolve_coordinates
-from trussid.fem.nastran.records import (Bar, Bulk, Bush, Conm2, Coord, DofSet, Eigrl, GrdSet, Grid, Load, Mat1,
+from trussid.fem.nastran.records import (Bar, BarDefaults, Bulk, Bush, Conm2, Coord, DofSet, Eigrl, GrdSet, Grid, Load, Mat1,
                                          Mpc, Prop, Rigid, Rod, Scalar, SetAdd, Spc)
 
 # The entry types are re-exported: code imports them from here (nastran.bulk).
@@ -85,7 +85,7 @@ def _orientation(card: Card, i: int, default):
 _ZERO3 = (0.0, 0.0, 0.0)
 
 
-def _bar(card: Card, orient: dict) -> Bar:
+def _bar(card: Card, orient: dict[str, BarDefaults]) -> Bar:
     f = card.fields
     if len(f) == 9 and not f[8] and card.name not in orient:
         # fast path: one line, no pin flags or offsets (the bulk of a large deck); anything
@@ -101,8 +101,8 @@ def _bar(card: Card, orient: dict) -> Bar:
             pass
     eid = integer(card, 1, "EID")
     d = orient.get(card.name)
-    pid = integer_or_blank(card, 2, "PID", d["pid"] if d and d["pid"] else eid)
-    default = (d["x"], d["g0"]) if d else (None, None)
+    pid = integer_or_blank(card, 2, "PID", d.pid if d and d.pid else eid)
+    default = (d.x, d.g0) if d else (None, None)
     x, g0 = _orientation(card, 5, default)
     f8 = card.get(8)
     bit = None
@@ -112,8 +112,8 @@ def _bar(card: Card, orient: dict) -> Bar:
             bit = _to_real(f8)
         else:
             offt = f8
-    elif d and d.get("offt"):
-        offt = d["offt"]
+    elif d and d.offt:
+        offt = d.offt
     wa = tuple(real_or_blank(card, k, "offset", 0.0) for k in (11, 12, 13))
     wb = tuple(real_or_blank(card, k, "offset", 0.0) for k in (14, 15, 16))
     sa = integer_or_blank(card, 17, "SA", 0) if card.name == "CBEAM" else 0
@@ -123,9 +123,9 @@ def _bar(card: Card, orient: dict) -> Bar:
                pa, pb, wa, wb, sa, sb, bit)
 
 
-def _baror(card: Card) -> dict:
+def _baror(card: Card) -> BarDefaults:
     x, g0 = _orientation(card, 5, (None, None))
-    return {"pid": integer_or_blank(card, 2, "PID", 0), "x": x, "g0": g0, "offt": card.get(8)}
+    return BarDefaults(integer_or_blank(card, 2, "PID", 0), x, g0, card.get(8))
 
 
 def _mat1(card: Card) -> Mat1:

@@ -4,6 +4,7 @@ G = 0), CROD and CONROD, added to the model one property at a time.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import defaultdict
 
@@ -14,6 +15,7 @@ from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.nastran.grids import NodeTable
 from trussid.fem.nastran.line_properties import LineProperty, material_of, rod_torsion
+from trussid.fem.properties import MaterialArrays, SectionArrays
 from trussid.fem.tapered import tapered_frame_matrices
 
 __all__ = ["add_bars", "add_rods"]
@@ -65,7 +67,7 @@ def add_bars(bdf, model: Model, nodes: NodeTable, props: dict) -> None:
         if prop.taper is not None:
             _add_tapered(model, group, ends, xyz, orient, prop, eids)
             continue
-        if prop.section["A"] == 0 or prop.mat["G"] == 0:
+        if prop.section.A == 0 or prop.mat.G == 0:
             _add_spring_bars(model, group, xyz, orient, prop, eids)
             continue
         if card == "CBAR" and model.mass_formulation == "consistent":
@@ -73,7 +75,7 @@ def add_bars(bdf, model: Model, nodes: NodeTable, props: dict) -> None:
             # mass goes in as non-structural mass per length, which the element gives
             # translational inertia only (the same translational mass, exactly; MSC 2020 on
             # the pt145 deck: torsion modes 2.6e-4 high with it, 3e-7 without).
-            mat, nsm = {**prop.mat, "rho": 0.0}, prop.nsm + prop.mat["rho"] * prop.section["A"]
+            mat, nsm = dataclasses.replace(prop.mat, rho=0.0), prop.nsm + prop.mat.rho * prop.section.A
         model.add_beams(eids, ends, prop.section, mat, orient, nsm=nsm, rod=False, label=prop.label)
         pinned = np.array([bool(e.pa or e.pb) for e in group])
         if pinned.any():
@@ -88,8 +90,9 @@ def _add_tapered(model: Model, elems: list, ends: np.ndarray, xyz: np.ndarray, o
     if any(e.pa or e.pb for e in elems):
         raise ModelError(f"{card}: pin flags on a tapered beam ({prop.label}) are not supported")
     L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
-    breaks, at = prop.taper
-    K, M = tapered_frame_matrices(L, breaks, at, prop.mat["E"], prop.mat["G"], prop.mat["rho"],
+    taper = prop.taper
+    K, M = tapered_frame_matrices(L, taper.stations, taper.section_at, prop.mat.E, prop.mat.G, prop.mat.rho,
+                                  nsm_at=taper.nsm_at,
                                   theory=model.beam_theory, mass=model.mass_formulation,
                                   torsion_lumped=elems[0].type == "CBEAM", label=prop.label)
     model.add_matrices(eids, ends, K=to_global(K, R), M=to_global(M, R), label=f"{prop.label} (tapered)")
@@ -109,14 +112,14 @@ def _add_spring_bars(model: Model, elems: list, xyz: np.ndarray, orient: np.ndar
     card = f"{elems[0].type} {eids[0]}"
     if any(e.pa or e.pb for e in elems):
         raise ModelError(f"{card}: pin flags on a bar with A = 0 or G = 0 are not supported")
-    G0 = mat["G"] == 0
-    if G0 and model.beam_theory == "timoshenko" and (math.isfinite(sec["Asy"]) or math.isfinite(sec["Asz"])):
+    G0 = mat.G == 0
+    if G0 and model.beam_theory == "timoshenko" and (math.isfinite(sec.Asy) or math.isfinite(sec.Asz)):
         raise ModelError(f"{card}: {prop.label} has shear flexibility with G = 0 (infinite shear flexibility)")
-    A0 = sec["A"] == 0
+    A0 = sec.A == 0
     L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
-    K, M = frame_matrices(L, 1.0 if A0 else sec["A"], sec["Iy"], sec["Iz"], sec["J"], mat["E"],
-                          mat["E"] / 2.0 if G0 else mat["G"], 0.0 if A0 else mat["rho"],
-                          nsm=prop.nsm, Asy=sec["Asy"], Asz=sec["Asz"], theory=model.beam_theory,
+    K, M = frame_matrices(L, 1.0 if A0 else sec.A, sec.Iy, sec.Iz, sec.J, mat.E,
+                          mat.E / 2.0 if G0 else mat.G, 0.0 if A0 else mat.rho,
+                          nsm=prop.nsm, Asy=sec.Asy, Asz=sec.Asz, theory=model.beam_theory,
                           mass=model.mass_formulation)
     zero = ([0, 6] if A0 else []) + ([3, 9] if G0 else [])
     K[:, zero, :] = 0.0
@@ -137,8 +140,8 @@ def _add_pin_flags(model: Model, elems: list, xyz: np.ndarray, orient: np.ndarra
     eids = np.array([e.eid for e in elems], dtype=np.int64)
     L, R = local_axes(xyz[:, 0], xyz[:, 1], orient, eids)
     sec, mat = prop.section, prop.mat
-    K = frame_matrices(L, sec["A"], sec["Iy"], sec["Iz"], sec["J"], mat["E"], mat["G"], mat["rho"],
-                       Asy=sec["Asy"], Asz=sec["Asz"], theory=model.beam_theory)[0]
+    K = frame_matrices(L, sec.A, sec.Iy, sec.Iz, sec.J, mat.E, mat.G, mat.rho,
+                       Asy=sec.Asy, Asz=sec.Asz, theory=model.beam_theory)[0]
     dK = np.zeros_like(K)
     for i, e in enumerate(elems):
         k = K[i].copy()
@@ -173,10 +176,10 @@ def add_rods(bdf, model: Model, nodes: NodeTable, props: dict, mats: dict, wtmas
         eids = np.array([e.eid for e in conrods], dtype=np.int64)
         ends = np.array([e.nodes for e in conrods], dtype=np.int64)
         m = [material_of(mats, e.mid, f"CONROD {e.eid}") for e in conrods]
-        sec = {"A": [e.A for e in conrods], "Iy": 1.0, "Iz": 1.0, "J": [e.j or 0.0 for e in conrods],
-               "Asy": math.inf, "Asz": math.inf}
-        sec = {k: np.broadcast_to(np.asarray(v, float), (len(eids),)) for k, v in sec.items()}
-        sec, mat = rod_torsion(sec, {k: np.array([mi[k] for mi in m]) for k in ("E", "G", "rho")})
+        sec = SectionArrays(A=[e.A for e in conrods], Iy=1.0, Iz=1.0, J=[e.j or 0.0 for e in conrods],
+                            name="CONROD").per_element(len(eids))
+        mat = MaterialArrays(E=[mi.E for mi in m], G=[mi.G for mi in m], rho=[mi.rho for mi in m], name="CONROD")
+        sec, mat = rod_torsion(sec, mat)
         nsm = np.array([e.nsm or 0.0 for e in conrods]) * wtmass
         model.add_beams(eids, ends, sec, mat, _rod_orient(nodes, ends, "CONROD", eids), nsm=nsm,
                         rod=True, label="CONROD")

@@ -5,9 +5,11 @@ and defaults, tapered beams as a section along the element.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -15,10 +17,11 @@ from trussid.fem.errors import ModelError, UnitsWarning
 from trussid.fem.materials import wave_speed_problem
 from trussid.fem.nastran.conventions import BAR_SHEAR_FACTOR, ROD_SHEAR_FACTOR
 from trussid.fem.nastran.entries import SECTION_TYPES
+from trussid.fem.properties import SECTION_FIELDS, MaterialArrays, SectionArrays
 from trussid.fem.sections import Section
 
-__all__ = ["LineProperty", "deck_materials", "check_units", "line_properties", "material_of",
-           "rod_torsion"]
+__all__ = ["DeckMaterial", "Taper", "LineProperty", "deck_materials", "check_units", "line_properties",
+           "material_of", "rod_torsion"]
 
 
 def check_units(bdf, mats: dict, wtmass: float) -> None:
@@ -32,36 +35,65 @@ def check_units(bdf, mats: dict, wtmass: float) -> None:
             used.add(int(mid))
     for mid in sorted(used & set(mats)):
         m = mats[mid]
-        why = wave_speed_problem(m["E"], m["rho"], wtmass)
+        why = wave_speed_problem(m.E, m.rho, wtmass)
         if why:
             warnings.warn(f"MAT1 {mid}: {why}", UnitsWarning, stacklevel=3)
             return
 
 
-def deck_materials(bdf, wtmass: float) -> dict:
-    """MAT1 id -> dict(E, G, nu, rho); NASTRAN's rule for a blank E, G or NU is applied when
+@dataclass(frozen=True)
+class DeckMaterial:
+    """A MAT1 as the elements use it: E, G [Pa], NU and the density times WTMASS, in the
+    deck's units."""
+
+    label: str
+    E: float
+    G: float
+    nu: float
+    rho: float
+
+    def arrays(self) -> MaterialArrays:
+        """E, G and density as the model's :class:`~trussid.fem.MaterialArrays`."""
+        return MaterialArrays(self.E, self.G, self.rho, name=self.label)
+
+    def nu_for_shear(self) -> float:
+        """Poisson's ratio for Cowper's shear factors (0.3 when the MAT1 gives E alone, NU = 0
+        then, or a NU no solid has)."""
+        return self.nu if -1.0 < self.nu < 0.5 else 0.3
+
+
+def deck_materials(bdf, wtmass: float) -> dict[int, DeckMaterial]:
+    """MAT1 id -> :class:`DeckMaterial`; NASTRAN's rule for a blank E, G or NU is applied when
     the card is read (:func:`trussid.fem.nastran.bulk._mat1`)."""
-    mats = {}
-    for mid, mat in bdf.materials.items():
-        mats[mid] = {"E": float(mat.e or 0.0), "G": float(mat.g or 0.0), "nu": float(mat.nu or 0.0),
-                     "rho": float(mat.rho or 0.0) * wtmass, "label": f"MAT1 {mid}"}
-    return mats
+    return {mid: DeckMaterial(f"MAT1 {mid}", float(mat.e or 0.0), float(mat.g or 0.0), float(mat.nu or 0.0),
+                              float(mat.rho or 0.0) * wtmass)
+            for mid, mat in bdf.materials.items()}
 
 
-@dataclass
+@dataclass(frozen=True)
+class Taper:
+    """A tapered PBEAM/PBEAML: stations ``x / L`` (0 ... 1) and the section and non-structural
+    mass per length at any ``xi`` (:func:`trussid.fem.tapered.tapered_frame_matrices`)."""
+
+    stations: np.ndarray
+    section_at: Callable[[np.ndarray], SectionArrays]
+    nsm_at: Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
 class LineProperty:
     """A line property resolved to section arrays, material and mass per length."""
 
     label: str
     kind: str  # "bar" (bending) or "rod"
-    section: dict
-    mat: dict
+    section: SectionArrays
+    mat: MaterialArrays
     nsm: float
     shear: bool
-    taper: tuple | None = None  # (stations x/L, section_at(xi) -> dict): a tapered PBEAM/PBEAML
+    taper: Taper | None = None
 
 
-def material_of(mats: dict, mid: int, label: str) -> dict:
+def material_of(mats: dict, mid: int, label: str) -> DeckMaterial:
     if mid not in mats:
         raise ModelError(f"{label}: material {mid} is not defined (MAT1 expected)")
     return mats[mid]
@@ -92,9 +124,8 @@ def section_from_shape(shape: str, dims, nu: float, label: str) -> Section:
     return Section.box(b=d[1], h=d[0], t=d[2], nu=nu, name=label)
 
 
-def _sec(A, Iy, Iz, J, Asy=math.inf, Asz=math.inf) -> dict:
-    return {"A": float(A), "Iy": float(Iy), "Iz": float(Iz), "J": float(J),
-            "Asy": float(Asy), "Asz": float(Asz)}
+def _sec(A, Iy, Iz, J, Asy=math.inf, Asz=math.inf, name: str = "section") -> SectionArrays:
+    return SectionArrays(float(A), float(Iy), float(Iz), float(J), float(Asy), float(Asz), name=name)
 
 
 def line_properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> dict:
@@ -104,14 +135,14 @@ def line_properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> 
         if p.type in ("PELAS", "PBUSH"):
             continue
         full = material_of(mats, p.mid, label)
-        mat = {k: full[k] for k in ("E", "G", "rho")}
+        mat = full.arrays()
         if p.type == "PBAR":
             if p.i12:
                 raise ModelError(f"{label}: I12 = {p.i12:g} (non-principal axes) is not supported")
             # NASTRAN: K1/K2 blank (or 0.0) means no shear flexibility.
             k1 = math.inf if p.k1 is None or p.k1 == 0 else p.k1
             k2 = math.inf if p.k2 is None or p.k2 == 0 else p.k2
-            sec = _sec(p.A, p.i2, p.i1, p.j, k1 * p.A, k2 * p.A)
+            sec = _sec(p.A, p.i2, p.i1, p.j, k1 * p.A, k2 * p.A, label)
             props[pid] = LineProperty(label, "bar", sec, mat, float(p.nsm) * wtmass,
                                math.isfinite(k1) or math.isfinite(k2))
         elif p.type == "PBEAM":
@@ -126,7 +157,7 @@ def line_properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> 
             k1 = math.inf if not p.k1 else p.k1
             k2 = math.inf if not p.k2 else p.k2
             A = float(p.A[0])
-            sec = _sec(A, p.i2[0], p.i1[0], p.j[0], k1 * A, k2 * A)
+            sec = _sec(A, p.i2[0], p.i1[0], p.j[0], k1 * A, k2 * A, label)
             props[pid] = LineProperty(label, "bar", sec, mat, float(p.nsm[0]) * wtmass,
                                math.isfinite(k1) or math.isfinite(k2), pbeam_taper(p, k1, k2, wtmass, label))
         elif p.type in ("PBARL", "PBEAML"):
@@ -139,25 +170,25 @@ def line_properties(bdf, mats: dict, wtmass: float, conventions: str = "nx") -> 
                 dims = np.atleast_2d(np.asarray(p.dim, float))
                 nsm = np.atleast_1d(np.asarray(p.nsm, float))
                 if (dims != dims[0]).any() or (nsm != nsm[0]).any():
-                    taper = pbeaml_taper(p, shape, nu_for_shear(full), conventions, wtmass, label)
+                    taper = pbeaml_taper(p, shape, full.nu_for_shear(), conventions, wtmass, label)
                 dims, nsm = dims[0], float(nsm[0])
             else:
                 dims, nsm = p.dim, float(p.nsm or 0.0)
-            props[pid] = LineProperty(label, "bar", shape_section(shape, dims, nu_for_shear(full), conventions, label),
+            props[pid] = LineProperty(label, "bar", shape_section(shape, dims, full.nu_for_shear(), conventions, label),
                                mat, nsm * wtmass, True, taper)
         elif p.type == "PROD":
-            props[pid] = LineProperty(label, "rod", rod_section(p.A, p.j), mat, float(p.nsm) * wtmass, False)
+            props[pid] = LineProperty(label, "rod", rod_section(p.A, p.j, label), mat, float(p.nsm) * wtmass, False)
         elif p.type == "PTUBE":
             if p.OD2 is not None and p.OD2 != p.OD1:
                 raise ModelError(f"{label}: tapered tube (OD2 != OD1) is not supported")
             r = p.OD1 / 2.0
             t = p.t if p.t else r
             s = Section.circle(r, name=label) if t >= r else Section.tube(r, t, name=label)
-            props[pid] = LineProperty(label, "rod", rod_section(s.A, s.J), mat, float(p.nsm) * wtmass, False)
+            props[pid] = LineProperty(label, "rod", rod_section(s.A, s.J, label), mat, float(p.nsm) * wtmass, False)
     return props
 
 
-def shape_section(shape: str, dims, nu: float, conventions: str, label: str) -> dict:
+def shape_section(shape: str, dims, nu: float, conventions: str, label: str) -> SectionArrays:
     """Section arrays of a PBARL/PBEAML shape with NASTRAN's shear factors."""
     s = section_from_shape(shape, dims, nu, label)
     asy, asz = s.Asy, s.Asz
@@ -169,7 +200,7 @@ def shape_section(shape: str, dims, nu: float, conventions: str, label: str) -> 
         asy = asz = ROD_SHEAR_FACTOR[conventions] * s.A
     elif shape == "BAR":
         asy = asz = BAR_SHEAR_FACTOR * s.A
-    return _sec(s.A, s.Iy, s.Iz, s.J, asy, asz)
+    return _sec(s.A, s.Iy, s.Iz, s.J, asy, asz, label)
 
 
 def taper_stations(xxb, label: str) -> np.ndarray:
@@ -180,24 +211,24 @@ def taper_stations(xxb, label: str) -> np.ndarray:
     return x
 
 
-def pbeam_taper(p, k1: float, k2: float, wtmass: float, label: str):
-    """``(stations, section_at)`` of a PBEAM whose properties vary (NASTRAN: linearly between
+def pbeam_taper(p, k1: float, k2: float, wtmass: float, label: str) -> Taper | None:
+    """The :class:`Taper` of a PBEAM whose properties vary (NASTRAN: linearly between
     stations), or None for a uniform one. I2 bends about element y, I1 about z."""
-    cols = {key: np.asarray(getattr(p, key), float).ravel() for key in ("A", "i1", "i2", "j", "nsm")}
-    if all((v == v[0]).all() for v in cols.values()):
+    A, i1, i2, j, nsm = (np.asarray(getattr(p, key), float).ravel() for key in ("A", "i1", "i2", "j", "nsm"))
+    if all((v == v[0]).all() for v in (A, i1, i2, j, nsm)):
         return None
     x = taper_stations(p.xxb, label)
 
     def at(xi):
-        f = {key: np.interp(xi, x, v) for key, v in cols.items()}
-        return {"A": f["A"], "Iy": f["i2"], "Iz": f["i1"], "J": f["j"], "Asy": k1 * f["A"],
-                "Asz": k2 * f["A"], "nsm": f["nsm"] * wtmass}
-    return x, at
+        a = np.interp(xi, x, A)
+        return SectionArrays(a, np.interp(xi, x, i2), np.interp(xi, x, i1), np.interp(xi, x, j), k1 * a, k2 * a,
+                             name=label)
+    return Taper(x, at, lambda xi: np.interp(xi, x, nsm) * wtmass)
 
 
-def pbeaml_taper(p, shape: str, nu: float, conventions: str, wtmass: float, label: str):
-    """``(stations, section_at)`` of a PBEAML whose dimensions vary: dimensions and NSM linear
-    between stations, the section computed from the dimensions at each point."""
+def pbeaml_taper(p, shape: str, nu: float, conventions: str, wtmass: float, label: str) -> Taper:
+    """The :class:`Taper` of a PBEAML whose dimensions vary: dimensions and NSM linear between
+    stations, the section computed from the dimensions at each point."""
     x = taper_stations(p.xxb, label)
     dims = np.atleast_2d(np.asarray(p.dim, float))
     nsm = np.asarray(p.nsm, float).ravel()
@@ -205,32 +236,23 @@ def pbeaml_taper(p, shape: str, nu: float, conventions: str, wtmass: float, labe
     def at(xi):
         d = np.stack([np.interp(xi, x, dims[:, k]) for k in range(dims.shape[1])], 1)
         rows = [shape_section(shape, di, nu, conventions, label) for di in d]
-        out = {key: np.array([r[key] for r in rows]) for key in ("A", "Iy", "Iz", "J", "Asy", "Asz")}
-        out["nsm"] = np.interp(xi, x, nsm) * wtmass
-        return out
-    return x, at
+        return SectionArrays(*(np.array([getattr(r, key) for r in rows]) for key in SECTION_FIELDS), name=label)
+    return Taper(x, at, lambda xi: np.interp(xi, x, nsm) * wtmass)
 
 
-def nu_for_shear(mat: dict) -> float:
-    # Cowper's shear factors need Poisson's ratio; MAT1 with E alone has NU = 0.
-    nu = mat["nu"]
-    return nu if -1.0 < nu < 0.5 else 0.3
-
-
-def rod_section(A, J) -> dict:
+def rod_section(A, J, label: str = "rod") -> SectionArrays:
     # Rods have no bending: Iy, Iz are placeholders the element ignores for rods.
-    return _sec(A, 1.0, 1.0, J or 0.0)
+    return _sec(A, 1.0, 1.0, J or 0.0, name=label)
 
 
-def rod_torsion(section: dict, mat: dict) -> tuple[dict, dict]:
+def rod_torsion(section: SectionArrays, mat: MaterialArrays) -> tuple[SectionArrays, MaterialArrays]:
     """Rods whose G is 0 (a MAT1 with E alone): no torsional stiffness, as in NASTRAN.
 
     The element checks G > 0 for every element, so such a rod gets J = 0 and a placeholder
     G = E / 2: its torsional stiffness G J is 0 either way, and nothing else uses G.
     """
-    G = np.asarray(mat["G"], float)
-    zero = G == 0
+    zero = mat.G == 0
     if not zero.any():
         return section, mat
-    J = np.where(zero, 0.0, np.asarray(section["J"], float))
-    return {**section, "J": J}, {**mat, "G": np.where(zero, np.asarray(mat["E"], float) / 2.0, G)}
+    return (dataclasses.replace(section, J=np.where(zero, 0.0, section.J)),
+            dataclasses.replace(mat, G=np.where(zero, mat.E / 2.0, mat.G)))

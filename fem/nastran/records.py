@@ -15,7 +15,7 @@ import numpy as np
 
 from trussid.fem.nastran.cards import ParsedDeck
 
-__all__ = ["Grid", "Coord", "BASIC", "Bar", "Rod", "Scalar", "Bush", "Conm2", "Prop", "Mat1", "Rigid",
+__all__ = ["Grid", "Coord", "BASIC", "Bar", "BarDefaults", "Rod", "Scalar", "Bush", "Conm2", "Prop", "Mat1", "Rigid",
            "Spc", "Mpc", "SetAdd", "DofSet", "Eigrl", "Load", "GrdSet", "Bulk"]
 
 
@@ -83,6 +83,15 @@ class Bar(NamedTuple):
     @property
     def nodes(self):
         return [self.ga, self.gb]
+
+
+class BarDefaults(NamedTuple):
+    """BAROR/BEAMOR: defaults of the CBAR/CBEAM entries that leave a field blank."""
+
+    pid: int         # 0: none (the element's own id, NASTRAN's default)
+    x: tuple | None  # orientation vector X1-X3, or None
+    g0: int | None   # orientation grid G0, or None
+    offt: str | None
 
 
 @dataclass(frozen=True, slots=True)
