@@ -295,11 +295,6 @@ def _comps(text, card: str) -> list[int]:
     return sorted({int(ch) - 1 for ch in text})
 
 
-def _raw_fields(card) -> list[str]:
-    """A raw card's fields (upper case, stripped; ``""`` for blanks), name first."""
-    return list(card.fields)
-
-
 def _ints(fields: list[str], card: str) -> list[int]:
     """Grid ids of a field list, with ``A THRU B`` expanded and blanks dropped."""
     out, i = [], 0
