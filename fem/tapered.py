@@ -132,8 +132,16 @@ def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], Section
         blk = np.block([[Hk @ H.transpose(0, 2, 1), Hk], [Kbb @ H.transpose(0, 2, 1), Kbb]])
         K[:, idx[:, None], idx[None, :]] += blk * np.outer(sign, sign)
 
-    m = rho * A + nsm                    # mass per length along the element
-    polar = rho * (Iy + Iz)              # torsional inertia per length
+    M = _mass(L, xi, w, rho * A + nsm, rho * (Iy + Iz), mass, torsion_lumped)
+    return 0.5 * (K + K.transpose(0, 2, 1)), M
+
+
+def _mass(L: np.ndarray, xi: np.ndarray, w: np.ndarray, m: np.ndarray, polar: np.ndarray, mass: str,
+          torsion_lumped: bool) -> np.ndarray:
+    """(n, 12, 12) element-axes mass of elements of lengths ``L`` whose mass per length ``m``
+    [kg/m] and torsional inertia per length ``polar`` [kg m] are sampled at the Gauss points
+    ``xi`` (weights ``w``); see :func:`tapered_frame_matrices`."""
+    n = len(L)
     M = np.zeros((n, 12, 12))
     if mass == "lumped":
         ends = (np.sum(w * m * (1.0 - xi)), np.sum(w * m * xi))
@@ -160,4 +168,4 @@ def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], Section
             M[:, idx[:, None], idx[None, :]] += bend * np.outer(sign, sign)
     else:
         raise ModelError(f"unknown mass formulation {mass!r}")
-    return 0.5 * (K + K.transpose(0, 2, 1)), M
+    return M
