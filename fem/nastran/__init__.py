@@ -41,7 +41,8 @@ Conventions that matter
   model is Timoshenko when any CBAR/CBEAM has a finite shear area, else Euler-Bernoulli.
 * Element mass follows NASTRAN where it differs from :mod:`trussid.fem.elements` (lumped
   CBEAM torsional inertia, coupled CROD, CBAR and shear-flexible CBEAM mass): see
-  :func:`_nastran_mass_conventions`; these were found on real NASTRAN output.
+  :func:`~trussid.fem.nastran.conventions.nastran_mass_conventions`; these were found on
+  real NASTRAN output.
 * Displacement systems (GRID CD, rectangular, cylindrical or spherical) become node frames
   of the model (:meth:`trussid.fem.Model.set_node_frames`): supports, scalar masses and
   springs, rigid elements, MPCs and OP2 results refer to them, as in NASTRAN.

@@ -10,7 +10,7 @@ import numpy as np
 
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
-from trussid.fem.nastran.deck import BdfInfo, _case_has, _case_int, _comps, _raw_cards
+from trussid.fem.nastran.deck import BdfInfo, case_has, case_int, components, raw_cards
 from trussid.fem.nastran.grids import NodeTable
 from trussid.fem.nastran.scalar_elements import SCALAR_POINT_CARDS, genel_fields
 
@@ -30,7 +30,7 @@ def add_dof_sets(bdf, model: Model, nodes: NodeTable, info: BdfInfo) -> None:
             for g, i, cm in zip(ids.tolist(), np.atleast_1d(idx), comps):
                 # component 0 (or blank) is a scalar point's only DOF
                 on_spoint = g in nodes.spoints and str(cm).strip() in ("0", "", "None")
-                mask[i, [0] if on_spoint else _comps(cm, what)] = True
+                mask[i, [0] if on_spoint else components(cm, what)] = True
         return mask
 
     omits, asets = bdf.omits, bdf.asets
@@ -59,7 +59,7 @@ def add_dof_sets(bdf, model: Model, nodes: NodeTable, info: BdfInfo) -> None:
             raise ModelError(f"{c.type} {grids[0]}: modal (Q-set) DOFs on grid points are not supported; "
                              f"the Craig-Bampton Q-set is read on scalar points only")
     if bsets:
-        extseout = _case_has(bdf, "EXTSEOUT")
+        extseout = case_has(bdf, "EXTSEOUT")
         if not (qsets or extseout):
             g0 = bsets[0].ids[0]
             raise ModelError(f"{bsets[0].type} (grid {g0}): a boundary set without QSET or EXTSEOUT (residual-structure "
@@ -83,7 +83,7 @@ def add_dof_sets(bdf, model: Model, nodes: NodeTable, info: BdfInfo) -> None:
             comps = c.components if isinstance(c.components, list) else [c.components] * len(ids)
             idx = nodes.index(ids, "SUPORT", np.zeros(len(ids), dtype=np.int64))
             for i, cm in zip(np.atleast_1d(idx), comps):
-                held[i, _comps(cm, "SUPORT")] = True
+                held[i, components(cm, "SUPORT")] = True
         for c in range(6):
             if held[:, c].any():
                 model.fix(nodes.ids[held[:, c]], str(c + 1))
@@ -97,7 +97,7 @@ def add_dof_sets(bdf, model: Model, nodes: NodeTable, info: BdfInfo) -> None:
 def add_spcs(bdf, model: Model, nodes: NodeTable, info: BdfInfo) -> None:
     """SPC/SPC1 (through SPCADD) of the case control's SPC set, else of all sets; GRID PS."""
     all_sets = set(bdf.spcs) | set(bdf.spcadds)
-    chosen = _case_int(bdf, "SPC")
+    chosen = case_int(bdf, "SPC")
     if chosen:
         if len(chosen) > 1:
             info.notes.append(f"subcases select different SPC sets {chosen}; using the first, {chosen[0]}")
@@ -171,7 +171,7 @@ def _scalar_point_refs(bdf) -> tuple[set, set]:
         if e.type in ("CELAS1", "CELAS2", "CMASS1", "CMASS2"):
             refs |= {int(n) for n, c in zip(list(e.nodes), (e.c1, e.c2)) if n and not c}
     for name in SCALAR_POINT_CARDS:
-        for eid, f in _raw_cards(bdf, name):
+        for eid, f in raw_cards(bdf, name):
             for k in (3, 4, 7, 8):
                 if k < len(f) and f[k]:
                     try:
@@ -179,10 +179,10 @@ def _scalar_point_refs(bdf) -> tuple[set, set]:
                     except ValueError:
                         raise ModelError(f"{name} {eid}: scalar point field {k} is {f[k]!r}, not a point id") from None
     mpc_refs = set()
-    for sid in _case_int(bdf, "MPC")[:1]:
+    for sid in case_int(bdf, "MPC")[:1]:
         for c in bdf.mpcs.get(int(sid), []):
             mpc_refs |= {int(n) for n, cm in zip(c.nodes, c.components) if str(cm).strip() in ("0", "")}
-    for eid, f in _raw_cards(bdf, "GENEL"):  # a GENEL's scalar points need their SPOINT, like an MPC's
+    for eid, f in raw_cards(bdf, "GENEL"):  # a GENEL's scalar points need their SPOINT, like an MPC's
         try:
             ui, ud, *_ = genel_fields(f, f"GENEL {eid}")
         except (ModelError, ValueError, TypeError):

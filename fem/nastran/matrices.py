@@ -17,7 +17,8 @@ import numpy as np
 
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
-from trussid.fem.nastran.deck import BdfInfo, _case_values, _nastran_value
+from trussid.fem.nastran.cards import nastran_value
+from trussid.fem.nastran.deck import BdfInfo, case_values
 
 __all__ = ["DIRECT_MATRIX_REQUESTS"]
 
@@ -53,7 +54,7 @@ def _dmigs(bdf) -> dict[str, _Dmig]:
             for k in range(0, len(vals) - 3, 4):
                 if not vals[k]:
                     continue
-                terms.append((gj, cj, int(vals[k]), int(vals[k + 1] or 0), float(_nastran_value(vals[k + 2]))))
+                terms.append((gj, cj, int(vals[k]), int(vals[k + 1] or 0), float(nastran_value(vals[k + 2]))))
         except (ValueError, TypeError):
             raise ModelError(f"{card.file}, line {card.line}: DMIG {name}: malformed entry "
                              f"({', '.join(card.fields[:6])})") from None
@@ -64,7 +65,7 @@ def _dmigs(bdf) -> dict[str, _Dmig]:
 def _selected(bdf, request: str) -> list:
     """[(scale, name), ...] of a case-control matrix request (``K2GG = 1.25*KAAX, KBB``; the
     first value given)."""
-    values = _case_values(bdf, request)
+    values = case_values(bdf, request)
     if not values:
         return []
     out = []
@@ -75,7 +76,7 @@ def _selected(bdf, request: str) -> list:
         if "*" in item:
             scale, name = item.split("*", 1)
             try:
-                out.append((float(_nastran_value(scale)), name.strip()))
+                out.append((float(nastran_value(scale)), name.strip()))
             except (TypeError, ValueError):
                 raise ModelError(f"case control {request} = {values[0]}: scale {scale.strip()!r} is not a number") from None
         else:

@@ -20,9 +20,9 @@ import numpy as np
 
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
-from trussid.fem.nastran.conventions import CONVENTIONS, _nastran_mass_conventions
-from trussid.fem.nastran.deck import (_is_preload_run, BdfInfo, _check_cards, _parse, _read_params,
-                                      _select_eigen)
+from trussid.fem.nastran.conventions import CONVENTIONS, nastran_mass_conventions
+from trussid.fem.nastran.deck import (is_preload_run, BdfInfo, check_cards, parse_bdf, read_params,
+                                      select_eigen)
 from trussid.fem.nastran.dof_sets import add_dof_sets, add_spcs, scalar_points
 from trussid.fem.nastran.grids import NodeTable, coord_axes, dof_matrix, grid_nodes, rect_frame
 from trussid.fem.nastran.line_elements import add_bars, add_rods
@@ -74,7 +74,8 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     requests: :data:`IGNORED_CARDS`) are accepted and listed with their counts in
     ``info.ignored``. NASTRAN's own element conventions are reproduced where they differ
     from the textbook elements of :mod:`trussid.fem.elements` (see
-    :func:`_nastran_mass_conventions` and the PBARL/PBEAML ROD shear factor).
+    :func:`~trussid.fem.nastran.conventions.nastran_mass_conventions` and the PBARL/PBEAML
+    ROD shear factor).
 
     Examples
     --------
@@ -98,11 +99,11 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     path = Path(path)
     if conventions not in CONVENTIONS:
         raise ModelError(f"conventions must be one of {', '.join(CONVENTIONS)}, got {conventions!r}")
-    bdf = _parse(path)
+    bdf = parse_bdf(path)
     info = BdfInfo(path=str(path), cards=dict(sorted(bdf.card_count.items())), conventions=conventions)
     info.notes.extend(bdf.parsed.notes)
-    _check_cards(bdf, path, info)
-    _read_params(bdf, info)
+    check_cards(bdf, path, info)
+    read_params(bdf, info)
 
     node_ids, xyz, frames = grid_nodes(bdf)
     scalar = scalar_points(bdf, set(node_ids.tolist()), info)
@@ -147,7 +148,7 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
         model.set_node_frames(node_ids, nodes.frames)
     add_bars(bdf, model, nodes, props)
     add_rods(bdf, model, nodes, props, mats, info.wtmass)
-    _nastran_mass_conventions(bdf, model, nodes, props, info)
+    nastran_mass_conventions(bdf, model, nodes, props, info)
     add_conm2(bdf, model, nodes, info.wtmass)
     add_scalar_masses(bdf, model, nodes, info.wtmass)
     add_scalar_point_elements(bdf, model, nodes, info.wtmass)
@@ -160,7 +161,7 @@ def read_bdf(path: str | os.PathLike, beam_theory: str | None = None,
     add_mpcs(bdf, model, nodes, info)
     add_spcs(bdf, model, nodes, info)
     add_dof_sets(bdf, model, nodes, info)
-    _select_eigen(bdf, info)
-    if _is_preload_run(*bdf.solution):
+    select_eigen(bdf, info)
+    if is_preload_run(*bdf.solution):
         add_preload_stiffness(bdf, model, nodes, info, rect_frame)
     return model, info

@@ -9,7 +9,7 @@ import numpy as np
 from trussid.fem.constraints import rbe3_constraint, rigid_element
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
-from trussid.fem.nastran.deck import BdfInfo, _case_int, _comps, _ints
+from trussid.fem.nastran.deck import BdfInfo, case_int, components, grid_ids
 from trussid.fem.nastran.dof_sets import qset_points
 from trussid.fem.nastran.grids import NodeTable
 
@@ -37,11 +37,11 @@ def add_rigid(bdf, model: Model, nodes: NodeTable) -> None:
         if e.type == "RBE2":
             nodes.index([e.gn], "RBE2", [eid])
             nodes.index(np.asarray(e.Gmi, dtype=np.int64), "RBE2", [eid] * len(e.Gmi))
-            dofs = "".join(str(c + 1) for c in _comps(e.cm, card))
+            dofs = "".join(str(c + 1) for c in components(e.cm, card))
             model.add_rigid_body(eid, e.gn, e.Gmi, dofs=dofs, mass=0.0, label=card)
         elif e.type == "RBAR":
-            ind = [(e.ga, c) for c in _comps(e.cna, card)] + [(e.gb, c) for c in _comps(e.cnb, card)]
-            cma, cmb = _comps(e.cma, card), _comps(e.cmb, card)
+            ind = [(e.ga, c) for c in components(e.cna, card)] + [(e.gb, c) for c in components(e.cnb, card)]
+            cma, cmb = components(e.cma, card), components(e.cmb, card)
             if not cma and not cmb:  # NASTRAN: blank CMA and CMB = every DOF not independent
                 cma = [c for c in range(6) if (e.ga, c) not in ind]
                 cmb = [c for c in range(6) if (e.gb, c) not in ind]
@@ -55,7 +55,7 @@ def add_rigid(bdf, model: Model, nodes: NodeTable) -> None:
             rows, comps, weights = [], [], []
             for w, c, grids in zip(e.weights, e.comps, e.Gijs):
                 mask = np.zeros(6, bool)
-                mask[_comps(c, card)] = True
+                mask[components(c, card)] = True
                 for g in grids:
                     rows.append(int(g))
                     comps.append(mask)
@@ -63,7 +63,7 @@ def add_rigid(bdf, model: Model, nodes: NodeTable) -> None:
             rows_a = np.array(rows, dtype=np.int64)
             comps_a = np.array(comps, dtype=bool).reshape(-1, 6)
             refc = np.zeros(6, bool)
-            refc[_comps(e.refc, card)] = True
+            refc[components(e.refc, card)] = True
             ref_xyz = nodes.coords([e.refgrid], "RBE3", [eid])[0]
             xyz = nodes.coords(rows_a, "RBE3", [eid] * len(rows_a))
             frames = None if nodes.frames is None else nodes.frame(rows_a, "RBE3", [eid] * len(rows_a))
@@ -97,7 +97,7 @@ def add_raw_rigid(bdf, model: Model, nodes: NodeTable) -> None:
         card = f"{name} {eid}"
         try:
             if name == "CRIGD1":
-                gi, gms = int(f[2]), _ints(f[3:], card)
+                gi, gms = int(f[2]), grid_ids(f[3:], card)
                 nodes.index([gi] + gms, name, [eid] * (1 + len(gms)))
                 model.add_rigid_body(eid, gi, gms, dofs="123456", label=card)
             elif name == "CRIGD2":
@@ -106,15 +106,15 @@ def add_raw_rigid(bdf, model: Model, nodes: NodeTable) -> None:
                 pairs = list(zip(vals[0::2], vals[1::2]))
                 grids = [gi] + [int(g) for g, _ in pairs]
                 ind = [(gi, c) for c in range(6)]
-                dep = [(int(g), c) for g, cm in pairs for c in _comps(cm, card)]
+                dep = [(int(g), c) for g, cm in pairs for c in components(cm, card)]
                 _add_rigid_element(model, nodes, eid, grids, ind, dep, card)
             elif name == "CRIGD3":
                 vals = [x for x in f[2:] if x]
                 if "MSET" not in vals:
                     raise ModelError(f"{card}: no MSET (dependent components) given")
                 k = vals.index("MSET")
-                ind = [(int(g), c) for g, cm in zip(vals[:k:2], vals[1:k:2]) for c in _comps(cm, card)]
-                dep = [(int(g), c) for g, cm in zip(vals[k + 1::2], vals[k + 2::2]) for c in _comps(cm, card)]
+                ind = [(int(g), c) for g, cm in zip(vals[:k:2], vals[1:k:2]) for c in components(cm, card)]
+                dep = [(int(g), c) for g, cm in zip(vals[k + 1::2], vals[k + 2::2]) for c in components(cm, card)]
                 grids = [g for g, _ in ind + dep]
                 _add_rigid_element(model, nodes, eid, grids, ind, dep, card)
             else:  # CRIGDR
@@ -147,7 +147,7 @@ def _add_rigid_rod(model: Model, nodes: NodeTable, eid: int, gi: int, gm: int, c
 
 def add_mpcs(bdf, model: Model, nodes: NodeTable, info: BdfInfo) -> None:
     """MPC (through MPCADD) of the case control's MPC set: the first term is dependent."""
-    chosen = _case_int(bdf, "MPC")
+    chosen = case_int(bdf, "MPC")
     if not chosen:
         if bdf.mpcs or bdf.mpcadds:
             info.notes.append(f"MPC sets {sorted(set(bdf.mpcs) | set(bdf.mpcadds))} present but not "
@@ -183,9 +183,9 @@ def add_mpcs(bdf, model: Model, nodes: NodeTable, info: BdfInfo) -> None:
                 c = type("MPCTerms", (), {"components": [x for x, k in zip(c.components, keep) if k],
                                           "coefficients": [x for x, k in zip(c.coefficients, keep) if k]})
                 if len(g) == 1:
-                    model.fix([int(g[0])], str(_comps(c.components[0], card)[0] + 1))
+                    model.fix([int(g[0])], str(components(c.components[0], card)[0] + 1))
                     continue
-            comp = [[0] if int(gi) in nodes.spoints and str(x).strip() in ("0", "") else _comps(x, card)
+            comp = [[0] if int(gi) in nodes.spoints and str(x).strip() in ("0", "") else components(x, card)
                     for gi, x in zip(g, c.components)]
             if any(len(x) != 1 for x in comp):
                 raise ModelError(f"{card}: each term needs exactly one component (scalar points are "

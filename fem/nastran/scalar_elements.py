@@ -12,7 +12,8 @@ from trussid.fem.constraints import rigid_transform
 from trussid.fem.errors import ModelError
 from trussid.fem.general_element import general_element_stiffness, lower_by_columns
 from trussid.fem.model import Model
-from trussid.fem.nastran.deck import _nastran_value, _raw_cards
+from trussid.fem.nastran.cards import nastran_value
+from trussid.fem.nastran.deck import raw_cards
 from trussid.fem.nastran.grids import NodeTable, dof_matrix, rect_frame
 
 __all__ = ["SCALAR_POINT_CARDS", "offset_spring_matrix", "add_conm2", "add_conm1", "add_springs",
@@ -258,12 +259,12 @@ def add_conm1(bdf, model: Model, nodes: NodeTable, wtmass: float) -> None:
 
     Read from its fields, so that a blank is NASTRAN's 0.0 and a malformed entry is named.
     """
-    for eid, f in _raw_cards(bdf, "CONM1"):
+    for eid, f in raw_cards(bdf, "CONM1"):
         card = f"CONM1 {eid}"
         try:
             g = int(f[2])
             cid = int(f[3]) if f[3] else 0
-            vals = [float(_nastran_value(v)) if v else 0.0 for v in (f[4:25] + [""] * 21)[:21]]
+            vals = [float(nastran_value(v)) if v else 0.0 for v in (f[4:25] + [""] * 21)[:21]]
         except (IndexError, ValueError, TypeError):
             raise ModelError(f"{card}: malformed entry (GRID, CID and 21 mass terms expected)") from None
         M = np.zeros((6, 6))
@@ -306,7 +307,7 @@ def genel_fields(f: list, card: str) -> tuple[list, list, str, list, list | None
             seg = seg[:-1]
         if "" in seg:
             raise ModelError(f"{card}: a blank field inside the {name} terms (write 0.0)")
-        return [float(_nastran_value(v)) for v in seg]
+        return [float(nastran_value(v)) for v in seg]
 
     ui, k = pairs(3, ("UD", "K", "Z", "S"))
     ud = []
@@ -325,7 +326,7 @@ def add_genel(bdf, model: Model, nodes: NodeTable) -> None:
     """GENEL: a general element given by its stiffness K or flexibility Z with rigid-body
     matrix S (:func:`trussid.fem.general_element.general_element_stiffness`), on grid
     components or scalar points."""
-    for eid, f in _raw_cards(bdf, "GENEL"):
+    for eid, f in raw_cards(bdf, "GENEL"):
         card = f"GENEL {eid}"
         try:
             ui, ud, kind, kz, s_terms = genel_fields(f, card)
@@ -363,14 +364,14 @@ def add_scalar_point_elements(bdf, model: Model, nodes: NodeTable, wtmass: float
     for name in SCALAR_POINT_CARDS:
         kind = "K" if name.startswith("CELAS") else "M"
         ends, values, eids = [], [], []
-        for _eid, f in _raw_cards(bdf, name):
+        for _eid, f in raw_cards(bdf, name):
             f = f + [""] * 9
             for base in (1, 5):  # a second element on the same entry starts in field 5
                 if not f[base]:
                     continue
                 try:
                     eid = int(f[base])
-                    ref = int(f[base + 1]) if name.endswith("3") else float(_nastran_value(f[base + 1]))
+                    ref = int(f[base + 1]) if name.endswith("3") else float(nastran_value(f[base + 1]))
                     s1, s2 = (int(x) if x else 0 for x in f[base + 2:base + 4])
                 except (ValueError, TypeError):
                     raise ModelError(f"{name} {f[base]}: malformed entry") from None
