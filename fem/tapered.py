@@ -25,7 +25,7 @@ from typing import Callable
 
 import numpy as np
 
-from trussid.fem.elements import _XY, _XZ, _XZ_SIGN
+from trussid.fem.elements import XY_PLANE, XZ_PLANE, XZ_SIGN
 from trussid.fem.errors import ModelError
 from trussid.fem.properties import SectionArrays
 
@@ -116,7 +116,7 @@ def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], Section
     # J = 0 somewhere: no torsional stiffness (NASTRAN's default J is 0)
     spring(3, 9, 0.0 if (J == 0).any() else G / (L * np.sum(w / J)))
     timo = theory == "timoshenko"
-    for idx, inertia, shear, sign in ((_XY, Iz, Asy, np.ones(4)), (_XZ, Iy, Asz, _XZ_SIGN)):
+    for idx, inertia, shear, sign in ((XY_PLANE, Iz, Asy, np.ones(4)), (XZ_PLANE, Iy, Asz, XZ_SIGN)):
         c = [np.sum(w * (1.0 - xi) ** k / inertia) for k in range(3)]
         shear_flex = np.sum(w / shear) if timo else 0.0
         # end-B flexibility of the element clamped at A, (deflection, rotation) per (force, moment)
@@ -164,7 +164,7 @@ def _mass(L: np.ndarray, xi: np.ndarray, w: np.ndarray, m: np.ndarray, polar: np
         unit = (N * w * m) @ N.T                                # int m N_i N_j dxi, rotations per L
         scale = np.stack([np.ones(n), L, np.ones(n), L], 1)     # (n, 4)
         bend = unit[None] * L[:, None, None] * scale[:, :, None] * scale[:, None, :]
-        for idx, sign in ((_XY, np.ones(4)), (_XZ, _XZ_SIGN)):
+        for idx, sign in ((XY_PLANE, np.ones(4)), (XZ_PLANE, XZ_SIGN)):
             M[:, idx[:, None], idx[None, :]] += bend * np.outer(sign, sign)
     else:
         raise ModelError(f"unknown mass formulation {mass!r}")

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from trussid.fem.nastran.cards import (Card, ParsedDeck, integer, integer_or_blank, real, real_or_blank,
-                                       _to_int, _to_real)
+                                       to_int, to_real)
 from trussid.fem.nastran.coords import resolve_coordinates
 from trussid.fem.nastran.records import (Bar, BarDefaults, Bulk, Bush, Conm2, Coord, DofSet, Eigrl, GrdSet, Grid, Load, Mat1,
                                          Mpc, Prop, Rigid, Rod, Scalar, SetAdd, Spc)
@@ -39,13 +39,13 @@ def _ints_thru(card: Card, start: int, what: str, stop: int | None = None) -> li
         if t == "THRU":
             if not out or k + 1 >= len(f):
                 raise card.error(start + k, f"{what}: THRU without both ends")
-            hi = _to_int(f[k + 1])
+            hi = to_int(f[k + 1])
             if hi is None:
                 raise card.error(start + k + 1, f"{what} must be an integer, got {f[k + 1]!r}")
             out.extend(range(out[-1] + 1, hi + 1))
             k += 2
             continue
-        v = _to_int(t)
+        v = to_int(t)
         if v is None:
             raise card.error(start + k, f"{what} must be an integer, got {t!r}")
         out.append(v)
@@ -76,7 +76,7 @@ def _orientation(card: Card, i: int, default):
             return (real_or_blank(card, i, "X1", 0.0), real_or_blank(card, i + 1, "X2", 0.0),
                     real_or_blank(card, i + 2, "X3", 0.0)), None
         return default
-    g0 = _to_int(t)
+    g0 = to_int(t)
     if g0 is not None:
         return None, g0
     return (real(card, i, "X1"), real_or_blank(card, i + 1, "X2", 0.0), real_or_blank(card, i + 2, "X3", 0.0)), None
@@ -94,7 +94,7 @@ def _bar(card: Card, orient: dict[str, BarDefaults]) -> Bar:
             eid, ga, gb = int(f[1]), int(f[3]), int(f[4])
             pid = int(f[2]) if f[2] else eid
             x1, x2, x3 = f[5], f[6], f[7]
-            x = (_to_real(x1) if x1 else None, _to_real(x2) if x2 else 0.0, _to_real(x3) if x3 else 0.0)
+            x = (to_real(x1) if x1 else None, to_real(x2) if x2 else 0.0, to_real(x3) if x3 else 0.0)
             if None not in x:
                 return Bar(card.name, eid, pid, ga, gb, x, None, "GGG", "", "", _ZERO3, _ZERO3, 0, 0, None)
         except ValueError:
@@ -108,8 +108,8 @@ def _bar(card: Card, orient: dict[str, BarDefaults]) -> Bar:
     bit = None
     offt = "GGG"
     if f8:
-        if card.name == "CBEAM" and _to_real(f8) is not None:
-            bit = _to_real(f8)
+        if card.name == "CBEAM" and to_real(f8) is not None:
+            bit = to_real(f8)
         else:
             offt = f8
     elif d and d.offt:
@@ -289,7 +289,7 @@ def _scalar(card: Card) -> Scalar:
     f = card.fields
     if len(f) <= 9 and card.name in ("CELAS2", "CMASS2"):
         try:  # fast path, as in _bar
-            v = _to_real(f[2]) if len(f) > 2 and f[2] else None
+            v = to_real(f[2]) if len(f) > 2 and f[2] else None
             if v is not None:
                 g = [int(t) if t else 0 for t in f[3:7]] + [0] * (7 - max(len(f), 3))
                 return Scalar(card.name, int(f[1]), 0, v, (g[0], g[2]), g[1], g[3])
@@ -330,7 +330,7 @@ def _rbe3(card: Card) -> Rigid:
         if mode in ("ALPHA", "TREF"):
             k += 1
             continue
-        w = _to_real(t)
+        w = to_real(t)
         if w is not None:
             weights.append(w)
             comps.append(_comp(card, k + 1))
@@ -353,7 +353,7 @@ def _rigid(card: Card) -> Rigid:
             t = card.get(k)
             if not t:
                 continue
-            if _to_real(t) is not None:  # ALPHA (thermal expansion) ends the list
+            if to_real(t) is not None:  # ALPHA (thermal expansion) ends the list
                 break
             if t == "THRU":
                 hi = integer(card, k + 1, "GM")

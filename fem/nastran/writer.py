@@ -8,7 +8,7 @@ import os
 import numpy as np
 
 from trussid._util.files import atomic_path
-from trussid.fem.assembly import _coo, beam_matrices, general_blocks, mass_blocks
+from trussid.fem.assembly import sum_blocks, beam_matrices, general_blocks, mass_blocks
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.nastran.reader import read_bdf
@@ -244,7 +244,7 @@ def _global_mass(model: Model):
     _, Mb, db = beam_matrices(model)
     ms, dm = mass_blocks(model)
     _, mg, dg = general_blocks(model)
-    return _coo([Mb] + ms + mg, [db] + dm + dg, model.n_dof)
+    return sum_blocks([Mb] + ms + mg, [db] + dm + dg, model.n_dof)
 
 
 #: Mass entries of the written deck's difference from the model below this fraction of
