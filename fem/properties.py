@@ -86,8 +86,12 @@ class SectionArrays:
     --------
     >>> from trussid.fem import Section, SectionArrays
     >>> s = SectionArrays(A=[1e-4, 2e-4], Iy=1e-9, Iz=1e-9, J=0.0, name="two rods")
-    >>> s.per_element(2).Iy
-    array([1.e-09, 1.e-09])
+    >>> s.per_element(2).Iy.shape                # one value, given to every element
+    (2,)
+    >>> s.per_element(3)
+    Traceback (most recent call last):
+    ...
+    trussid.fem.errors.ModelError: section 'two rods': A has 2 values for 3 elements (give one value or one per element)
     >>> SectionArrays.of(Section.rectangle(0.02, 0.01)).A
     array(0.0002)
     """
