@@ -14,7 +14,7 @@ timed). (A 1e5-element truss boom is 2.2 km long: its first bending eigenvalue i
 the stiffest element's and the modal solver's zero-eigenvalue test takes it for a mechanism.)
 Then, in this process:
 
-- *parse*: pyNastran reading the deck (:func:`trussid.fem.nastran.deck._parse`: the BDF object);
+- *parse*: pyNastran reading the deck (:func:`trussid.fem.nastran.deck.parse_bdf`: the BDF object);
 - *read_bdf*: the whole :func:`trussid.fem.nastran.read_bdf` (parse + translation into a
   :class:`trussid.fem.Model`); *build* = read_bdf - parse, the part that is trussid's;
 - *assemble*: :func:`trussid.fem.assembly.assemble`;
@@ -97,7 +97,7 @@ def main(argv=None) -> int:
         size_mb = deck.stat().st_size / 1e6
         best = {}
         for _ in range(args.repeat):
-            _, w_parse, c_parse = timed(nastran.deck._parse, deck)
+            _, w_parse, c_parse = timed(nastran.deck.parse_bdf, deck)
             (m2, info), w_read, c_read = timed(nastran.read_bdf, deck)
             system, w_asm, c_asm = timed(assemble, m2, autospc=info.autospc)
             if args.modes > 0:

@@ -9,6 +9,7 @@ from trussid._util.lazy import lazy_exports
 from trussid.fem.errors import ModelError
 from trussid.fem.materials import ALUMINIUM, STEEL, Material
 from trussid.fem.model import Beams, Model, PointMasses, RigidBody, Springs, parse_dofs
+from trussid.fem.properties import MaterialArrays, SectionArrays
 from trussid.fem.sections import Section
 
 _LAZY = {
@@ -26,5 +27,5 @@ _LAZY = {
 }
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)
 
-__all__ = ["ALUMINIUM", "STEEL", "Beams", "Material", "Model", "ModelError", "PointMasses",
-           "RigidBody", "Section", "Springs", "parse_dofs", *_LAZY]
+__all__ = ["ALUMINIUM", "STEEL", "Beams", "Material", "MaterialArrays", "Model", "ModelError",
+           "PointMasses", "RigidBody", "Section", "SectionArrays", "Springs", "parse_dofs", *_LAZY]

@@ -22,7 +22,7 @@ from trussid.fem.model import DOF_NAMES
 from trussid.fem.reduction import craig_bampton, guyan
 
 __all__ = ["System", "beam_matrices", "spring_matrices", "general_blocks", "mass_blocks",
-           "assemble"]
+           "sum_blocks", "assemble"]
 
 
 @dataclass
@@ -194,7 +194,7 @@ def mass_blocks(model) -> tuple[list, list]:
     return blocks, dofs
 
 
-def _coo(blocks, dofs, n) -> sp.csr_matrix:
+def sum_blocks(blocks, dofs, n) -> sp.csr_matrix:
     """Sum dense element blocks into an (n, n) CSR matrix with one COO conversion.
 
     Exact zeros are dropped first so that they do not enter the sparsity pattern (and the
@@ -312,8 +312,8 @@ def assemble(model, autospc: bool = False) -> System:
     ks, ds = spring_matrices(model)
     ms, dm = mass_blocks(model)
     kg, mg, dg = general_blocks(model)
-    K_full = _coo([Kb] + ks + kg, [db] + ds + dg, n)
-    M_full = _coo([Mb] + ms + mg, [db] + dm + dg, n)
+    K_full = sum_blocks([Kb] + ks + kg, [db] + ds + dg, n)
+    M_full = sum_blocks([Mb] + ms + mg, [db] + dm + dg, n)
 
     fixed = model.fixed_mask()
     T, dofs = build_transformation(model, fixed)

@@ -32,14 +32,15 @@ import numpy as np
 
 from trussid.fem.errors import ModelError
 
-__all__ = ["local_axes", "frame_matrices", "to_global", "check_beam_properties"]
+__all__ = ["local_axes", "frame_matrices", "to_global", "check_beam_properties", "XY_PLANE", "XZ_PLANE",
+           "XZ_SIGN"]
 
 #: Local DOF indices of the x-y bending plane (v, rz at A; v, rz at B) ...
-_XY = np.array([1, 5, 7, 11])
+XY_PLANE = np.array([1, 5, 7, 11])
 #: ... and of the x-z plane (w, ry at A; w, ry at B).
-_XZ = np.array([2, 4, 8, 10])
+XZ_PLANE = np.array([2, 4, 8, 10])
 #: In the x-z plane a positive rotation ry is -dw/dx: flip the rotation signs.
-_XZ_SIGN = np.array([1.0, -1.0, 1.0, -1.0])
+XZ_SIGN = np.array([1.0, -1.0, 1.0, -1.0])
 
 
 def local_axes(xyz_a: np.ndarray, xyz_b: np.ndarray, orient: np.ndarray,
@@ -207,9 +208,9 @@ def frame_matrices(L, A, Iy, Iz, J, E, G, rho, *, nsm=0.0, Asy=np.inf, Asz=np.in
     _put(K, np.array([0, 6]), ax)
     tor = (G * J / L)[:, None, None] * np.array([[1.0, -1.0], [-1.0, 1.0]])
     _put(K, np.array([3, 9]), tor)
-    sgn = np.outer(_XZ_SIGN, _XZ_SIGN)
-    _put(K, _XY, beam * E[:, None, None] * Iz[:, None, None] * _bending_block(L, phi_y))
-    _put(K, _XZ, beam * E[:, None, None] * Iy[:, None, None] * _bending_block(L, phi_z) * sgn)
+    sgn = np.outer(XZ_SIGN, XZ_SIGN)
+    _put(K, XY_PLANE, beam * E[:, None, None] * Iz[:, None, None] * _bending_block(L, phi_y))
+    _put(K, XZ_PLANE, beam * E[:, None, None] * Iy[:, None, None] * _bending_block(L, phi_z) * sgn)
 
     m_len = rho * A + nsm  # translational mass per length [kg/m]
     M = np.zeros((n, 12, 12))
@@ -228,11 +229,11 @@ def frame_matrices(L, A, Iy, Iz, J, E, G, rho, *, nsm=0.0, Asy=np.inf, Asz=np.in
         tor_m = (rho * (Iy + Iz) * L / 6.0)[:, None, None] * np.array([[2.0, 1.0], [1.0, 2.0]])
         _put(M, np.array([3, 9]), beam * tor_m)
         # ... and the cubic (Timoshenko-consistent) translational inertia of each plane.
-        _put(M, _XY, beam * m_len[:, None, None] * _translational_mass_block(L, phi_y))
-        _put(M, _XZ, beam * m_len[:, None, None] * _translational_mass_block(L, phi_z) * sgn)
+        _put(M, XY_PLANE, beam * m_len[:, None, None] * _translational_mass_block(L, phi_y))
+        _put(M, XZ_PLANE, beam * m_len[:, None, None] * _translational_mass_block(L, phi_z) * sgn)
         if timo:
-            _put(M, _XY, beam * (rho * Iz)[:, None, None] * _rotary_mass_block(L, phi_y))
-            _put(M, _XZ, beam * (rho * Iy)[:, None, None] * _rotary_mass_block(L, phi_z) * sgn)
+            _put(M, XY_PLANE, beam * (rho * Iz)[:, None, None] * _rotary_mass_block(L, phi_y))
+            _put(M, XZ_PLANE, beam * (rho * Iy)[:, None, None] * _rotary_mass_block(L, phi_z) * sgn)
 
     if R is not None:
         K = to_global(K, R)
@@ -255,8 +256,10 @@ def to_global(mat: np.ndarray, R: np.ndarray) -> np.ndarray:
 def check_beam_properties(beams, theory: str = "euler-bernoulli") -> None:
     """Raise :class:`ModelError` naming the first element with a non-physical property.
 
-    Sections and materials validate themselves, but beams added from dicts of arrays (e.g.
-    by the NASTRAN reader) arrive unchecked.
+    :class:`~trussid.fem.Section` and :class:`~trussid.fem.Material` validate themselves;
+    per-element arrays (:class:`~trussid.fem.SectionArrays`, e.g. from the NASTRAN reader)
+    may hold zeros that are legal for some elements and theories only, so their values are
+    checked here, per element.
     """
     checks = [("E", beams.E), ("G", beams.G), ("A", beams.A)]
     frame = ~np.asarray(beams.rod, bool)

@@ -5,7 +5,8 @@ A :class:`Model` is a builder: ``add_*`` calls append, each accepting many items
 Elements refer to nodes by *node id* (the user's numbering, e.g. NASTRAN GRID ids), so
 elements may be added before their nodes; ids are resolved to indices, and checked, when the
 model is assembled (:func:`Model.index_of`). Global DOF ``6 * i + k`` is component ``k``
-(ux, uy, uz, rx, ry, rz) of the node at index ``i`` (the order nodes were added).
+(ux, uy, uz, rx, ry, rz) of the node at index ``i`` (the order nodes were added). The parts
+it holds are the records of :mod:`trussid.fem.parts`.
 
 Everything is SI: m, kg, s, N, Pa.
 """
@@ -13,235 +14,21 @@ Everything is SI: m, kg, s, N, Pa.
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field
-from typing import Iterable, Literal
+import dataclasses
+from typing import Literal
 
 import numpy as np
 
 from trussid.fem.errors import ModelError
 from trussid.fem.materials import Material
+from trussid.fem.parts import (DOF_NAMES, Beams, GeneralElements, LinearConstraint, PointMasses, RigidBody,
+                               Springs, parse_dofs)
+from trussid.fem.properties import MaterialArrays, SectionArrays
 from trussid.fem.sections import Section
 
+# The parts are re-exported: code and users import them from here (fem.model).
 __all__ = ["DOF_NAMES", "parse_dofs", "Beams", "PointMasses", "Springs", "RigidBody",
            "LinearConstraint", "GeneralElements", "Model"]
-
-DOF_NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
-
-
-def parse_dofs(dofs: str | Iterable[int]) -> np.ndarray:
-    """DOF components as a boolean mask of length 6.
-
-    ``dofs`` is a NASTRAN-style digit string (``"123"`` = translations, ``"123456"`` = all)
-    or an iterable of 0-based component indices.
-
-    Examples
-    --------
-    >>> from trussid.fem import parse_dofs
-    >>> parse_dofs("123")                         # NASTRAN digits: the translations
-    array([ True,  True,  True, False, False, False])
-    >>> parse_dofs([3, 4, 5])                     # 0-based components: the rotations
-    array([False, False, False,  True,  True,  True])
-    """
-    mask = np.zeros(6, dtype=bool)
-    if isinstance(dofs, str):
-        for ch in dofs.strip():
-            if ch not in "123456":
-                raise ModelError(f"DOF string {dofs!r}: component {ch!r} is not one of 1-6")
-            mask[int(ch) - 1] = True
-    else:
-        for k in dofs:
-            if not 0 <= int(k) < 6:
-                raise ModelError(f"DOF component {k!r} is not in 0..5")
-            mask[int(k)] = True
-    return mask
-
-
-@dataclass
-class Beams:
-    """All 2-node frame elements, as arrays of length ``n``.
-
-    Attributes
-    ----------
-    ids : (n,) int
-        Element ids.
-    nodes : (n, 2) int
-        Node ids of ends A and B.
-    orient : (n, 3) float
-        Orientation vector in global axes: together with the axis it fixes the local x-y
-        plane (NASTRAN's v vector). Must not be parallel to the element.
-    A, Iy, Iz, J, Asy, Asz : (n,) float
-        Section properties (see :class:`trussid.fem.sections.Section`) [m^2, m^4].
-    E, G, rho : (n,) float
-        Material [Pa, Pa, kg/m^3].
-    nsm : (n,) float
-        Non-structural mass per length [kg/m].
-    rod : (n,) bool
-        Axial and torsion only (CROD/CONROD): no bending stiffness, translational mass.
-    labels : (n,) object
-        Property label for messages and reports (e.g. ``"strut 3"``, ``"PBAR 12"``).
-    """
-
-    ids: np.ndarray
-    nodes: np.ndarray
-    orient: np.ndarray
-    A: np.ndarray
-    Iy: np.ndarray
-    Iz: np.ndarray
-    J: np.ndarray
-    Asy: np.ndarray
-    Asz: np.ndarray
-    E: np.ndarray
-    G: np.ndarray
-    rho: np.ndarray
-    nsm: np.ndarray
-    rod: np.ndarray
-    labels: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.ids)
-
-
-@dataclass
-class PointMasses:
-    """Concentrated masses (CONM2-like), arrays of length ``n``.
-
-    Attributes
-    ----------
-    nodes : (n,) int
-        Node ids.
-    mass : (n,) float
-        Mass [kg].
-    inertia : (n, 3, 3) float
-        Inertia tensor about the mass's own centre of gravity, global axes [kg m^2].
-    offset : (n, 3) float
-        Centre of gravity relative to the node, global axes [m].
-    """
-
-    nodes: np.ndarray
-    mass: np.ndarray
-    inertia: np.ndarray
-    offset: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.nodes)
-
-
-@dataclass
-class Springs:
-    """Uncoupled 6-DOF springs (CELAS/CBUSH-like), arrays of length ``n``.
-
-    A spring joins node A to node B, or node A to ground when B is ``-1``. Its stiffness is
-    diagonal in the frame whose rows are ``frame[i]`` (global axes by default).
-
-    Attributes
-    ----------
-    ids : (n,) int
-    nodes : (n, 2) int
-        Node ids; ``-1`` in column 1 for grounded springs.
-    k : (n, 6) float
-        Stiffness per component [N/m for translations, N m/rad for rotations], >= 0.
-    frame : (n, 3, 3) float
-        Rows are the spring's axes in global coordinates (orthonormal).
-    """
-
-    ids: np.ndarray
-    nodes: np.ndarray
-    k: np.ndarray
-    frame: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.ids)
-
-
-@dataclass
-class RigidBody:
-    """A rigid body (RBE2-like) with optional mass.
-
-    The dependent components ``dofs`` of every slave node follow the master node rigidly.
-    The body's mass is attached at the master (its centre of gravity need not be there).
-    Applied by DOF transformation, not penalty.
-
-    Attributes
-    ----------
-    id : int
-    master : int
-        Master node id.
-    slaves : (k,) int
-        Slave node ids.
-    dofs : (6,) bool
-        Slave components that follow the master (all six for a fully rigid body).
-    mass : float
-        Mass [kg] (0 for a massless link).
-    cg : (3,) float
-        Centre of gravity, global coordinates [m] (ignored when mass is 0).
-    inertia : (3, 3) float
-        Inertia tensor about the centre of gravity, global axes [kg m^2].
-    label : str
-    """
-
-    id: int
-    master: int
-    slaves: np.ndarray
-    dofs: np.ndarray
-    mass: float = 0.0
-    cg: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    inertia: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
-    label: str = ""
-
-
-@dataclass
-class LinearConstraint:
-    """Dependent DOFs as linear combinations of independent ones (MPC, RBAR, RBE3...).
-
-    ``u[dependent] = C @ u[independent]``, every component in its node's displacement frame
-    (:meth:`Model.set_node_frames`; global axes by default). Applied by DOF transformation
-    together with the rigid bodies: a dependent DOF must not be supported or dependent in
-    another constraint; independent DOFs may be dependent elsewhere (chains are composed).
-
-    Attributes
-    ----------
-    id : int
-    dep_nodes, dep_comps : (m,) int
-        Node ids and 0-based components (0..5 = ux..rz) of the dependent DOFs.
-    ind_nodes, ind_comps : (p,) int
-        Node ids and components of the independent DOFs.
-    C : (m, p) float
-        Coefficients [m/m, m/rad, rad/m as the components dictate].
-    label : str
-        For messages (e.g. ``"RBE3 7"``).
-    """
-
-    id: int
-    dep_nodes: np.ndarray
-    dep_comps: np.ndarray
-    ind_nodes: np.ndarray
-    ind_comps: np.ndarray
-    C: np.ndarray
-    label: str = ""
-
-
-@dataclass
-class GeneralElements:
-    """Element matrices given directly (NASTRAN GENEL/DMIG-like), one stack per call.
-
-    Attributes
-    ----------
-    ids : (n,) int
-    nodes : (n, k) int
-        Node ids joined by each element.
-    K, M : (n, 6k, 6k) float
-        Stiffness and mass in global axes, DOF order ``ux..rz`` of each node in turn.
-    label : str
-    """
-
-    ids: np.ndarray
-    nodes: np.ndarray
-    K: np.ndarray
-    M: np.ndarray
-    label: str = ""
-
-    def __len__(self) -> int:
-        return len(self.ids)
 
 
 def _ids(values, what: str) -> np.ndarray:
@@ -327,9 +114,9 @@ class Model:
         # index_of's sorted node ids, (number of add_nodes calls it was built from, order,
         # sorted ids): rebuilt when nodes were added since, not re-sorted on every call.
         self._node_index: tuple[int, np.ndarray, np.ndarray] | None = None
-        self._beams: list[dict[str, np.ndarray]] = []
-        self._masses: list[dict[str, np.ndarray]] = []
-        self._springs: list[dict[str, np.ndarray]] = []
+        self._beams: list[Beams] = []
+        self._masses: list[PointMasses] = []
+        self._springs: list[Springs] = []
         self.rigid_bodies: list[RigidBody] = []
         self._fixed: list[tuple[np.ndarray, np.ndarray]] = []
         self._omitted: list[tuple[np.ndarray, np.ndarray]] = []
@@ -480,7 +267,7 @@ class Model:
         return order[pos_c].reshape(ids.shape)
 
     # ------------------------------------------------------------------ elements
-    def add_beams(self, ids, nodes, section: Section | dict, material: Material | dict,
+    def add_beams(self, ids, nodes, section: Section | SectionArrays, material: Material | MaterialArrays,
                   orient, nsm=0.0, rod: bool = False, label: str | None = None) -> None:
         """Add frame elements sharing one section and material.
 
@@ -490,10 +277,11 @@ class Model:
             Element ids.
         nodes : (n, 2) int
             Node ids of the two ends.
-        section : Section
-            Cross-section, or a dict of per-element arrays with keys A, Iy, Iz, J, Asy, Asz.
-        material : Material
-            Material, or a dict of per-element arrays with keys E, G, rho.
+        section : Section or SectionArrays
+            Cross-section, or per-element section arrays (a mapping with the keys A, Iy, Iz,
+            J and optionally Asy, Asz is read as :meth:`SectionArrays.of` reads it).
+        material : Material or MaterialArrays
+            Material, or per-element material arrays (or a mapping with the keys E, G, rho).
         orient : (3,) or (n, 3) float
             Orientation vector(s), global axes.
         nsm : float or (n,) float
@@ -515,17 +303,17 @@ class Model:
             raise ModelError(f"add_beams: orient must be a 3-vector or ({n}, 3), got shape "
                              f"{orient.shape}")
         orient = np.broadcast_to(orient, (n, 3)).copy()
-        sec = section if isinstance(section, dict) else {
-            k: getattr(section, k) for k in ("A", "Iy", "Iz", "J", "Asy", "Asz")}
-        mat = material if isinstance(material, dict) else {
-            k: getattr(material, k) for k in ("E", "G", "rho")}
-        chunk = {"ids": ids, "nodes": nodes, "orient": orient}
-        for key, value in {**sec, **mat, "nsm": nsm}.items():
-            chunk[key] = np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy()
-        chunk["rod"] = np.full(n, bool(rod))
         name = label if label is not None else getattr(section, "name", "section")
-        chunk["labels"] = np.full(n, name, dtype=object)
-        self._beams.append(chunk)
+        sec = SectionArrays.of(section, name).per_element(n)
+        mat = MaterialArrays.of(material, name).per_element(n)
+        try:
+            nsm = np.broadcast_to(np.asarray(nsm, dtype=float), (n,)).copy()
+        except (TypeError, ValueError):
+            raise ModelError(f"add_beams ({name}): nsm must be one number or {n} (one per element), "
+                             f"got {nsm!r}") from None
+        self._beams.append(Beams(ids=ids, nodes=nodes, orient=orient, A=sec.A, Iy=sec.Iy, Iz=sec.Iz, J=sec.J,
+                                 Asy=sec.Asy, Asz=sec.Asz, E=mat.E, G=mat.G, rho=mat.rho, nsm=nsm,
+                                 rod=np.full(n, bool(rod)), labels=np.full(n, name, dtype=object)))
 
     @property
     def beams(self) -> Beams:
@@ -536,7 +324,7 @@ class Model:
             return Beams(**{k: np.zeros(shapes.get(k, (0,)),
                                          dtype=np.int64 if k in ("ids", "nodes") else bool if k == "rod"
                                          else object if k == "labels" else float) for k in keys})
-        return Beams(**{k: np.concatenate([c[k] for c in self._beams]) for k in keys})
+        return Beams(**{k: np.concatenate([getattr(c, k) for c in self._beams]) for k in keys})
 
     def with_beam_sections(self, A, Iy, Iz, J) -> "Model":
         """A copy of the model whose beams have the section properties ``A`` [m^2], ``Iy``,
@@ -559,7 +347,7 @@ class Model:
         for key, value in vars(self).items():  # the copy's own lists: adding to one leaves the other
             if isinstance(value, list):
                 setattr(out, key, list(value))
-        out._beams = [{**{k: getattr(b, k) for k in Beams.__dataclass_fields__}, **new}]
+        out._beams = [dataclasses.replace(b, **new)]
         return out
 
     def add_point_masses(self, nodes, mass, inertia=None, offset=None) -> None:
@@ -581,25 +369,25 @@ class Model:
         n = len(nodes)
         inertia = _inertia_tensors(inertia, n, nodes)
         try:
-            chunk = {
-                "nodes": nodes,
-                "mass": np.broadcast_to(np.asarray(mass, dtype=float), (n,)).copy(),
-                "inertia": inertia,
-                "offset": np.broadcast_to(np.zeros(3) if offset is None else np.asarray(offset, float), (n, 3)).copy(),
-            }
+            chunk = PointMasses(
+                nodes=nodes,
+                mass=np.broadcast_to(np.asarray(mass, dtype=float), (n,)).copy(),
+                inertia=inertia,
+                offset=np.broadcast_to(np.zeros(3) if offset is None else np.asarray(offset, float), (n, 3)).copy(),
+            )
         except ValueError as exc:
             raise ModelError(f"add_point_masses: mass must be one number or {n}, and offset a "
                              f"3-vector or ({n}, 3) ({exc})") from None
-        bad = (chunk["mass"] < 0) | ~np.isfinite(chunk["mass"])
+        bad = (chunk.mass < 0) | ~np.isfinite(chunk.mass)
         if bad.any():
-            raise ModelError(f"point mass at node {nodes[bad][0]}: mass must be >= 0, got {float(chunk['mass'][bad][0])!r}")
+            raise ModelError(f"point mass at node {nodes[bad][0]}: mass must be >= 0, got {float(chunk.mass[bad][0])!r}")
         self._masses.append(chunk)
 
     @property
     def point_masses(self) -> PointMasses:
         if not self._masses:
             return PointMasses(np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 3, 3)), np.zeros((0, 3)))
-        return PointMasses(**{k: np.concatenate([c[k] for c in self._masses]) for k in PointMasses.__dataclass_fields__})
+        return PointMasses(**{k: np.concatenate([getattr(c, k) for c in self._masses]) for k in PointMasses.__dataclass_fields__})
 
     def add_springs(self, ids, nodes, k, frame=None) -> None:
         """Add 6-DOF springs.
@@ -628,13 +416,13 @@ class Model:
         err = np.abs(fr @ fr.transpose(0, 2, 1) - np.eye(3)).max(axis=(1, 2))
         if (err > 1e-9).any():
             raise ModelError(f"spring {ids[err > 1e-9][0]}: frame axes are not orthonormal")
-        self._springs.append({"ids": ids, "nodes": nodes, "k": kk, "frame": fr})
+        self._springs.append(Springs(ids=ids, nodes=nodes, k=kk, frame=fr))
 
     @property
     def springs(self) -> Springs:
         if not self._springs:
             return Springs(np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros((0, 6)), np.zeros((0, 3, 3)))
-        return Springs(**{k: np.concatenate([c[k] for c in self._springs]) for k in Springs.__dataclass_fields__})
+        return Springs(**{k: np.concatenate([getattr(c, k) for c in self._springs]) for k in Springs.__dataclass_fields__})
 
     def add_rigid_body(self, id: int, master: int, slaves, dofs: str = "123456", mass: float = 0.0,
                        cg=None, inertia=None, label: str = "") -> None:

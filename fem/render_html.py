@@ -15,7 +15,7 @@ than plotly animation frames, which would store every frame of every mode in the
 (frames x modes copies of the geometry).
 
 Beams bend between their nodes with the cubic Hermite shape functions
-(:func:`trussid.fem.render.hermite_beam_displacements`), as in the offscreen renderer.
+(:func:`trussid.fem.render_scene.hermite_beam_displacements`), as in the offscreen renderer.
 
 Optional markers at sensors: the FE mode projected on each sensor's axis and, from
 identified models, their modes at the sensors (complex shapes, scaled to the FE projection
@@ -39,8 +39,9 @@ import plotly
 
 from trussid._util.files import atomic_path
 from trussid.fem.model import Model
-from trussid.fem.render import (DEFAULT_AMPLITUDE, RenderError, check_mode_number,
-                                default_cmap, equivalent_radius, hermite_beam_displacements, node_displacements)
+from trussid.fem.errors import RenderError
+from trussid.fem.render_scene import (DEFAULT_AMPLITUDE, check_mode_number, default_cmap,
+                                      equivalent_radius, hermite_beam_displacements, node_displacements)
 
 __all__ = ["SensorAxis", "IdentifiedMode", "mode_viewer_data", "viewer_fragment",
            "plotly_script", "html_page", "write_mode_viewer", "external_references",
@@ -465,7 +466,7 @@ def write_mode_viewer(model: Model, modes, out, *, n_modes: int | None = None,
     """Write a self-contained page with the 3-D viewer of ``model``'s modes to ``out``
     (atomically), ``first_mode`` selected. Returns the file's size [bytes].
 
-    A bad ``first_mode`` raises :class:`trussid.fem.render.RenderError` before anything is
+    A bad ``first_mode`` raises :class:`trussid.fem.errors.RenderError` before anything is
     written.
     """
     n_avail = np.asarray(modes.shapes_full).shape[1]

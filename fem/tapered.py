@@ -25,8 +25,9 @@ from typing import Callable
 
 import numpy as np
 
-from trussid.fem.elements import _XY, _XZ, _XZ_SIGN
+from trussid.fem.elements import XY_PLANE, XZ_PLANE, XZ_SIGN
 from trussid.fem.errors import ModelError
+from trussid.fem.properties import SectionArrays
 
 __all__ = ["GAUSS_POINTS", "tapered_frame_matrices"]
 
@@ -46,8 +47,9 @@ def _gauss(breaks: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     return xi, wt
 
 
-def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], dict], E: float, G: float,
-                           rho: float, *, theory: str = "euler-bernoulli", mass: str = "consistent",
+def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], SectionArrays], E: float, G: float,
+                           rho: float, *, nsm_at: Callable[[np.ndarray], np.ndarray] | None = None,
+                           theory: str = "euler-bernoulli", mass: str = "consistent",
                            torsion_lumped: bool = True, label: str = "tapered beam"
                            ) -> tuple[np.ndarray, np.ndarray]:
     """Local stiffness and mass of ``n`` elements sharing one tapered property, (n, 12, 12).
@@ -59,11 +61,14 @@ def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], dict], 
     breaks : (s,) float
         Stations as ``x / L`` from 0 to 1, ascending (the section may kink there).
     section_at : callable
-        ``section_at(xi)`` for an array ``xi`` returns a dict of arrays over ``xi``: ``A``,
-        ``Iy``, ``Iz``, ``J`` [m^2, m^4], ``Asy``, ``Asz`` [m^2, inf for none] and ``nsm``
-        [kg/m], in element axes (``Iz`` bends in the x-y plane).
+        ``section_at(xi)`` for an array ``xi`` returns the section there as
+        :class:`~trussid.fem.SectionArrays` (each field one value or one per ``xi``): ``A``,
+        ``Iy``, ``Iz``, ``J`` [m^2, m^4], ``Asy``, ``Asz`` [m^2, inf for none], in element
+        axes (``Iz`` bends in the x-y plane).
     E, G, rho : float
         Material [Pa, Pa, kg/m^3].
+    nsm_at : callable, optional
+        ``nsm_at(xi)``: non-structural mass per length at ``xi`` [kg/m]; default none.
     theory : {"euler-bernoulli", "timoshenko"}
         Timoshenko adds the shear flexibility ``int dx / G A_s``.
     mass : {"consistent", "lumped"}
@@ -87,13 +92,17 @@ def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], dict], 
     xi, w = _gauss(breaks, GAUSS_POINTS)
     # checked at the stations too: a section vanishing at an end is positive at every
     # Gauss point, and its integrals diverge
-    checked = {k: np.asarray(v, float) for k, v in section_at(np.r_[breaks, xi]).items()}
+    at = np.r_[breaks, xi]
+    checked = section_at(at)
     for key in ("A", "Iy", "Iz"):
-        if not (np.isfinite(checked[key]) & (checked[key] > 0)).all():
+        value = getattr(checked, key)
+        if not (np.isfinite(value) & (value > 0)).all():
             raise ModelError(f"{label}: {key} must be positive along the element")
-    if not (np.isfinite(checked["J"]) & (checked["J"] >= 0)).all():
+    if not (np.isfinite(checked.J) & (checked.J >= 0)).all():
         raise ModelError(f"{label}: J must be >= 0 along the element")
-    s = {k: np.broadcast_to(v, np.r_[breaks, xi].shape)[len(breaks):] for k, v in checked.items()}
+    s = checked.per_element(len(at))  # the stations, then the Gauss points
+    A, Iy, Iz, J, Asy, Asz = (getattr(s, k)[len(breaks):] for k in ("A", "Iy", "Iz", "J", "Asy", "Asz"))
+    nsm = np.zeros(len(xi)) if nsm_at is None else np.broadcast_to(np.asarray(nsm_at(xi), float), xi.shape)
     n = len(L)
     K = np.zeros((n, 12, 12))
 
@@ -103,11 +112,11 @@ def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], dict], 
         K[:, i, j] -= k
         K[:, j, i] -= k
 
-    spring(0, 6, E / (L * np.sum(w / s["A"])))
+    spring(0, 6, E / (L * np.sum(w / A)))
     # J = 0 somewhere: no torsional stiffness (NASTRAN's default J is 0)
-    spring(3, 9, 0.0 if (s["J"] == 0).any() else G / (L * np.sum(w / s["J"])))
+    spring(3, 9, 0.0 if (J == 0).any() else G / (L * np.sum(w / J)))
     timo = theory == "timoshenko"
-    for idx, inertia, shear, sign in ((_XY, s["Iz"], s["Asy"], np.ones(4)), (_XZ, s["Iy"], s["Asz"], _XZ_SIGN)):
+    for idx, inertia, shear, sign in ((XY_PLANE, Iz, Asy, np.ones(4)), (XZ_PLANE, Iy, Asz, XZ_SIGN)):
         c = [np.sum(w * (1.0 - xi) ** k / inertia) for k in range(3)]
         shear_flex = np.sum(w / shear) if timo else 0.0
         # end-B flexibility of the element clamped at A, (deflection, rotation) per (force, moment)
@@ -123,8 +132,16 @@ def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], dict], 
         blk = np.block([[Hk @ H.transpose(0, 2, 1), Hk], [Kbb @ H.transpose(0, 2, 1), Kbb]])
         K[:, idx[:, None], idx[None, :]] += blk * np.outer(sign, sign)
 
-    m = rho * s["A"] + s["nsm"]          # mass per length along the element
-    polar = rho * (s["Iy"] + s["Iz"])    # torsional inertia per length
+    M = _mass(L, xi, w, rho * A + nsm, rho * (Iy + Iz), mass, torsion_lumped)
+    return 0.5 * (K + K.transpose(0, 2, 1)), M
+
+
+def _mass(L: np.ndarray, xi: np.ndarray, w: np.ndarray, m: np.ndarray, polar: np.ndarray, mass: str,
+          torsion_lumped: bool) -> np.ndarray:
+    """(n, 12, 12) element-axes mass of elements of lengths ``L`` whose mass per length ``m``
+    [kg/m] and torsional inertia per length ``polar`` [kg m] are sampled at the Gauss points
+    ``xi`` (weights ``w``); see :func:`tapered_frame_matrices`."""
+    n = len(L)
     M = np.zeros((n, 12, 12))
     if mass == "lumped":
         ends = (np.sum(w * m * (1.0 - xi)), np.sum(w * m * xi))
@@ -147,8 +164,8 @@ def tapered_frame_matrices(L, breaks, section_at: Callable[[np.ndarray], dict], 
         unit = (N * w * m) @ N.T                                # int m N_i N_j dxi, rotations per L
         scale = np.stack([np.ones(n), L, np.ones(n), L], 1)     # (n, 4)
         bend = unit[None] * L[:, None, None] * scale[:, :, None] * scale[:, None, :]
-        for idx, sign in ((_XY, np.ones(4)), (_XZ, _XZ_SIGN)):
+        for idx, sign in ((XY_PLANE, np.ones(4)), (XZ_PLANE, XZ_SIGN)):
             M[:, idx[:, None], idx[None, :]] += bend * np.outer(sign, sign)
     else:
         raise ModelError(f"unknown mass formulation {mass!r}")
-    return 0.5 * (K + K.transpose(0, 2, 1)), M
+    return M

@@ -13,8 +13,14 @@ declare ``numpy<2``). This package only translates cards into the model's arrays
 
 Modules: :mod:`~trussid.fem.nastran.entries` (what is read, accepted or refused),
 :mod:`~trussid.fem.nastran.cards` (text to cards), :mod:`~trussid.fem.nastran.bulk` (cards
-to typed entries), :mod:`~trussid.fem.nastran.deck` (PARAMs, case control, checks),
-:mod:`~trussid.fem.nastran.reader` (the translation), :mod:`~trussid.fem.nastran.conventions`
+to typed entries), :mod:`~trussid.fem.nastran.records` (the typed entries),
+:mod:`~trussid.fem.nastran.coords` (coordinate systems into basic),
+:mod:`~trussid.fem.nastran.deck` (PARAMs, case control, checks),
+:mod:`~trussid.fem.nastran.reader` (the translation: the model assembled from the modules
+of each kind of entry, :mod:`~trussid.fem.nastran.grids`,
+:mod:`~trussid.fem.nastran.line_properties`, :mod:`~trussid.fem.nastran.line_elements`,
+:mod:`~trussid.fem.nastran.scalar_elements`, :mod:`~trussid.fem.nastran.rigid`,
+:mod:`~trussid.fem.nastran.dof_sets`), :mod:`~trussid.fem.nastran.conventions`
 (NASTRAN's element conventions and the build conventions, ``conventions="nx"|"msc"``),
 :mod:`~trussid.fem.nastran.matrices` (DMIG through K2GG/M2GG),
 :mod:`~trussid.fem.nastran.preload` (rigid format 13) and :mod:`~trussid.fem.nastran.writer`.
@@ -35,7 +41,8 @@ Conventions that matter
   model is Timoshenko when any CBAR/CBEAM has a finite shear area, else Euler-Bernoulli.
 * Element mass follows NASTRAN where it differs from :mod:`trussid.fem.elements` (lumped
   CBEAM torsional inertia, coupled CROD, CBAR and shear-flexible CBEAM mass): see
-  :func:`_nastran_mass_conventions`; these were found on real NASTRAN output.
+  :func:`~trussid.fem.nastran.conventions.nastran_mass_conventions`; these were found on
+  real NASTRAN output.
 * Displacement systems (GRID CD, rectangular, cylindrical or spherical) become node frames
   of the model (:meth:`trussid.fem.Model.set_node_frames`): supports, scalar masses and
   springs, rigid elements, MPCs and OP2 results refer to them, as in NASTRAN.

@@ -1,334 +1,28 @@
 """Bulk-data cards (:mod:`~trussid.fem.nastran.cards`) to typed entries: what
 :func:`trussid.fem.nastran.read_bdf` translates, with NASTRAN's defaults applied.
 
-Each entry is a small frozen dataclass whose attributes are the QRG's field names; the
-:class:`Bulk` gathers them by kind (grids, elements, properties...). Entries this module does
-not type stay available as :class:`~trussid.fem.nastran.cards.Card` s (``Bulk.raw``).
-Coordinate systems (CORD1R/C/S, CORD2R/C/S, each possibly defined in another) are resolved
-here into origins and axes in the basic system, and the grids' positions into basic.
+Each entry is a small frozen dataclass whose attributes are the QRG's field names
+(:mod:`trussid.fem.nastran.records`); the :class:`Bulk` gathers them by kind (grids,
+elements, properties...). Entries this module does not type stay available as
+:class:`~trussid.fem.nastran.cards.Card` s (``Bulk.raw``). Coordinate systems (CORD1R/C/S,
+CORD2R/C/S, each possibly defined in another) are resolved into origins and axes in the
+basic system, and the grids' positions into basic, by :mod:`trussid.fem.nastran.coords`.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
-from typing import NamedTuple
-
 import numpy as np
 
-from trussid.fem.errors import ModelError
 from trussid.fem.nastran.cards import (Card, ParsedDeck, integer, integer_or_blank, real, real_or_blank,
-                                       string_or_blank, _to_int, _to_real)
+                                       to_int, to_real)
+from trussid.fem.nastran.coords import resolve_coordinates
+from trussid.fem.nastran.records import (Bar, BarDefaults, Bulk, Bush, Conm2, Coord, DofSet, Eigrl, GrdSet, Grid, Load, Mat1,
+                                         Mpc, Prop, Rigid, Rod, Scalar, SetAdd, Spc)
 
+# The entry types are re-exported: code imports them from here (nastran.bulk).
 __all__ = ["Bulk", "build_bulk", "Coord"]
 
 _SO = ("YES", "YESA", "NO")
-
-
-class Grid(NamedTuple):
-    nid: int
-    cp: int
-    xyz: tuple
-    cd: int
-    ps: str
-    seid: int
-
-
-@dataclass(frozen=True, slots=True)
-class Coord:
-    """A coordinate system resolved in basic: origin and axes (rows i, j, k)."""
-
-    cid: int
-    Type: str  # "R", "C" or "S"
-    origin: np.ndarray
-    i: np.ndarray
-    j: np.ndarray
-    k: np.ndarray
-
-    @property
-    def R(self) -> np.ndarray:
-        return np.vstack([self.i, self.j, self.k])
-
-    def to_basic(self, p: np.ndarray) -> np.ndarray:
-        """Basic coordinates of points ``p`` (n, 3) given in this system (angles in degrees)."""
-        p = np.asarray(p, float).reshape(-1, 3)
-        if self.Type == "C":
-            t = np.radians(p[:, 1])
-            p = np.column_stack([p[:, 0] * np.cos(t), p[:, 0] * np.sin(t), p[:, 2]])
-        elif self.Type == "S":
-            t, f = np.radians(p[:, 1]), np.radians(p[:, 2])
-            p = np.column_stack([p[:, 0] * np.sin(t) * np.cos(f), p[:, 0] * np.sin(t) * np.sin(f),
-                                 p[:, 0] * np.cos(t)])
-        return self.origin + p @ self.R
-
-
-BASIC = Coord(0, "R", np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0]))
-
-
-class Bar(NamedTuple):
-    """CBAR or CBEAM (BAROR/BEAMOR defaults applied). Grid, Bar and Scalar, the entries a
-    large deck has by the hundred thousand, are named tuples: immutable, and three times
-    faster to build than frozen dataclasses."""
-
-    type: str
-    eid: int
-    pid: int
-    ga: int
-    gb: int
-    x: tuple | None
-    g0: int | None
-    offt: str
-    pa: int
-    pb: int
-    wa: tuple
-    wb: tuple
-    sa: int
-    sb: int
-    bit: float | None
-
-    @property
-    def nodes(self):
-        return [self.ga, self.gb]
-
-
-@dataclass(frozen=True, slots=True)
-class Rod:
-    """CROD (``mid``/``A``... unused) or CONROD (``pid`` 0)."""
-
-    type: str
-    eid: int
-    pid: int
-    nodes: tuple
-    mid: int = 0
-    A: float = 0.0
-    j: float = 0.0
-    nsm: float = 0.0
-
-
-class Scalar(NamedTuple):
-    """CELAS1/2 and CMASS1/2: ``value`` is K or M (1: from the property ``pid``)."""
-
-    type: str
-    eid: int
-    pid: int
-    value: float | None
-    nodes: tuple
-    c1: int
-    c2: int
-
-    @property
-    def k(self):
-        return self.value
-
-    @property
-    def mass(self):
-        return self.value
-
-
-@dataclass(frozen=True, slots=True)
-class Bush:
-    type: str
-    eid: int
-    pid: int
-    nodes: tuple
-    x: tuple | None
-    g0: int | None
-    cid: int | None
-    s: float | None
-    ocid: int | None
-    si: tuple
-
-
-@dataclass(frozen=True, slots=True)
-class Conm2:
-    type: str
-    eid: int
-    nid: int
-    cid: int
-    mass: float
-    X: tuple
-    I: tuple
-
-
-@dataclass(frozen=True, slots=True)
-class Prop:
-    """PBAR, PBEAM (per-station arrays A, i1...), PBARL/PBEAML, PROD, PTUBE, PELAS, PBUSH, PMASS."""
-
-    type: str
-    pid: int
-    mid: int | None = None
-    A: object = 0.0
-    i1: object = 0.0
-    i2: object = 0.0
-    i12: object = 0.0
-    j: object = 0.0
-    nsm: object = 0.0
-    k1: float | None = None
-    k2: float | None = None
-    k: float = 0.0  # PELAS K
-    mass: float = 0.0  # PMASS M
-    Ki: tuple = ()  # PBUSH K1-K6
-    vars: tuple = ()  # PBUSH keywords given
-    beam_type: str = ""  # PBARL/PBEAML section type
-    dim: object = None  # PBARL dimensions; PBEAML (stations, dimensions)
-    xxb: tuple = (0.0,)  # PBEAM/PBEAML station positions X/XB, end A (0.0) first
-    OD1: float = 0.0  # PTUBE outer diameters and wall thickness (None: solid)
-    OD2: float | None = None
-    t: float | None = None
-    # PBEAM non-structural inertia, warping, centre-of-mass and neutral-axis offsets
-    nsia: float = 0.0
-    nsib: float = 0.0
-    cwa: float = 0.0
-    cwb: float = 0.0
-    m1a: float = 0.0
-    m2a: float = 0.0
-    m1b: float = 0.0
-    m2b: float = 0.0
-    n1a: float = 0.0
-    n2a: float = 0.0
-    n1b: float = 0.0
-    n2b: float = 0.0
-
-
-@dataclass(frozen=True, slots=True)
-class Mat1:
-    mid: int
-    e: float
-    g: float
-    nu: float
-    rho: float
-
-
-@dataclass(frozen=True, slots=True)
-class Rigid:
-    """RBE2 (gn, cm, Gmi), RBAR (ga, gb, cna, cnb, cma, cmb), RBE3 (refgrid, refc, weights,
-    comps, Gijs, Gmi = UM grids)."""
-
-    type: str
-    eid: int
-    gn: int = 0
-    cm: str = ""
-    Gmi: tuple = ()
-    ga: int = 0
-    gb: int = 0
-    cna: str = ""
-    cnb: str = ""
-    cma: str = ""
-    cmb: str = ""
-    refgrid: int = 0
-    refc: str = ""
-    weights: tuple = ()
-    comps: tuple = ()
-    Gijs: tuple = ()
-
-
-@dataclass(frozen=True, slots=True)
-class Spc:
-    """SPC (nodes, components, enforced) or SPC1 (nodes, one component string)."""
-
-    type: str
-    sid: int
-    nodes: tuple
-    components: object
-    enforced: tuple = ()
-
-
-@dataclass(frozen=True, slots=True)
-class Mpc:
-    sid: int
-    nodes: tuple
-    components: tuple
-    coefficients: tuple
-
-
-@dataclass(frozen=True, slots=True)
-class SetAdd:
-    sid: int
-    sets: tuple
-
-
-@dataclass(frozen=True, slots=True)
-class DofSet:
-    """OMIT/ASET/BSET/QSET/SUPORT (pairs) and their ``1`` forms: grid ids and components."""
-
-    type: str
-    ids: tuple
-    components: object
-
-    @property
-    def nodes(self):
-        return self.ids
-
-
-@dataclass(frozen=True, slots=True)
-class Eigrl:
-    type: str
-    sid: int
-    v1: float | None
-    v2: float | None
-    nd: int | None
-
-
-@dataclass(frozen=True, slots=True)
-class Load:
-    """FORCE/MOMENT (node, cid, mag, xyz) and FORCE1/MOMENT1 (node, mag, g1, g2)."""
-
-    type: str
-    sid: int
-    node: int
-    mag: float
-    cid: int = 0
-    xyz: tuple = (0.0, 0.0, 0.0)
-    g1: int = 0
-    g2: int = 0
-
-
-@dataclass(frozen=True, slots=True)
-class GrdSet:
-    cp: int
-    cd: int
-    ps: str
-    seid: int
-
-
-@dataclass(frozen=True)
-class Bulk:
-    """A deck's entries by kind (ids -> typed entries), as :func:`read_bdf` translates them."""
-
-    parsed: ParsedDeck
-    nodes: dict
-    coords: dict
-    elements: dict
-    masses: dict
-    properties: dict
-    properties_mass: dict
-    materials: dict
-    rigid_elements: dict
-    spcs: dict
-    spcadds: dict
-    mpcs: dict
-    mpcadds: dict
-    omits: list
-    asets: list
-    bsets: list
-    qsets: list
-    suport: list
-    suport1: dict
-    spoints: set
-    methods: dict
-    loads: dict
-    grdset: GrdSet | None
-    raw: dict  # name -> list of Card, every entry not typed above
-    card_count: dict
-    xyz_basic: np.ndarray | None = None  # grid positions in basic, in ``nodes`` order
-
-    @property
-    def case(self):
-        return self.parsed.case
-
-    @property
-    def solution(self) -> tuple:
-        return self.parsed.sol, self.parsed.app
 
 
 # ================================================================== card -> entry
@@ -345,13 +39,13 @@ def _ints_thru(card: Card, start: int, what: str, stop: int | None = None) -> li
         if t == "THRU":
             if not out or k + 1 >= len(f):
                 raise card.error(start + k, f"{what}: THRU without both ends")
-            hi = _to_int(f[k + 1])
+            hi = to_int(f[k + 1])
             if hi is None:
                 raise card.error(start + k + 1, f"{what} must be an integer, got {f[k + 1]!r}")
             out.extend(range(out[-1] + 1, hi + 1))
             k += 2
             continue
-        v = _to_int(t)
+        v = to_int(t)
         if v is None:
             raise card.error(start + k, f"{what} must be an integer, got {t!r}")
         out.append(v)
@@ -382,7 +76,7 @@ def _orientation(card: Card, i: int, default):
             return (real_or_blank(card, i, "X1", 0.0), real_or_blank(card, i + 1, "X2", 0.0),
                     real_or_blank(card, i + 2, "X3", 0.0)), None
         return default
-    g0 = _to_int(t)
+    g0 = to_int(t)
     if g0 is not None:
         return None, g0
     return (real(card, i, "X1"), real_or_blank(card, i + 1, "X2", 0.0), real_or_blank(card, i + 2, "X3", 0.0)), None
@@ -391,7 +85,7 @@ def _orientation(card: Card, i: int, default):
 _ZERO3 = (0.0, 0.0, 0.0)
 
 
-def _bar(card: Card, orient: dict) -> Bar:
+def _bar(card: Card, orient: dict[str, BarDefaults]) -> Bar:
     f = card.fields
     if len(f) == 9 and not f[8] and card.name not in orient:
         # fast path: one line, no pin flags or offsets (the bulk of a large deck); anything
@@ -400,26 +94,26 @@ def _bar(card: Card, orient: dict) -> Bar:
             eid, ga, gb = int(f[1]), int(f[3]), int(f[4])
             pid = int(f[2]) if f[2] else eid
             x1, x2, x3 = f[5], f[6], f[7]
-            x = (_to_real(x1) if x1 else None, _to_real(x2) if x2 else 0.0, _to_real(x3) if x3 else 0.0)
+            x = (to_real(x1) if x1 else None, to_real(x2) if x2 else 0.0, to_real(x3) if x3 else 0.0)
             if None not in x:
                 return Bar(card.name, eid, pid, ga, gb, x, None, "GGG", "", "", _ZERO3, _ZERO3, 0, 0, None)
         except ValueError:
             pass
     eid = integer(card, 1, "EID")
     d = orient.get(card.name)
-    pid = integer_or_blank(card, 2, "PID", d["pid"] if d and d["pid"] else eid)
-    default = (d["x"], d["g0"]) if d else (None, None)
+    pid = integer_or_blank(card, 2, "PID", d.pid if d and d.pid else eid)
+    default = (d.x, d.g0) if d else (None, None)
     x, g0 = _orientation(card, 5, default)
     f8 = card.get(8)
     bit = None
     offt = "GGG"
     if f8:
-        if card.name == "CBEAM" and _to_real(f8) is not None:
-            bit = _to_real(f8)
+        if card.name == "CBEAM" and to_real(f8) is not None:
+            bit = to_real(f8)
         else:
             offt = f8
-    elif d and d.get("offt"):
-        offt = d["offt"]
+    elif d and d.offt:
+        offt = d.offt
     wa = tuple(real_or_blank(card, k, "offset", 0.0) for k in (11, 12, 13))
     wb = tuple(real_or_blank(card, k, "offset", 0.0) for k in (14, 15, 16))
     sa = integer_or_blank(card, 17, "SA", 0) if card.name == "CBEAM" else 0
@@ -429,9 +123,9 @@ def _bar(card: Card, orient: dict) -> Bar:
                pa, pb, wa, wb, sa, sb, bit)
 
 
-def _baror(card: Card) -> dict:
+def _baror(card: Card) -> BarDefaults:
     x, g0 = _orientation(card, 5, (None, None))
-    return {"pid": integer_or_blank(card, 2, "PID", 0), "x": x, "g0": g0, "offt": card.get(8)}
+    return BarDefaults(integer_or_blank(card, 2, "PID", 0), x, g0, card.get(8))
 
 
 def _mat1(card: Card) -> Mat1:
@@ -595,7 +289,7 @@ def _scalar(card: Card) -> Scalar:
     f = card.fields
     if len(f) <= 9 and card.name in ("CELAS2", "CMASS2"):
         try:  # fast path, as in _bar
-            v = _to_real(f[2]) if len(f) > 2 and f[2] else None
+            v = to_real(f[2]) if len(f) > 2 and f[2] else None
             if v is not None:
                 g = [int(t) if t else 0 for t in f[3:7]] + [0] * (7 - max(len(f), 3))
                 return Scalar(card.name, int(f[1]), 0, v, (g[0], g[2]), g[1], g[3])
@@ -636,7 +330,7 @@ def _rbe3(card: Card) -> Rigid:
         if mode in ("ALPHA", "TREF"):
             k += 1
             continue
-        w = _to_real(t)
+        w = to_real(t)
         if w is not None:
             weights.append(w)
             comps.append(_comp(card, k + 1))
@@ -659,7 +353,7 @@ def _rigid(card: Card) -> Rigid:
             t = card.get(k)
             if not t:
                 continue
-            if _to_real(t) is not None:  # ALPHA (thermal expansion) ends the list
+            if to_real(t) is not None:  # ALPHA (thermal expansion) ends the list
                 break
             if t == "THRU":
                 hi = integer(card, k + 1, "GM")
@@ -829,7 +523,7 @@ def build_bulk(parsed: ParsedDeck, typed: frozenset) -> Bulk:
         else:
             raw.setdefault(name, []).append(card)
     nodes, xyz = _grids(grid_cards, grdset)
-    coords, xyz = _resolve(coord_cards, nodes, xyz)
+    coords, xyz = resolve_coordinates(coord_cards, nodes, xyz)
     return Bulk(parsed, nodes, coords, elements, masses, props, pmass, mats, rigid, spcs, spcadds, mpcs,
                 mpcadds, omits, asets, bsets, qsets, suport, suport1, spoints, methods, loads, grdset, raw,
                 counts, xyz)
@@ -870,91 +564,3 @@ def _grids(cards: list, grdset: GrdSet | None) -> tuple:
     return nodes, xyz[:len(nodes)]
 
 
-def _coord_points(card: Card, base: int) -> np.ndarray:
-    return np.array([real_or_blank(card, base + m, "coordinate", 0.0) for m in range(9)]).reshape(3, 3)
-
-
-def _from_points(cid: int, kind: str, a: np.ndarray, b: np.ndarray, c: np.ndarray, card: Card) -> Coord:
-    """A system from its origin A, a point B on z and a point C in the x-z plane (basic)."""
-    k = b - a
-    nk = np.linalg.norm(k)
-    if not nk > 0:
-        raise card.error(None, f"system {cid}: points A and B coincide")
-    k = k / nk
-    j = np.cross(k, c - a)
-    nj = np.linalg.norm(j)
-    if not nj > 1e-12 * max(nk, np.linalg.norm(c - a)):
-        raise card.error(None, f"system {cid}: point C is on the z axis (A-B)")
-    j = j / nj
-    return Coord(cid, kind, a, np.cross(j, k), j, k)
-
-
-def _resolve(cards: list, nodes: dict, xyz_local: np.ndarray) -> tuple:
-    """Coordinate systems in basic and the grids' basic positions (systems may be defined in
-    other systems, CORD1x by grids whose positions are in yet other systems: resolved until
-    nothing changes; a cycle or an undefined system is an error naming the entry)."""
-    coords = {0: BASIC}
-    pending = []  # (cid, kind, card, how)
-    for card in cards:
-        kind = card.name[-1]
-        if card.name.startswith("CORD2"):
-            cid = integer(card, 1, "CID")
-            pending.append((cid, kind, card, ("2", integer_or_blank(card, 2, "RID", 0), _coord_points(card, 3))))
-        else:
-            for base in (1, 5):
-                if card.get(base):
-                    cid = integer(card, base, "CID")
-                    g = [integer(card, base + m, "G") for m in (1, 2, 3)]
-                    pending.append((cid, kind, card, ("1", g)))
-    ids = np.fromiter(nodes.keys(), dtype=np.int64, count=len(nodes))
-    cp = np.fromiter((g.cp for g in nodes.values()), dtype=np.int64, count=len(nodes))
-    xyz = np.array(xyz_local, float).reshape(-1, 3)
-    done = cp == 0
-    pos = {int(n): i for i, n in enumerate(ids)} if pending or not done.all() else {}
-    seen = set()
-    for cid, _k, card, _h in pending:
-        if cid in seen or cid == 0:
-            raise card.error(1, f"coordinate system {cid} is defined twice" if cid else "CID 0 is the basic system")
-        seen.add(cid)
-    while True:
-        progress = False
-        for c in list(np.unique(cp[~done])):
-            if int(c) in coords:
-                sel = (~done) & (cp == c)
-                xyz[sel] = coords[int(c)].to_basic(xyz[sel])
-                done |= sel
-                progress = True
-        rest = []
-        for item in pending:
-            cid, kind, card, how = item
-            if how[0] == "2":
-                rid = how[1]
-                if rid in coords:
-                    p = coords[rid].to_basic(how[2])
-                    coords[cid] = _from_points(cid, kind, p[0], p[1], p[2], card)
-                    progress = True
-                    continue
-            else:
-                idx = []
-                for g in how[1]:
-                    if g not in pos:
-                        raise card.error(None, f"system {cid}: grid {g} is not defined")
-                    idx.append(pos[g])
-                if all(done[i] for i in idx):
-                    coords[cid] = _from_points(cid, kind, xyz[idx[0]], xyz[idx[1]], xyz[idx[2]], card)
-                    progress = True
-                    continue
-            rest.append(item)
-        pending = rest
-        if not progress:
-            break
-    if pending:
-        cid, _k, card, how = pending[0]
-        if how[0] == "2" and how[1] not in {p[0] for p in pending}:
-            raise card.error(2, f"system {cid}: reference system RID={how[1]} is not defined")
-        raise card.error(None, f"cannot resolve coordinate system {cid} (its definition refers to itself "
-                               f"through other systems or grids)")
-    if not done.all():
-        i = int(np.flatnonzero(~done)[0])
-        raise ModelError(f"GRID {ids[i]}: coordinate system CP={cp[i]} is not defined")
-    return coords, xyz

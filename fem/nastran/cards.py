@@ -40,7 +40,7 @@ from typing import NamedTuple
 from trussid.fem.errors import ModelError
 
 __all__ = ["Card", "CaseControl", "ParsedDeck", "parse_deck", "integer", "real", "integer_or_blank",
-           "real_or_blank", "string_or_blank", "number", "nastran_value", "deck_text"]
+           "real_or_blank", "string_or_blank", "number", "nastran_value", "to_real", "to_int", "deck_text"]
 
 
 class Card(NamedTuple):
@@ -109,7 +109,7 @@ def _field_number(i: int) -> str:
 
 
 # ------------------------------------------------------------------ field conversion
-def _to_real(text: str) -> float | None:
+def to_real(text: str) -> float | None:
     """A NASTRAN real, or None when ``text`` is not one (integers are not reals)."""
     # The implicit exponent (1.5-3) is found by its sign rather than by a failed float():
     # decks written with 16-character fields use it on most values.
@@ -127,7 +127,8 @@ def _to_real(text: str) -> float | None:
         return None
 
 
-def _to_int(text: str) -> int | None:
+def to_int(text: str) -> int | None:
+    """A NASTRAN integer, or None when ``text`` is not one."""
     try:
         return int(text)
     except ValueError:
@@ -137,7 +138,7 @@ def _to_int(text: str) -> int | None:
 def integer(card: Card, i: int, what: str) -> int:
     """Field ``i`` as an integer; blank or anything else is an error naming the field."""
     text = card.get(i)
-    value = _to_int(text) if text else None
+    value = to_int(text) if text else None
     if value is None:
         got = "blank" if not text else repr(text)
         raise card.error(i, f"{what} must be an integer, got {got}")
@@ -148,7 +149,7 @@ def integer_or_blank(card: Card, i: int, what: str, default=None):
     text = card.get(i)
     if not text:
         return default
-    value = _to_int(text)
+    value = to_int(text)
     if value is None:
         raise card.error(i, f"{what} must be an integer, got {text!r}")
     return value
@@ -156,7 +157,7 @@ def integer_or_blank(card: Card, i: int, what: str, default=None):
 
 def real(card: Card, i: int, what: str) -> float:
     text = card.get(i)
-    value = _to_real(text) if text else None
+    value = to_real(text) if text else None
     if value is None:
         got = "blank" if not text else repr(text)
         raise card.error(i, f"{what} must be a real number (with a decimal point), got {got}")
@@ -167,7 +168,7 @@ def real_or_blank(card: Card, i: int, what: str, default=None):
     text = card.get(i)
     if not text:
         return default
-    value = _to_real(text)
+    value = to_real(text)
     if value is None:
         raise card.error(i, f"{what} must be a real number (with a decimal point), got {text!r}")
     return value
@@ -178,9 +179,9 @@ def number(card: Card, i: int, what: str, default=None):
     text = card.get(i)
     if not text:
         return default
-    value = _to_int(text)
+    value = to_int(text)
     if value is None:
-        value = _to_real(text)
+        value = to_real(text)
     if value is None:
         raise card.error(i, f"{what} must be a number, got {text!r}")
     return value
@@ -194,10 +195,10 @@ def string_or_blank(card: Card, i: int, default=None):
 def nastran_value(text: str):
     """A field as NASTRAN reads it: int, real (also ``1.5-3`` = 1.5e-3), or the string."""
     t = text.strip().upper()
-    v = _to_int(t)
+    v = to_int(t)
     if v is not None:
         return v
-    v = _to_real(t)
+    v = to_real(t)
     return t if v is None else v
 
 

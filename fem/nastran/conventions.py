@@ -10,14 +10,14 @@ from trussid.fem.elements import frame_matrices, local_axes
 from trussid.fem.model import Model
 from trussid.fem.nastran.deck import BdfInfo
 
-__all__ = ['CONVENTIONS', 'ROD_SHEAR_FACTOR', 'BAR_SHEAR_FACTOR']
+__all__ = ['CONVENTIONS', 'ROD_SHEAR_FACTOR', 'BAR_SHEAR_FACTOR', 'nastran_mass_conventions']
 
 
 #: Build conventions :func:`read_bdf` can follow (``conventions=``), default first.
 CONVENTIONS = ("nx", "msc")
 
-#: Shear factor K1 = K2 of a PBARL/PBEAML ROD by build conventions (see :func:`_properties`):
-#: 0.9 as NX/Simcenter and the newer MSC builds convert it, 6/7 as an MSC 2012 build did.
+#: Shear factor K1 = K2 of a PBARL/PBEAML ROD by build conventions (see
+#: :func:`trussid.fem.nastran.line_properties.line_properties`): 0.9 as NX/Simcenter and the newer MSC builds convert it, 6/7 as an MSC 2012 build did.
 ROD_SHEAR_FACTOR = {"nx": 0.9, "msc": 6.0 / 7.0}
 
 #: Shear factor of a PBARL/PBEAML BAR: 5/6, as NASTRAN converts it (MSC 2012.2 on a deep
@@ -25,7 +25,7 @@ ROD_SHEAR_FACTOR = {"nx": 0.9, "msc": 6.0 / 7.0}
 BAR_SHEAR_FACTOR = 5.0 / 6.0
 
 
-def _nastran_mass_conventions(bdf, model: Model, nodes, props: dict, info: BdfInfo) -> None:
+def nastran_mass_conventions(bdf, model: Model, nodes, props: dict, info: BdfInfo) -> None:
     """NASTRAN's element mass where it differs from the textbook elements of fem.elements.
 
     ``nodes`` is the reader's node table (ids, coordinates). Each was found on real NASTRAN
@@ -35,7 +35,8 @@ def _nastran_mass_conventions(bdf, model: Model, nodes, props: dict, info: BdfIn
     * lumped CBEAM: the section's torsional inertia ``rho (I1 + I2) L / 2`` about the axis
       at each end (a CBAR's lumped mass has none);
     * coupled CBAR: no torsional inertia (the textbook element has ``rho (I1 + I2)``): done
-      in :func:`_add_bars`, exactly, by reading its structural mass as non-structural mass;
+      in :func:`trussid.fem.nastran.line_elements.add_bars`, exactly, by reading its
+      structural mass as non-structural mass;
     * coupled CROD/CONROD: axial ``m [[5/12, 1/12], [1/12, 5/12]]``, transverse lumped
       ``m / 2`` (the textbook rod interpolates all three translations linearly);
     * coupled shear-flexible CBEAM (NX) and CBAR (MSC 2013 and the MSC NAS102 workshop run):

@@ -16,7 +16,8 @@ from trussid.fem.nastran.cards import nastran_value, parse_deck
 from trussid.fem.nastran.entries import (CASE_SELECTED_CARDS, HANDLED_PARAMS, IGNORED_CARDS, MODE_PARAMS,
                                          NOTED_CARDS, RAW_CARDS, SUPPORTED_CARDS, THERMAL_CARDS)
 
-__all__ = ['EigenRequest', 'BdfInfo']
+__all__ = ['EigenRequest', 'BdfInfo', 'parse_bdf', 'check_cards', 'read_params', 'select_eigen',
+           'is_preload_run', 'case_values', 'case_int', 'case_has', 'components', 'grid_ids', 'raw_cards']
 
 
 @dataclass
@@ -102,13 +103,11 @@ class _RawParam:
     values: list
 
 
-_nastran_value = nastran_value
-
 #: Loads read for a preload (rigid format 13); otherwise they are ignored, never parsed.
 PRELOAD_CARDS = frozenset({"FORCE", "FORCE1", "MOMENT", "MOMENT1"})
 
 
-def _is_preload_run(sol: str | None, app: str | None) -> bool:
+def is_preload_run(sol: str | None, app: str | None) -> bool:
     """NASTRAN-95 rigid format 13: normal modes with differential stiffness."""
     return sol is not None and sol.split(",")[0] == "13" and app in (None, "DISP", "DISPLACEMENT")
 
@@ -120,7 +119,7 @@ def _check_solution(path: Path, sol: str | None, app: str | None, text: str) -> 
         raise ModelError(f"{path}: {statsub.group(0).strip()} asks for the modes of a structure preloaded by "
                          f"a static subcase with MSC/NX differential stiffness, which trussid does not compute "
                          f"(it does for NASTRAN-95 rigid format 13)")
-    if not _is_preload_run(sol, app):
+    if not is_preload_run(sol, app):
         return
     m = re.search(r"^\s*(CPSE[234])[\s,]+(\d+)", text, re.IGNORECASE | re.MULTILINE)
     if m:
@@ -134,7 +133,7 @@ def _check_solution(path: Path, sol: str | None, app: str | None, text: str) -> 
 TYPED_CARDS = SUPPORTED_CARDS - RAW_CARDS - {"PARAM", "EIGR", "ENDDATA"}
 
 
-def _parse(path: Path) -> Bulk:
+def parse_bdf(path: Path) -> Bulk:
     """The deck at ``path`` as typed entries; any malformed field is a one-line ModelError
     naming the file, line, entry and field."""
     path = Path(path)
@@ -150,7 +149,7 @@ def _parse(path: Path) -> Bulk:
     parsed = parse_deck(path)
     if not parsed.cards:
         raise ModelError(f"{path}: no bulk-data cards found")
-    typed = TYPED_CARDS | (PRELOAD_CARDS if _is_preload_run(parsed.sol, parsed.app) else frozenset())
+    typed = TYPED_CARDS | (PRELOAD_CARDS if is_preload_run(parsed.sol, parsed.app) else frozenset())
     return build_bulk(parsed, typed)
 
 
@@ -165,15 +164,15 @@ def _params(bdf: Bulk) -> dict:
     return params
 
 
-def _check_cards(bdf: Bulk, path: Path, info: BdfInfo) -> None:
+def check_cards(bdf: Bulk, path: Path, info: BdfInfo) -> None:
     """Every card must be translated or known to be harmless: list all the others.
 
     Unsupported element entries (shells, solids...) come first in the message: they are
     the reason a beam code cannot read the deck, the rest would follow from them.
     """
     counts = bdf.card_count
-    thermal_on = any(counts.get(c) for c in ("TEMPD", "TEMP")) or _case_values(bdf, "TEMPERATURE") \
-        or _case_values(bdf, "TEMP")
+    thermal_on = any(counts.get(c) for c in ("TEMPD", "TEMP")) or case_values(bdf, "TEMPERATURE") \
+        or case_values(bdf, "TEMP")
     bad, ignored = {}, {}
     for name, n in counts.items():
         if name in SUPPORTED_CARDS:
@@ -215,7 +214,7 @@ def _check_selected(bdf: Bulk, path: Path, name: str) -> None:
     """Refuse a noted entry that the case control makes count (:data:`CASE_SELECTED_CARDS`:
     rotordynamics through RGYRO, transfer functions through TFL)."""
     request = CASE_SELECTED_CARDS.get(name)
-    chosen = _case_values(bdf, request) if request else []
+    chosen = case_values(bdf, request) if request else []
     if not chosen:
         return
     first = bdf.raw[name][0].label() if bdf.raw.get(name) else name
@@ -253,7 +252,7 @@ def _param(bdf, name):
     return p.values[0]
 
 
-def _read_params(bdf, info: BdfInfo) -> None:
+def read_params(bdf, info: BdfInfo) -> None:
     wt = _param(bdf, "WTMASS")
     if wt is not None:
         if not (isinstance(wt, (int, float)) and math.isfinite(wt) and wt > 0):
@@ -287,7 +286,7 @@ def _read_params(bdf, info: BdfInfo) -> None:
                                    "(they take no part in the modes, as in NASTRAN's run)")
 
 
-def _comps(text, card: str) -> list[int]:
+def components(text, card: str) -> list[int]:
     """0-based components of a NASTRAN component string such as "123456"."""
     text = "" if text is None else str(text).strip()
     if any(ch not in "123456" for ch in text):
@@ -295,12 +294,7 @@ def _comps(text, card: str) -> list[int]:
     return sorted({int(ch) - 1 for ch in text})
 
 
-def _raw_fields(card) -> list[str]:
-    """A raw card's fields (upper case, stripped; ``""`` for blanks), name first."""
-    return list(card.fields)
-
-
-def _ints(fields: list[str], card: str) -> list[int]:
+def grid_ids(fields: list[str], card: str) -> list[int]:
     """Grid ids of a field list, with ``A THRU B`` expanded and blanks dropped."""
     out, i = [], 0
     fields = [f for f in fields if f]
@@ -317,7 +311,7 @@ def _ints(fields: list[str], card: str) -> list[int]:
     return out
 
 
-def _raw_cards(bdf: Bulk, name: str):
+def raw_cards(bdf: Bulk, name: str):
     """(id, fields) of every raw (untyped) ``name`` entry, in deck order."""
     for card in bdf.raw.get(name, []):
         f = list(card.fields)
@@ -327,15 +321,15 @@ def _raw_cards(bdf: Bulk, name: str):
             raise card.error(1, "no element id") from None
 
 
-def _case_values(bdf: Bulk, key: str) -> list:
+def case_values(bdf: Bulk, key: str) -> list:
     """Values of case-control ``key`` (e.g. "SPC", "METHOD") over the subcases, in order."""
     return bdf.case.values(key)
 
 
-def _case_int(bdf: Bulk, key: str) -> list:
+def case_int(bdf: Bulk, key: str) -> list:
     """Integer values of ``key`` (set ids), each checked."""
     out = []
-    for v in _case_values(bdf, key):
+    for v in case_values(bdf, key):
         try:
             out.append(int(v))
         except ValueError:
@@ -343,15 +337,15 @@ def _case_int(bdf: Bulk, key: str) -> list:
     return out
 
 
-def _case_has(bdf: Bulk, key: str) -> bool:
+def case_has(bdf: Bulk, key: str) -> bool:
     """Whether the case control has a ``key`` request anywhere (with options, e.g. EXTSEOUT(...))."""
     return bdf.case.has(key)
 
 
-def _select_eigen(bdf, info: BdfInfo) -> None:
+def select_eigen(bdf, info: BdfInfo) -> None:
     methods = {sid: m for sid, m in bdf.methods.items() if m.type == "EIGRL"}
     methods.update(_raw_eigrs(bdf))
-    chosen = _case_int(bdf, "METHOD")
+    chosen = case_int(bdf, "METHOD")
     if chosen:
         sid = chosen[0]
         if sid not in methods:
@@ -389,10 +383,10 @@ class _RawEigr:
 def _raw_eigrs(bdf) -> dict:
     """EIGR SID -> :class:`_RawEigr` (fields SID METHOD F1 F2 NE ND)."""
     out = {}
-    for sid, f in _raw_cards(bdf, "EIGR"):
+    for sid, f in raw_cards(bdf, "EIGR"):
         f = f + [""] * 8
         try:
-            num = [None if not v else _nastran_value(v) for v in f[3:7]]
+            num = [None if not v else nastran_value(v) for v in f[3:7]]
             f1, f2 = (None if v is None else float(v) for v in num[:2])
             ne, nd = (None if v is None else int(v) for v in num[2:])
         except (TypeError, ValueError):

@@ -11,11 +11,14 @@ triangle given) and IFO 1 (square, must be symmetric) of real terms (TIN 1 or 2)
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
-from trussid.fem.nastran.deck import BdfInfo, _case_values, _nastran_value
+from trussid.fem.nastran.cards import nastran_value
+from trussid.fem.nastran.deck import BdfInfo, case_values
 
 __all__ = ["DIRECT_MATRIX_REQUESTS"]
 
@@ -24,15 +27,26 @@ DIRECT_MATRIX_REQUESTS = {"K2GG": True, "M2GG": True, "B2GG": False, "K2PP": Fal
                           "B2PP": False}
 
 
-def _dmigs(bdf) -> dict:
-    """DMIG name -> {"ifo": int, "tin": int, "terms": [(gj, cj, gi, ci, a), ...]}."""
-    out: dict = {}
+@dataclass
+class _Dmig:
+    """A DMIG matrix as its entries give it: form, type of terms and the terms
+    ``(gj, cj, gi, ci, a)`` (column DOF, row DOF, value)."""
+
+    ifo: int | None = None  # None: no header entry
+    tin: int = 1
+    terms: list = field(default_factory=list)
+
+
+def _dmigs(bdf) -> dict[str, _Dmig]:
+    """DMIG name -> :class:`_Dmig`, header and columns gathered."""
+    out: dict[str, _Dmig] = {}
     for card in bdf.raw.get("DMIG", []):
         f = list(card.fields) + [""] * 9
         name = f[1]
         try:
             if f[2] in ("0", ""):
-                out.setdefault(name, {"terms": []}).update(ifo=int(f[3]), tin=int(f[4] or 1))
+                dmig = out.setdefault(name, _Dmig())
+                dmig.ifo, dmig.tin = int(f[3]), int(f[4] or 1)
                 continue
             gj, cj = int(f[2]), int(f[3] or 0)
             vals = f[5:]
@@ -40,18 +54,18 @@ def _dmigs(bdf) -> dict:
             for k in range(0, len(vals) - 3, 4):
                 if not vals[k]:
                     continue
-                terms.append((gj, cj, int(vals[k]), int(vals[k + 1] or 0), float(_nastran_value(vals[k + 2]))))
+                terms.append((gj, cj, int(vals[k]), int(vals[k + 1] or 0), float(nastran_value(vals[k + 2]))))
         except (ValueError, TypeError):
             raise ModelError(f"{card.file}, line {card.line}: DMIG {name}: malformed entry "
                              f"({', '.join(card.fields[:6])})") from None
-        out.setdefault(name, {"terms": []})["terms"].extend(terms)
+        out.setdefault(name, _Dmig()).terms.extend(terms)
     return out
 
 
 def _selected(bdf, request: str) -> list:
     """[(scale, name), ...] of a case-control matrix request (``K2GG = 1.25*KAAX, KBB``; the
     first value given)."""
-    values = _case_values(bdf, request)
+    values = case_values(bdf, request)
     if not values:
         return []
     out = []
@@ -62,7 +76,7 @@ def _selected(bdf, request: str) -> list:
         if "*" in item:
             scale, name = item.split("*", 1)
             try:
-                out.append((float(_nastran_value(scale)), name.strip()))
+                out.append((float(nastran_value(scale)), name.strip()))
             except (TypeError, ValueError):
                 raise ModelError(f"case control {request} = {values[0]}: scale {scale.strip()!r} is not a number") from None
         else:
@@ -92,21 +106,21 @@ def add_direct_matrices(bdf, model: Model, info: BdfInfo, dof_matrix) -> None:
                                  f"direct mass is scaled by WTMASS differs between builds; give it in mass units "
                                  f"and WTMASS 1.0")
             _add_dmig(model, name, dmigs[name], scale, "K" if request == "K2GG" else "M", dof_matrix)
-            info.notes.append(f"{request} = {name}: DMIG {name} added ({len(dmigs[name]['terms'])} terms"
+            info.notes.append(f"{request} = {name}: DMIG {name} added ({len(dmigs[name].terms)} terms"
                               f"{f', scaled by {scale:g}' if scale != 1.0 else ''})")
     idle = sorted(set(dmigs) - used)
     if idle:
         info.notes.append(f"DMIG {', '.join(idle[:5])}: not selected by K2GG or M2GG: no effect, not used")
 
 
-def _add_dmig(model: Model, name: str, dmig: dict, scale: float, kind: str, dof_matrix) -> None:
+def _add_dmig(model: Model, name: str, dmig: _Dmig, scale: float, kind: str, dof_matrix) -> None:
     card = f"DMIG {name}"
-    ifo = dmig.get("ifo")
+    ifo = dmig.ifo
     if ifo not in (1, 6):
         raise ModelError(f"{card}: form IFO = {ifo} is not supported (6 symmetric, 1 square)")
-    if dmig.get("tin", 1) not in (1, 2):
-        raise ModelError(f"{card}: complex terms (TIN = {dmig.get('tin')}) are not supported")
-    terms = dmig["terms"]
+    if dmig.tin not in (1, 2):
+        raise ModelError(f"{card}: complex terms (TIN = {dmig.tin}) are not supported")
+    terms = dmig.terms
     dofs = list(dict.fromkeys([(gj, cj) for gj, cj, *_ in terms] + [(gi, ci) for _, _, gi, ci, _ in terms]))
     pos = {d: k for k, d in enumerate(dofs)}
     A = np.zeros((len(dofs), len(dofs)))

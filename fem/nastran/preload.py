@@ -22,7 +22,7 @@ import numpy as np
 from trussid.fem.elements import local_axes, to_global
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
-from trussid.fem.nastran.deck import BdfInfo, _case_int
+from trussid.fem.nastran.deck import BdfInfo, case_int
 from trussid.fem.static import solve_static
 
 __all__ = ["frame_differential_stiffness"]
@@ -92,7 +92,7 @@ def add_preload_stiffness(bdf, model: Model, nodes, info: BdfInfo, rect_frame) -
     ``nodes`` is the reader's node table and ``rect_frame(bdf, cid, card)`` its rectangular
     system lookup (the reader imports this module, so they are passed in).
     """
-    chosen = _case_int(bdf, "LOAD")
+    chosen = case_int(bdf, "LOAD")
     if not chosen:
         raise ModelError("SOL 13 (normal modes with differential stiffness): no LOAD in the case control "
                          "for the static preload")

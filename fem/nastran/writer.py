@@ -8,7 +8,7 @@ import os
 import numpy as np
 
 from trussid._util.files import atomic_path
-from trussid.fem.assembly import _coo, beam_matrices, general_blocks, mass_blocks
+from trussid.fem.assembly import sum_blocks, beam_matrices, general_blocks, mass_blocks
 from trussid.fem.errors import ModelError
 from trussid.fem.model import Model
 from trussid.fem.nastran.reader import read_bdf
@@ -157,9 +157,9 @@ def write_bdf(model: Model, path: str | os.PathLike, n_modes: int | None = 20,
     grids only: elsewhere NASTRAN adds a lever arm the model's spring does not have); RBE2
     (a rigid body's mass as a CONM2 at its master, CID = 0, offset to its cg); SPC1 (set 1);
     PARAM,COUPMASS (1 consistent, -1 lumped); EIGRL. NASTRAN's coupled CROD and CBAR mass differ
-    from the model's textbook consistent mass (see :func:`_nastran_mass_conventions`): the
-    difference is written as CMASS2 scalar masses, so that the deck NASTRAN solves is the
-    model itself. Element ids that clash across kinds are
+    from the model's textbook consistent mass (see
+    :func:`~trussid.fem.nastran.conventions.nastran_mass_conventions`): the difference is
+    written as CMASS2 scalar masses, so that the deck NASTRAN solves is the model itself. Element ids that clash across kinds are
     renumbered above the largest id. Values are written in 16-character fields so that a
     re-read model matches to about 1e-12 (16-character fields).
 
@@ -244,7 +244,7 @@ def _global_mass(model: Model):
     _, Mb, db = beam_matrices(model)
     ms, dm = mass_blocks(model)
     _, mg, dg = general_blocks(model)
-    return _coo([Mb] + ms + mg, [db] + dm + dg, model.n_dof)
+    return sum_blocks([Mb] + ms + mg, [db] + dm + dg, model.n_dof)
 
 
 #: Mass entries of the written deck's difference from the model below this fraction of
@@ -257,8 +257,8 @@ def _write_mass_corrections(bdf, model: Model, deck, eid_for) -> int:
 
     NASTRAN's coupled CBAR mass has no torsional inertia, its coupled CROD mass is not the
     textbook rod's and its shear-flexible coupled mass drops the rotary inertia
-    (:func:`_nastran_mass_conventions`). The deck is read back as NASTRAN would run it and
-    the difference ``dM`` from the model's mass is added as scalar masses: ``-dM_ij``
+    (:func:`~trussid.fem.nastran.conventions.nastran_mass_conventions`). The deck is read
+    back as NASTRAN would run it and the difference ``dM`` from the model's mass is added as scalar masses: ``-dM_ij``
     between components ``i`` and ``j`` (a CMASS2 adds its value to both diagonals and
     subtracts it off the diagonal), and on each diagonal the rest, grounded. NASTRAN takes
     negative scalar masses; the sum is the model's positive semi-definite mass. Returns the

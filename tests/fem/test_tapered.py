@@ -14,6 +14,7 @@ import pytest
 from trussid.fem.elements import frame_matrices
 from trussid.fem.modal import solve_modes
 from trussid.fem.nastran import read_bdf
+from trussid.fem.properties import SectionArrays
 from trussid.fem.tapered import tapered_frame_matrices
 
 E, G, RHO = 70e9, 26e9, 2700.0
@@ -24,9 +25,10 @@ E, G, RHO = 70e9, 26e9, 2700.0
 def test_a_uniform_section_gives_the_textbook_element(theory, mass):
     L = np.array([0.7, 1.3])
     A, Iy, Iz, J = 2e-4, 3e-9, 5e-9, 4e-9
-    K, M = tapered_frame_matrices(L, [0.0, 0.4, 1.0], lambda xi: dict(A=A, Iy=Iy, Iz=Iz, J=J, Asy=0.8 * A,
-                                                                      Asz=0.7 * A, nsm=0.3),
-                                  E, G, RHO, theory=theory, mass=mass, torsion_lumped=False)
+    K, M = tapered_frame_matrices(L, [0.0, 0.4, 1.0], lambda xi: SectionArrays(A=A, Iy=Iy, Iz=Iz, J=J, Asy=0.8 * A,
+                                                                               Asz=0.7 * A),
+                                  E, G, RHO, nsm_at=lambda xi: np.full(len(xi), 0.3), theory=theory, mass=mass,
+                                  torsion_lumped=False)
     full = lambda v: np.full(2, v)
     K0, M0 = frame_matrices(L, full(A), full(Iy), full(Iz), full(J), full(E), full(G), full(RHO), nsm=0.3,
                             Asy=0.8 * A, Asz=0.7 * A, theory=theory, mass=mass)
@@ -34,8 +36,8 @@ def test_a_uniform_section_gives_the_textbook_element(theory, mass):
     if theory == "euler-bernoulli" or mass == "lumped":  # the Timoshenko element adds rotary inertia
         np.testing.assert_allclose(M, M0, rtol=0, atol=1e-12 * np.abs(M0).max())
     if mass == "lumped":  # NASTRAN's lumped CBEAM: torsional inertia rho (I1 + I2) L / 2 per end
-        Mt = tapered_frame_matrices(L, [0.0, 1.0], lambda xi: dict(A=A, Iy=Iy, Iz=Iz, J=J, Asy=np.inf, Asz=np.inf,
-                                                                   nsm=0.0), E, G, RHO, mass="lumped")[1]
+        Mt = tapered_frame_matrices(L, [0.0, 1.0], lambda xi: SectionArrays(A=A, Iy=Iy, Iz=Iz, J=J),
+                                   E, G, RHO, mass="lumped")[1]
         np.testing.assert_allclose(Mt[:, 3, 3], RHO * (Iy + Iz) * L / 2, rtol=1e-13)
         np.testing.assert_allclose(Mt[:, 9, 9], RHO * (Iy + Iz) * L / 2, rtol=1e-13)
 
@@ -46,8 +48,8 @@ def test_one_element_has_the_closed_form_flexibility_of_a_tapered_cantilever():
     P L^3 / (E I_a a^3) (r^2 ln r - 2 r a + (r^2 - 1) / 2), a = r - 1 (integral of
     (L - x)^2 / E I(x)); tip rotation under a tip moment L ln r / (E I_a a)."""
     L, r, Aa, Ia = 1.5, 3.0, 1e-4, 2e-9
-    at = lambda xi: dict(A=Aa * (1 + (r - 1) * xi), Iy=Ia * (1 + (r - 1) * xi), Iz=Ia * (1 + (r - 1) * xi),
-                         J=Ia * (1 + (r - 1) * xi), Asy=np.inf, Asz=np.inf, nsm=0.0)
+    at = lambda xi: SectionArrays(A=Aa * (1 + (r - 1) * xi), Iy=Ia * (1 + (r - 1) * xi),
+                                  Iz=Ia * (1 + (r - 1) * xi), J=Ia * (1 + (r - 1) * xi))
     K, _ = tapered_frame_matrices(np.array([L]), [0.0, 1.0], at, E, G, RHO)
     flex = np.linalg.inv(K[0][6:, 6:])   # end A clamped
     a = r - 1
@@ -131,17 +133,18 @@ def test_element_stiffness_is_the_limit_of_finely_subdivided_uniform_sections(th
     error, and the integrated element lies within that bound (1e-9)."""
     L = 0.8
     kink = [0.0, 0.4, 1.0]
-    at = lambda xi: dict(A=np.interp(xi, kink, [2e-4, 1.2e-4, 1e-4]), Iy=np.interp(xi, kink, [6e-9, 3e-9, 2e-9]),
-                         Iz=np.interp(xi, kink, [9e-9, 5e-9, 2e-9]), J=np.interp(xi, kink, [9e-9, 6e-9, 3e-9]),
-                         Asy=0.8 * np.interp(xi, kink, [2e-4, 1.2e-4, 1e-4]),
-                         Asz=0.7 * np.interp(xi, kink, [2e-4, 1.2e-4, 1e-4]), nsm=0.0)
+    at = lambda xi: SectionArrays(A=np.interp(xi, kink, [2e-4, 1.2e-4, 1e-4]),
+                                  Iy=np.interp(xi, kink, [6e-9, 3e-9, 2e-9]),
+                                  Iz=np.interp(xi, kink, [9e-9, 5e-9, 2e-9]), J=np.interp(xi, kink, [9e-9, 6e-9, 3e-9]),
+                                  Asy=0.8 * np.interp(xi, kink, [2e-4, 1.2e-4, 1e-4]),
+                                  Asz=0.7 * np.interp(xi, kink, [2e-4, 1.2e-4, 1e-4]))
     K = tapered_frame_matrices(np.array([L]), kink, at, E, G, RHO, theory=theory)[0][0]
 
     def chain(S: int) -> np.ndarray:
         mid = (np.arange(S) + 0.5) / S
         p = at(mid)
-        Ke = frame_matrices(np.full(S, L / S), p["A"], p["Iy"], p["Iz"], p["J"], np.full(S, E), np.full(S, G),
-                            np.full(S, RHO), Asy=p["Asy"], Asz=p["Asz"], theory=theory)[0]
+        Ke = frame_matrices(np.full(S, L / S), p.A, p.Iy, p.Iz, p.J, np.full(S, E), np.full(S, G),
+                            np.full(S, RHO), Asy=p.Asy, Asz=p.Asz, theory=theory)[0]
         Kc = np.zeros((6 * (S + 1), 6 * (S + 1)))
         for e in range(S):
             Kc[6 * e:6 * e + 12, 6 * e:6 * e + 12] += Ke[e]
