@@ -17,7 +17,7 @@ except ImportError:  # the pure-numpy path of recursion_kernel gives the same re
     numba = None
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "njit", "csr"]
+__all__ = ["HAVE_NUMBA", "njit", "csr", "state_sequence"]
 
 # fastmath without the finite-math flags: the recursion must carry NaN/inf through (the
 # estimator reports a broken run instead of raising), which "nnan"/"ninf" would break.
@@ -127,3 +127,46 @@ def _bookkeep(z, P, k, k_done, q, d, track, hist, hist_every, hrow, out):
     if hist_every > 0 and (k_done + k + 1) % hist_every == 0:
         for i in range(q):
             hist[hrow, i] = z[i]
+
+
+def _state_sequence(At, Bu, x, X):
+    """``X[k] = x_k`` of ``x_{k+1} = A x_k + Bu[k]``, ``At = A^T`` (see
+    :func:`state_sequence`); ``x`` is overwritten."""
+    n = x.shape[0]
+    xn = np.empty(n)
+    for k in range(Bu.shape[0]):
+        for i in range(n):
+            X[k, i] = x[i]
+        for j in range(n):
+            acc = Bu[k, j]
+            for i in range(n):
+                acc += x[i] * At[i, j]
+            xn[j] = acc
+        for j in range(n):
+            x[j] = xn[j]
+
+
+# no fastmath here: a plain simulation is compared with other simulations to rounding
+_state_sequence_compiled = (numba.njit(cache=True, nogil=True)(_state_sequence)
+                            if HAVE_NUMBA else None)
+
+
+def state_sequence(A: np.ndarray, Bu: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """States ``x_0 .. x_{N-1}`` of ``x_{k+1} = A x_k + Bu[k]`` as rows (N, n).
+
+    Compiled when numba is there (a simulation of 5114 samples at 30 states: about 1 ms
+    against 14 ms for the numpy loop, which ``identify`` runs a dozen times); else the
+    numpy loop.
+    """
+    A = np.asarray(A, float)
+    Bu = np.ascontiguousarray(Bu, dtype=float)
+    x = np.array(x0, dtype=float).reshape(-1)
+    X = np.empty((Bu.shape[0], x.size))
+    At = np.ascontiguousarray(A.T)
+    if _state_sequence_compiled is not None and np.all(np.isfinite(At)):
+        _state_sequence_compiled(At, Bu, x, X)
+        return X
+    for k in range(Bu.shape[0]):
+        X[k] = x
+        x = x @ At + Bu[k]
+    return X
