@@ -20,6 +20,10 @@ BLAS calls carry 69 % of the flops in 22 % of the time). Compiling the same dens
 arithmetic gained nothing (the first attempt, recorded in ``recursion_direct``); using the
 structure is what gains. ``benchmarks/bench_plid.py`` times both beside each other.
 
+The module is this dispatch and the pure-numpy fallback; the compiled loops live in
+:mod:`trussid.plid.kernel_direct` (direct form), :mod:`trussid.plid.kernel_sqrt`
+(square-root form) and :mod:`trussid.plid.kernel_common` (what they share).
+
 Without numba (``HAVE_NUMBA`` False) the same functions run the reference steps sample by
 sample: same results, at the reference speed. The kernels are compiled on first use and
 cached on disk (``cache=True``): the first call in a fresh environment costs the compile
@@ -30,15 +34,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from trussid.plid.kernel_common import HAVE_NUMBA, csr
+from trussid.plid.kernel_direct import direct_kernel
+from trussid.plid.kernel_sqrt import sqrt_kernel
 from trussid.plid.recursion_common import Problem, psd_factor
 from trussid.plid.recursion_direct import DirectState, direct_step
 from trussid.plid.recursion_sqrt import SqrtState, sqrt_step
 
-from trussid.plid.kernel_common import HAVE_NUMBA, csr
-from trussid.plid.kernel_direct import direct_kernel
-from trussid.plid.kernel_sqrt import sqrt_kernel
-
 __all__ = ["HAVE_NUMBA", "KernelRun", "run_direct", "run_sqrt", "compiled"]
+
 
 class KernelRun:
     """What one block of samples left besides the state: the innovations go to ``E``.
