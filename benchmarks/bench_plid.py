@@ -324,6 +324,21 @@ def speed_table(rows) -> str:
     return "\n".join(lines)
 
 
+def speed_acceptance(rows) -> str:
+    """Issue 34's acceptance 2, target beside measured: the compiled square-root form (the
+    streaming API's default) and the direct form at each target shape."""
+    lines = []
+    for r in rows:
+        if r.get("engine") != "compiled" or not r.get("target_cpu_sps"):
+            continue
+        ok = r["cpu_sps_best"] >= r["target_cpu_sps"]
+        lines.append(f"acceptance 2: ({r['states']},{r['inputs']},{r['outputs']}) {r['basis']} "
+                     f"{r['form']}: {r['cpu_sps_best']:.0f} samples per CPU s (median "
+                     f"{r['cpu_sps_median']:.0f}), target {r['target_cpu_sps']:.0f}: "
+                     f"{'met' if ok else 'NOT met'}")
+    return "\n".join(lines)
+
+
 def machine() -> dict:
     cpu = "unknown"
     try:
@@ -368,6 +383,7 @@ def main(argv=None):
     if "speed" in args.which:
         report["speed"] = speed(1000, 1, shapes=((12, 1, 3),)) if args.quick else speed()
         print(speed_table(report["speed"]))
+        print(speed_acceptance(report["speed"]))
         if not args.quick:
             report["compile"] = compile_cost()
     report["machine_end"] = machine()

@@ -220,13 +220,21 @@ def _general_transform(A: np.ndarray, C: np.ndarray, basis: ObserverBasis):
     """
     n, p = basis.n, basis.p
     F, Cb = basis.F, basis.C
+    # (-F) T + T A = e_i C_j for all n p right-hand sides. This is
+    # scipy.linalg.solve_sylvester's Bartels-Stewart step by step, with the two real Schur
+    # forms computed once instead of once per right-hand side (they were 90 % of its
+    # cost: 0.12 of identify's 1.5 CPU s on the subframe record at 30 states).
+    r, uf = scipy.linalg.schur(-F, output="real")
+    s, va = scipy.linalg.schur(A.T, output="real")
+    trsyl, = scipy.linalg.get_lapack_funcs(("trsyl",), (r, s))
+    CV = C @ va                                   # u^T (e_i C_j) v = outer(u[i], C_j v)
     Ts = []
     for j in range(p):
         for i in range(n):
-            rhs = np.zeros((n, n))
-            rhs[i] = C[j]
-            # solve_sylvester solves a X + X b = q: here (-F) T + T A = e_i C_j.
-            Ts.append(scipy.linalg.solve_sylvester(-F, A, rhs))
+            y, scale, info = trsyl(r, s, np.outer(uf[i], CV[j]), tranb="C")
+            if info < 0:
+                raise np.linalg.LinAlgError(f"illegal value in the {-info}-th argument of trsyl")
+            Ts.append(scale * (uf @ y @ va.T))
     M = np.column_stack([(Cb @ T).ravel() for T in Ts])  # (p n, n p)
     cond = np.linalg.cond(M)
     if not np.isfinite(cond) or cond > 1e14:

@@ -29,6 +29,7 @@ import scipy.signal
 
 from trussid.plid.data import IOData
 from trussid.plid.errors import DataError
+from trussid.plid.kernel_common import state_sequence
 from trussid.plid.stability import require_stable
 
 EXCITATIONS = ("white", "prbs", "chirp", "multisine")
@@ -230,13 +231,8 @@ def simulate(plant: control.StateSpace, u: np.ndarray, x0=None) -> np.ndarray:
                         f"{u.shape[1]} columns")
     A, B, C, D = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))
     n = A.shape[0]
-    Bu = u @ B.T
-    X = np.empty((u.shape[0], n))
     x = np.zeros(n) if x0 is None else np.broadcast_to(np.asarray(x0, float), (n,)).copy()
-    At = np.ascontiguousarray(A.T)
-    for k in range(u.shape[0]):
-        X[k] = x
-        x = x @ At + Bu[k]
+    X = state_sequence(A, u @ B.T, x)
     return X @ C.T + u @ D.T
 
 

@@ -1,0 +1,367 @@
+"""The square-root-form PLID recursion compiled (the loop of
+:func:`trussid.plid.recursion_kernel.run_sqrt`; its reference is
+:func:`trussid.plid.recursion_sqrt.sqrt_step`, see :mod:`trussid.plid.recursion_kernel`
+for what the compiled form changes and why)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from trussid.plid.kernel_common import _bookkeep, _psd_factor, njit
+
+__all__ = ["sqrt_kernel"]
+
+
+@njit
+def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r):
+    """All p whitened Carlson updates on their generators, then ``L[:, :J] <- L T``."""
+    # Long: the p scalar updates share their generators (f, a, w, V) and the product with
+    # L uses them all; split, the same work arrays would only be passed around.
+    p, n = Hw.shape
+    d = L.shape[0]
+    for k in range(p):
+        for j in range(J):
+            acc = 0.0
+            for i in range(n):
+                acc += Hw[k, i] * L[q + i, j]
+            Gm[k, j] = acc
+    for j in range(J):
+        D[j] = 1.0
+        wsum[j] = 0.0
+    for k in range(p):
+        hx = 0.0
+        for i in range(n):
+            hx += Hw[k, i] * z[q + i]
+        # f = (T_1 ... T_{k-1})^T g: D g + V_j . (sum_{i > j} g_i U_i)
+        for r in range(k):
+            acc_r[r] = 0.0
+        for j in range(J - 1, -1, -1):
+            g = Gm[k, j]
+            fj = D[j] * g
+            for r in range(k):
+                fj += V[j, r] * acc_r[r]
+            for r in range(k):
+                acc_r[r] += g * U[j, r]
+            f[j] = fj
+        # a_j = 1 + sum_{i >= j} f_i^2
+        acc = 0.0
+        a[J] = 1.0
+        for j in range(J - 1, -1, -1):
+            acc += f[j] * f[j]
+            a[j] = acc + 1.0
+        # w = (T_1 ... T_{k-1}) f and the new V columns, one forward pass
+        for r in range(k):
+            acc_r[r] = 0.0
+        for j in range(J):
+            s = np.sqrt(a[j] * a[j + 1])
+            dj = a[j + 1] / s
+            bj = -f[j] / s
+            wj = D[j] * f[j]
+            for r in range(k):
+                wj += U[j, r] * acc_r[r]
+                incl = acc_r[r] + V[j, r] * f[j]
+                V[j, r] = V[j, r] * dj - incl * bj
+                acc_r[r] = incl
+            w[j] = wj
+            V[j, k] = bj
+            D[j] *= dj
+        innov = yw[k] - hx
+        for j in range(J):
+            innov -= Gm[k, j] * wsum[j]
+        sc = innov / a[0]
+        for j in range(J):
+            wsum[j] += w[j] * sc
+            U[j, k] = w[j]
+    for j in range(J):
+        c = wsum[j]
+        for i in range(j, d):
+            z[i] += L[i, j] * c
+    # L T column by column from the right: (L T)[:, j] = D_j L[:, j] + M_j V_j with
+    # M_j = sum_{i > j} L[:, i] U_i^T (p x d, stored transposed), accumulated as j decreases.
+    M = np.zeros((p, d))
+    col = np.empty(d)
+    for j in range(J - 1, -1, -1):
+        # one-dimensional contiguous views and one store per loop: what lets LLVM vectorise
+        Lj = L[j:, j]
+        cj = col[j:]
+        dj = D[j]
+        for i in range(cj.size):
+            cj[i] = dj * Lj[i]
+        for r in range(p):
+            Mr = M[r, j:]
+            v = V[j, r]
+            for i in range(cj.size):
+                cj[i] += Mr[i] * v
+        for r in range(p):
+            Mr = M[r, j:]
+            u = U[j, r]
+            for i in range(cj.size):
+                Mr[i] += Lj[i] * u
+        for i in range(cj.size):
+            Lj[i] = cj[i]
+
+
+@njit
+def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
+               xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
+    """The square-root time update of one sample (as sqrt_step's); False at a non-finite
+    moment, where the reference raises.
+
+    ``L`` is Fortran-ordered (the measurement update works on its columns), so every loop
+    here runs its innermost index down a column: the factor rows the reference multiplies
+    as matrices are read column by column.
+    """
+    # Long: the moments, the new x rows and the LQ of the x block are one step of the
+    # reference; split further they would only pass the same work arrays around.
+    q = n * (p + m)
+    d = q + n
+    np_ = n * p
+    nb = p + m
+    for c in range(p):
+        for a in range(n):
+            Abar[a, c] = z[c * n + a]
+            AbarT[c, a] = z[c * n + a]
+    for j in range(m):
+        for a in range(n):
+            Bm[a, j] = z[np_ + j * n + a]
+    for r in range(p):
+        acc = 0.0
+        for t in range(Cp[r], Cp[r + 1]):
+            acc += Cx[t] * z[q + Ci[t]]
+        coef[r] = acc
+    for j in range(m):
+        coef[p + j] = uk[j]
+    # CL = C L[x, :] (factor rows of C x, i.e. of -v)
+    for i in range(d):
+        for r in range(p):
+            acc = 0.0
+            for t in range(Cp[r], Cp[r + 1]):
+                acc += Cx[t] * L[q + Ci[t], i]
+            CL[r, i] = acc
+    for r in range(p):
+        for l in range(p):
+            acc = 0.0
+            for i in range(d):
+                acc += CL[r, i] * CL[l, i]
+            Sv[r, l] = acc
+    # c3[l, j n + a] = (L_A CL_A^T)[j n + a, l] (the reference's c3[j, a, l]); L_A =
+    # L[:np, :np] is lower triangular
+    for l in range(p):
+        c3l = c3[l]
+        for ra in range(np_):
+            c3l[ra] = 0.0
+        for i in range(np_):
+            f = CL[l, i]
+            Li = L[i:np_, i]
+            for t in range(Li.size):
+                c3l[i + t] += Li[t] * f
+    for a in range(n):
+        acc = 0.0
+        for t in range(Fp[a], Fp[a + 1]):
+            acc += Fx[t] * z[q + Fi[t]]
+        for c in range(p):
+            acc += Abar[a, c] * coef[c]
+        for j in range(m):
+            acc += Bm[a, j] * coef[p + j]
+        for j in range(p):
+            acc += c3[j, j * n + a]
+        xn[a] = acc
+    # second-order moments: sum_k G_k G_k^T with G_k = sum_j Ws[j, k] L_aj (Sv = Ws Ws^T)
+    if not _psd_factor(Sv, Ws):
+        return False
+    for a in range(n):
+        for b2 in range(n):
+            W[a, b2] = Q[a, b2]
+    _add_block_gram(L, Ws, 0, np_, n, Gt, W)
+    for a in range(n):
+        for b2 in range(n):
+            acc = 0.0
+            for j in range(p):
+                for l in range(p):
+                    acc += c3[l, j * n + a] * c3[j, l * n + b2]
+            W[a, b2] += acc
+    if has_N:
+        # input noise sum_jl N[j, l] (L_bj L_bl^T + b_j b_l^T), with N = Wn Wn^T
+        _add_block_gram(L, Wn, np_, q, n, Gt, W)
+        for a in range(n):
+            for b2 in range(n):
+                acc = 0.0
+                for k in range(m):
+                    ga = 0.0
+                    gb = 0.0
+                    for j in range(m):
+                        ga += Bm[a, j] * Wn[j, k]
+                        gb += Bm[b2, j] * Wn[j, k]
+                    acc += ga * gb
+                W[a, b2] += acc
+    for a in range(n):
+        for b2 in range(a):
+            h = 0.5 * (W[a, b2] + W[b2, a])
+            W[a, b2] = h
+            W[b2, a] = h
+    if not _psd_factor(W, Wf):
+        return False
+    # new x rows, column by column: L_x <- Phi L_t + A_hat L_x with A_hat = F + Abar C
+    for i in range(d):
+        Lx = L[q:, i]
+        for a in range(n):
+            acc = 0.0
+            for t in range(Fp[a], Fp[a + 1]):
+                acc += Fx[t] * Lx[Fi[t]]
+            col[a] = acc
+        for c in range(p):
+            v = CL[c, i]
+            Ac = AbarT[c]
+            for a in range(n):
+                col[a] += Ac[a] * v
+        if i < q:
+            for b in range(nb):
+                f = coef[b]
+                Lb = L[b * n:(b + 1) * n, i]
+                for a in range(n):
+                    col[a] += f * Lb[a]
+            for a in range(n):
+                Lx[a] = col[a]
+        else:
+            for a in range(n):
+                pre[a, i - q] = col[a]          # pre = [A_hat L_xx, Wf], n x 2n
+    # L_xx from the LQ of [A_hat L_xx, Wf] (the reference: the R of the QR of its transpose)
+    for a in range(n):
+        for i in range(n):
+            pre[a, n + i] = Wf[a, i]
+    for a in range(n):
+        for i in range(2 * n):
+            if not np.isfinite(pre[a, i]):
+                return False
+    _lq_rows(pre)
+    for a in range(n):
+        for i in range(n):
+            L[q + a, q + i] = pre[a, i] if i <= a else 0.0
+    for a in range(n):
+        z[q + a] = xn[a]
+    return True
+
+
+@njit
+def _lq_rows(M):
+    """In place: the first columns of ``M`` (r x c, r <= c, C-ordered) become the lower
+    triangle ``L`` with ``L L^T = M M^T``: Householder reflections applied from the right,
+    LAPACK's sign convention (``dlarfg``: the diagonal is ``-sign(alpha) |x|``), so that
+    it equals the reference's ``qr(M.T, mode='r').T``. Written out because only the
+    triangle is wanted: numba's ``np.linalg.qr`` also forms Q and copies, 3x the time."""
+    r, c = M.shape
+    v = np.empty(c)
+    for k in range(r):
+        Mk = M[k]
+        alpha = Mk[k]
+        xn2 = 0.0
+        for j in range(k + 1, c):
+            xn2 += Mk[j] * Mk[j]
+        if xn2 == 0.0:
+            continue
+        nrm = np.sqrt(alpha * alpha + xn2)
+        beta = -nrm if alpha >= 0.0 else nrm
+        tau = (beta - alpha) / beta
+        scale = 1.0 / (alpha - beta)
+        v[k] = 1.0
+        for j in range(k + 1, c):
+            v[j] = Mk[j] * scale
+        Mk[k] = beta
+        for j in range(k + 1, c):
+            Mk[j] = 0.0
+        for i in range(k + 1, r):
+            Mi = M[i]
+            acc = Mi[k]
+            for j in range(k + 1, c):
+                acc += Mi[j] * v[j]
+            acc *= tau
+            Mi[k] -= acc
+            for j in range(k + 1, c):
+                Mi[j] -= acc * v[j]
+
+
+@njit
+def _add_block_gram(L, Wk, r0, r1, n, Gt, W):
+    """``W += sum_k G_k G_k^T`` with ``G_k = sum_j Wk[j, k] L[r0 + j n:, :r1]`` over the n-row
+    blocks of ``L[r0:r1, :r1]`` (lower triangular: block j is zero beyond column
+    ``r0 + (j + 1) n``). The G_k are stacked transposed in ``Gt`` and the Gram is one BLAS
+    product: it carries most of the time update's flops, which scalar loops do 5x slower."""
+    nbk = (r1 - r0) // n
+    nk = Wk.shape[1]
+    for kk in range(nk):
+        G = Gt[kk * r1:(kk + 1) * r1]
+        for i in range(r1):
+            for a in range(n):
+                G[i, a] = 0.0
+        for j in range(nbk):
+            f = Wk[j, kk]
+            if f != 0.0:
+                base = r0 + j * n
+                for i in range(base + n):
+                    Li = L[base:base + n, i]
+                    Gi = G[i]
+                    for a in range(n):
+                        Gi[a] += f * Li[a]
+    Gs = Gt[:nk * r1]
+    W += np.dot(Gs.T, Gs)
+
+
+@njit
+def sqrt_kernel(z, L, Fp, Fi, Fx, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
+                 us, ys, E, hist, hist_every, k_done, n, p, m, out):
+    # Long: one compiled loop over the samples is the point of this module; its stages
+    # follow sqrt_step's (measurement, moments, new x rows, LQ of the x block).
+    q = n * (p + m)
+    d = q + n
+    np_ = n * p
+    nb = p + m
+    Gm = np.empty((p, J))
+    D = np.empty(J)
+    U = np.empty((J, p))
+    V = np.empty((J, p))
+    wsum = np.empty(J)
+    fv = np.empty(J)
+    av = np.empty(J + 1)
+    wv = np.empty(J)
+    acc_r = np.empty(p)
+    yw = np.empty(p)
+    Abar = np.empty((n, p))
+    Bm = np.empty((n, m))
+    coef = np.empty(nb)
+    xn = np.empty(n)
+    CL = np.empty((p, d))
+    Sv = np.empty((p, p))
+    Ws = np.empty((p, p))
+    c3 = np.empty((p, np_))
+    Gt = np.empty((max(p, m) * q, n))
+    W = np.empty((n, n))
+    Wf = np.empty((n, n))
+    col = np.empty(n)
+    AbarT = np.empty((p, n))
+    pre = np.empty((n, 2 * n))          # [A_hat L_xx, Wf], for the LQ
+    hrow = 0
+    out[0] = -1
+    out[1] = -1
+    for k in range(us.shape[0]):
+        for r in range(p):
+            acc = 0.0
+            for t in range(Cp[r], Cp[r + 1]):
+                acc += Cx[t] * z[q + Ci[t]]
+            E[k, r] = ys[k, r] - acc
+        for r in range(p):
+            acc = 0.0
+            for l in range(p):
+                acc += Rw[r, l] * ys[k, l]
+            yw[r] = acc
+        _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r)
+        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT,
+                          Bm, coef, xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
+            # a non-finite moment: where the reference raises and PLID._one marks the
+            # estimate NaN (the rest of this sample's time update is skipped, as there)
+            if out[1] < 0:
+                out[1] = k
+            for i in range(d):
+                z[i] = np.nan
+        _bookkeep(z, L, k, k_done, q, d, False, hist, hist_every, hrow, out)
+        if hist_every > 0 and (k_done + k + 1) % hist_every == 0:
+            hrow += 1
