@@ -164,14 +164,33 @@ class Procedure:
                 + f"; it is stable on the model with a {self.disk_gain_db:.1f} dB disk margin")
 
     def lines(self) -> list:
-        """The per-target report: damping reached and what limited it."""
+        """The per-target report, in plain words: the damping reached on the model and,
+        when short of the asked, what limited it."""
         out = []
         for o in self.outcomes:
-            sf = "-" if o.state_feedback is None else f"{100 * o.state_feedback:.2f} %"
-            out.append(f"  target {o.frequency_hz:7.1f} Hz: identified {100 * o.identified_damping:.3f} %,"
-                       f" asked {100 * o.asked:.1f} %, state feedback {sf}, closed loop on "
-                       f"the model {100 * o.on_model:.2f} % ({o.limited_by}: {o.detail})")
+            head = (f"  {o.frequency_hz:7.1f} Hz: {100 * o.on_model:.2f} % on the model "
+                    f"(open loop {100 * o.identified_damping:.2f} %, asked {100 * o.asked:.1f} %)")
+            if o.limited_by == "reached":
+                out.append(head + ": reached")
+            else:
+                out.append(head + f": limited by {o.limited_by}: {o.detail}")
         return out
+
+    def choice_line(self) -> str:
+        """What was kept, worded so that the state-feedback tuning is not read as the
+        damping reached (the loop on the whole model reaches less, so the tuning may aim
+        above the asked damping)."""
+        des = self.design
+        tuned = des.info["target_damping"]
+        why = ("" if abs(tuned - self.asked) < 1e-9 else
+               " (above the asked damping: the loop on the whole model, with its estimator "
+               "and the modes the design leaves out, reaches less than its state feedback)"
+               if tuned > self.asked else
+               " (below the asked damping: stronger designs failed on the model, see below)")
+        return (f"design: {len(self.attempts)} tried in {self.cpu_seconds:.1f} s CPU; kept a "
+                f"state feedback tuned to {100 * tuned:.1f} % on {len(des.target_modes)} "
+                f"modes{why}; on the model: stable, MIMO disk margin "
+                f"{self.disk_gain_db:.1f} dB; per target mode:")
 
 
 def default_band(fs: float, excited) -> tuple[float, float]:
@@ -197,6 +216,16 @@ def rank_targets(rows, band, n_modes=None, dominant_fraction: float = 0.25,
     rmax = cand[0].residue
     k = max(at_least, sum(r.residue >= dominant_fraction * rmax for r in cand))
     return [r.block for r in cand[:k]]
+
+
+def observed_modes(rows, band, targets, fraction: float | None = 1.0) -> list:
+    """Blocks the design model tracks without weighting them: the complex modes above
+    ``band`` whose residue is at least ``fraction`` of the largest target's (None: none)."""
+    if fraction is None or not targets:
+        return []
+    top = max(rows[b].residue for b in targets)
+    return [r.block for r in rows if r.complex and r.frequency_hz > band[1]
+            and r.residue >= fraction * top]
 
 
 def _grade(model, des: LQGDesign, original, rows, asked, excited, min_gain_db,
@@ -239,7 +268,7 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
                      estimator: str = "record",
                      min_gain_db: float = THRESHOLDS.mimo_gm_nominal_db,
                      others_ratio: float = THRESHOLDS.other_ratio_nominal, cpu_budget_s: float = 120.0,
-                     progress=None) -> Procedure:
+                     progress=None, observe_fraction: float | None = None) -> Procedure:
     """The best LQG design that is stable and robust on ``model`` (module docstring).
 
     Parameters
@@ -302,6 +331,7 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
         raise ControlError(f"the model has no lightly damped complex mode in "
                            f"{band_used[0]:.0f}-{band_used[1]:.0f} Hz to damp")
     fixed = n_modes is not None
+    observed = observed_modes(rows, band_used, original, observe_fraction)
     sets = [original] if fixed else [original[:k] for k in range(len(original), 0, -1)]
     attempts, best = [], None
     open_loop = [rows[b].damping for b in original]
@@ -312,7 +342,8 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
         freqs = tuple(rows[b].frequency_hz for b in tset)
         try:
             des = design_lqg(model, u, y, target_damping=zeta, form=form, K=K,
-                             estimator=estimator, verify=False, blocks=tset)
+                             estimator=estimator, verify=False, blocks=tset,
+                             observe=observed)
         except ControlError as exc:
             att = Attempt(freqs, zeta, False, "design", str(exc),
                           seconds=time.process_time() - t0)
@@ -361,7 +392,16 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
         # higher: scale the design damping by what was missing (at most twice, at most 3x
         # the asked); after a failed rung, try once between it and the one that passed.
         cands = [passed]
-        mine = [z for b, z in zip(original, passed[0].reached) if b in tset]
+
+        def reachable(att, des):
+            """Reached damping of the targets whose state feedback got to its tuning: a
+            mode the iteration left short (actuator authority) gains nothing from aiming
+            higher, which would only overdrive the others."""
+            short = {round(f, 6) for f in des.info.get("lqr_short_hz", [])}
+            return [z for b, z in zip(original, att.reached)
+                    if b in tset and round(rows[b].frequency_hz, 6) not in short]
+
+        mine = reachable(*passed)
         for _ in range(2):
             att0 = cands[-1][0]
             if over_budget() or not mine or min(mine) >= 0.95 * asked:
@@ -380,7 +420,7 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
                     break
                 continue
             cands.append((att, des))
-            mine = [z for b, z in zip(original, att.reached) if b in tset]
+            mine = reachable(att, des)
         for att, des in cands:
             if best is None or att.score > best[0].score + 1e-9:
                 best = (att, des, tset)
@@ -441,28 +481,32 @@ def _outcomes(att, des, tset, original, rows, asked, attempts, model) -> list:
             telling = [a for a in bigger if a.failure not in ("no gain", "design")]
             why = (telling or bigger or [None])[-1]
             limit = _limit(why)
-            detail = ("dropped from the targets: with it " + (
+            detail = ("left out of the design: with it, " + (
                 why.detail if why else "no design scored better"))
         elif z >= 0.95 * asked:
             limit, detail = "reached", f"{100 * z:.2f} % on the model"
         elif key in short_hz:
             limit = "actuator authority"
-            detail = (f"the state feedback stopped at {100 * sf[key]:.2f} % "
-                      f"({des.info.get('lqr_stop', '')}: the actuators barely reach this mode)")
+            detail = (f"the state feedback itself stopped at {100 * sf[key]:.2f} % "
+                      f"({des.info.get('lqr_stop', '')}): the actuators barely reach this "
+                      f"mode, or only together with a close neighbour")
         elif above:
             limit = _limit(above[-1])
-            detail = (f"designed for {100 * att.target_damping:.1f} %; at "
-                      f"{100 * above[-1].target_damping:.1f} %: {above[-1].detail}")
+            detail = (f"a stronger design (state feedback tuned to "
+                      f"{100 * above[-1].target_damping:.1f} %) failed on the model: "
+                      f"{above[-1].detail}")
         else:
             neighbour = f_all[(np.abs(f_all - f) < CLUSTER * f) & (np.abs(f_all - f) > 1e-9 * f)]
             if neighbour.size:
                 limit = "model uncertainty"
                 detail = (f"another model mode at {neighbour[0]:.1f} Hz lies within "
-                          f"{100 * CLUSTER:g} %: the loop damps a mix of the two")
+                          f"{100 * CLUSTER:g} % of it: the model may not separate the two, "
+                          f"and the loop damps a mix of them")
             else:
                 limit = "spillover"
-                detail = ("the state feedback reached it on the design model; the modes the "
-                          "design model leaves out and the estimator take the rest")
+                detail = (f"the state feedback gives it {100 * sf[key]:.2f} % on the design "
+                          f"model; the estimator and the modes the design model leaves out "
+                          f"take the rest")
         out.append(TargetOutcome(f, r.damping, r.residue, asked,
                                  att.target_damping if inside else None,
                                  sf.get(key) if inside else None, float(z), limit, detail))
