@@ -363,7 +363,7 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
                form: str = "predictor", estimator: str = "record",
                dominant_fraction: float = 0.25, K=None, verify: bool = True,
                min_fraction: float = 0.5, n_modes: int | None = None,
-               blocks=None, observe=()) -> LQGDesign:
+               blocks=None) -> LQGDesign:
     """Design a discrete LQG damping controller from an identified model and its record.
 
     Parameters
@@ -395,12 +395,6 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
         Target exactly these blocks of :func:`modal.real_modal_basis` (complex ones; the
         rows of :func:`mode_rows`), instead of selecting by ``band``, ``n_modes`` and
         ``dominant_fraction``.
-    observe : sequence of int, optional
-        Blocks (complex modes, not targets) the design model also holds with no state
-        weight: the state feedback leaves them alone (their block of the Riccati solution
-        is zero, so ``F`` is zero there) while the estimator tracks them, so that their
-        response is explained by their own states instead of leaking into the targets'
-        estimates and back to the actuators (spillover onto strong modes above the band).
 
     Returns
     -------
@@ -466,13 +460,9 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
             raise ControlError(f"target blocks {bad or list(blocks)}: need the indices of "
                                f"complex modes of the model (0..{len(rows) - 1})")
         sel = sorted({int(b) for b in blocks}, key=lambda b: rows[b].frequency_hz)
-    obs = [int(b) for b in observe if int(b) not in sel and 0 <= int(b) < len(rows)
-           and rows[int(b)].complex]
-    dm, kept = modal_truncation(model, list(sel) + obs)
+    dm, kept = modal_truncation(model, sel)
     A, B, C = (np.asarray(M, dtype=float) for M in (dm.A, dm.B, dm.C))
-    # the targets are the first len(sel) blocks; the observed ones follow, unweighted
-    blocks = [np.array([2 * k, 2 * k + 1]) for k in range(len(sel))]
-    all_blocks_dm = [np.array([2 * k, 2 * k + 1]) for k in range(len(kept))]
+    blocks = [np.array([2 * k, 2 * k + 1]) for k in range(len(kept))]
     tuning = lqr_for_damping(A, B, blocks, target_damping, model.dt, R=np.diag(1.0 / u_rms**2))
     F, q, zeta_sf, iters = tuning.F, tuning.weights, tuning.damping, tuning.iterations
     if estimator == "model":
@@ -480,7 +470,7 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
             raise ControlError("estimator 'model': the model file has no predictor gain K")
         T, all_blocks = real_modal_basis(model.A)
         KT = np.linalg.solve(T, np.asarray(K, dtype=float))
-        Kd = np.vstack([KT[all_blocks[b][0]] for b in list(sel) + obs])
+        Kd = np.vstack([KT[all_blocks[b][0]] for b in sel])
         kinfo = {"chosen": "identified model's K, projected on the target modes"}
     else:
         Kd, _, kinfo = choose_predictor(dm, u, y)
@@ -491,7 +481,7 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
             # as the mode did (the best one-step predictor of a clean record can be slow).
             # Use the dual of the state-feedback tuning instead: a steady-state Kalman gain
             # whose predictor poles reach the target damping on every target mode.
-            Fd = lqr_for_damping(A.T, C.T, all_blocks_dm, target_damping, model.dt,
+            Fd = lqr_for_damping(A.T, C.T, blocks, target_damping, model.dt,
                                  R=np.diag(y_rms**2)).F
             finite = zeta_k[np.isfinite(zeta_k)]
             kinfo = dict(kinfo, rejected=kinfo.get("chosen"),
@@ -515,7 +505,6 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
             "lqr_iterations": iters, "lqr_stop": tuning.reason,
             "lqr_short_hz": [rows[b].frequency_hz for b, s in zip(sel, tuning.short) if s],
             "excited_band_hz": list(excited),
-            "observed_hz": [rows[b].frequency_hz for b in obs],
             "design_states": int(A.shape[0]), "model_states": int(model.nstates),
             "estimator_min_damping": float(np.min(zeta_est)) if zeta_est.size else None,
             "input_rms": u_rms.tolist(), "output_rms": y_rms.tolist(),

@@ -218,16 +218,6 @@ def rank_targets(rows, band, n_modes=None, dominant_fraction: float = 0.25,
     return [r.block for r in cand[:k]]
 
 
-def observed_modes(rows, band, targets, fraction: float | None = 1.0) -> list:
-    """Blocks the design model tracks without weighting them: the complex modes above
-    ``band`` whose residue is at least ``fraction`` of the largest target's (None: none)."""
-    if fraction is None or not targets:
-        return []
-    top = max(rows[b].residue for b in targets)
-    return [r.block for r in rows if r.complex and r.frequency_hz > band[1]
-            and r.residue >= fraction * top]
-
-
 def _grade(model, des: LQGDesign, original, rows, asked, excited, min_gain_db,
            others_ratio) -> tuple:
     """``(failure, detail, disk gain, others ratio, reached per original target)``."""
@@ -268,7 +258,7 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
                      estimator: str = "record",
                      min_gain_db: float = THRESHOLDS.mimo_gm_nominal_db,
                      others_ratio: float = THRESHOLDS.other_ratio_nominal, cpu_budget_s: float = 120.0,
-                     progress=None, observe_fraction: float | None = None) -> Procedure:
+                     progress=None) -> Procedure:
     """The best LQG design that is stable and robust on ``model`` (module docstring).
 
     Parameters
@@ -331,7 +321,6 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
         raise ControlError(f"the model has no lightly damped complex mode in "
                            f"{band_used[0]:.0f}-{band_used[1]:.0f} Hz to damp")
     fixed = n_modes is not None
-    observed = observed_modes(rows, band_used, original, observe_fraction)
     sets = [original] if fixed else [original[:k] for k in range(len(original), 0, -1)]
     attempts, best = [], None
     open_loop = [rows[b].damping for b in original]
@@ -342,8 +331,7 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
         freqs = tuple(rows[b].frequency_hz for b in tset)
         try:
             des = design_lqg(model, u, y, target_damping=zeta, form=form, K=K,
-                             estimator=estimator, verify=False, blocks=tset,
-                             observe=observed)
+                             estimator=estimator, verify=False, blocks=tset)
         except ControlError as exc:
             att = Attempt(freqs, zeta, False, "design", str(exc),
                           seconds=time.process_time() - t0)
