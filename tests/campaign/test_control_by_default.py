@@ -63,9 +63,14 @@ def mimo_disk_margin_db(P, Cc, fs, lightly_damped_hz):
 @pytest.mark.parametrize("name", [
     pytest.param("pzt_tower", marks=pytest.mark.xfail(strict=False, reason=(
         "issue 32, not reached on the PZT tower (47 modes below Nyquist in dense member "
-        "clusters; MIMO model 33 states, 18.8 dB one-step): measured at 698386b, the "
+        "clusters): measured at 698386b and again after the wording/aim-higher changes, the "
         "targets 319.1 / 330.7 / 400.1 Hz reach 2.45 / 3.77 / 1.57 % on the truth and the "
-        "392.0 Hz mode keeps 0.78 of its damping (stable, disk margin 8.8 dB)"))),
+        "392.0 Hz mode keeps 0.78 of its damping (stable, disk margin 8.8 dB). The limit is "
+        "the model: the quick scan stops at 36 states while the ratio still rises (MIMO 33 "
+        "states, 18.8 dB on validation; an N4SID fit at 78 states gives 31.2 dB) and the six "
+        "true modes of 361-370 Hz are two smeared model modes; a trial design tracking the "
+        "strong modes above the band reached more on the model and was unstable on the "
+        "truth"))),
     "force_grid", "lattice_beam"])
 def test_demo_then_control_without_options_damps_the_dominant_modes(tmp_path, name):
     deck, io = structures.write(tmp_path, name, getattr(structures, name))

@@ -38,3 +38,13 @@ def test_the_scan_stops_at_its_cpu_budget_and_says_which_orders_it_left_out():
     assert [r.order for r in choice.rows] == [2]
     assert choice.not_scanned == tuple(range(4, 15, 2))
     assert choice.chosen == 2
+
+
+def test_a_scan_whose_best_order_is_its_largest_says_the_range_limits_the_model():
+    u, y, dt = modal_record()
+    short = scan_orders(u, y, dt, range(2, 5, 2), direct=False, block_rows=20)
+    assert short.best_at_top()  # 2 and 4 states for three modes: 4 is best, and the top
+    assert any("wider range may predict better" in line for line in short.lines())
+    full = scan_orders(u, y, dt, range(2, 11, 2), direct=False, block_rows=20)
+    assert not full.best_at_top()
+    assert not any("wider range" in line for line in full.lines())

@@ -218,3 +218,31 @@ def test_closed_loop_without_plant_says_the_testbed_was_used(tmp_path, capsys):
     assert code == 2
     assert "no PLANT given, so the controller runs on the default testbed" in err
     assert not (tmp_path / "rep").exists()
+
+
+def test_a_design_short_of_the_asked_damping_exits_0_warns_and_says_why_per_mode(tmp_path,
+                                                                                capsys):
+    """Issue 32, acceptance 4: 60 % is out of reach with a 6 dB margin. The command backs
+    off, exits 0 with one warning line, prints per target mode the damping reached on the
+    model and its reason in words, and does not print the state-feedback tuning as if it
+    were the damping chosen (the old "chosen: 21.0 %" beside "asked 7.0 %")."""
+    from trussid.lqg.procedure import LIMITS
+
+    model, data, plant_file = csv_files(tmp_path, accel_structure())
+    code, out, err = run_here(capsys, "control", model, "--data", data, "--out",
+                              tmp_path / "c.npz", "--target-damping", 0.6)
+    assert code == 0, err
+    warn = [ln for ln in err.splitlines() if ln.startswith("warning:")]
+    assert len(warn) == 1 and "less than the 60.0 % asked" in warn[0]
+    assert "chosen:" not in out
+    kept = [ln for ln in out.splitlines() if ln.startswith("design:")]
+    assert len(kept) == 1 and "kept a state feedback tuned to" in kept[0]
+    per_mode = [ln for ln in out.splitlines() if "% on the model (open loop" in ln]
+    ctrl, meta = load_model(tmp_path / "c.npz")
+    outcomes = json.loads(str(meta["extra"]["design_json"]))["procedure"]["outcomes"]
+    assert len(per_mode) == len(outcomes) >= 2
+    for line, o in zip(per_mode, outcomes):
+        assert f"{o['frequency_hz']:.1f} Hz: {100 * o['on_model']:.2f} %" in line
+        assert o["limited_by"] in LIMITS[1:] and f"limited by {o['limited_by']}: " in line
+    plant, _ = load_model(plant_file)  # the model is the plant here: stable, from numpy
+    assert np.max(np.abs(closed_loop_poles(plant, ctrl))) < 1

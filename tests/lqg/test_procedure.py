@@ -138,3 +138,30 @@ def test_the_cluster_redesign_that_raised_from_the_riccati_solver_now_designs_or
     assert disk_margins(truth, c).mimo.gain_db >= 6.0
     for o in proc.outcomes:
         assert o.limited_by in LIMITS
+
+
+def test_a_mode_short_for_lack_of_authority_does_not_drive_the_design_above_the_asked():
+    """The newcomer audit's truss (issue 32): a close pair (46.9 / 48.3 Hz) that both
+    actuators drive along one direction, so only one combination of it is controllable.
+    The state feedback stops short on one mode; aiming higher for it used to tune the
+    design to three times the asked damping ("chosen: 21.0 %" beside "asked 7.0 %") and
+    overdrive the other mode. Now the design stays at the asked damping and the short mode
+    is said to lack actuator authority."""
+    fs, f, zeta = 1000.0, np.array([46.9, 48.3]), 0.01
+    w = 2 * np.pi * f
+    phi_in = np.array([[1.0, 0.001], [1.0, 0.001]])  # the PZT a thousand times weaker
+    phi_out = np.array([[1.0, 0.5, 0.3], [0.5, -0.7, 0.4]])
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.diag(w**2), -np.diag(2 * zeta * w)]])
+    d = control.c2d(control.ss(A, np.vstack([np.zeros((2, 2)), phi_in]), phi_out.T @ A[2:],
+                               phi_out.T @ phi_in), 1 / fs, "zoh")
+    plant = control.ss(d.A, d.B, d.C, d.D, 1 / fs, inputs=["shaker", "pzt"],
+                       outputs=["a1", "a2", "a3"])
+    proc = design_procedure(plant, *record(plant))
+    assert proc.design.info["target_damping"] <= 0.07 + 1e-12
+    assert "above the asked damping" not in proc.choice_line()
+    limits = sorted(o.limited_by for o in proc.outcomes)
+    assert limits == ["actuator authority", "reached"], proc.lines()
+    reached = max(o.on_model for o in proc.outcomes)
+    assert 0.95 * 0.07 <= reached < 0.15  # at the asked damping, not overdriven
+    tab = damping_table(plant, proc.design.controller, band=(0.0, 500.0))
+    assert tab.stable and disk_margins(plant, proc.design.controller).mimo.gain_db >= 6.0

@@ -70,7 +70,20 @@ class OrderChoice:
                        f"{' (' + r.note + ')' if r.note else ''}{mark}")
         if self.not_scanned:
             out.append(f"  not scanned (budget): {', '.join(map(str, self.not_scanned))}")
+        if self.best_at_top():
+            out.append("  the best held-back ratio is at the largest order scanned: a wider "
+                       "range may predict better (the model is then limited by the range, "
+                       "not by the data)")
         return out
+
+    def best_at_top(self) -> bool:
+        """The best held-back ratio came from the largest order that gave a model: the
+        scan did not reach the order where more states stop predicting better."""
+        scored = [r for r in self.rows if r.held_back_db is not None]
+        if len(scored) < 2:
+            return False
+        best = max(scored, key=lambda r: r.held_back_db)
+        return best.order == max(r.order for r in scored)
 
 
 def scan_orders(u, y, dt: float, orders, *, direct: bool = True, block_rows: int = 40,

@@ -164,14 +164,33 @@ class Procedure:
                 + f"; it is stable on the model with a {self.disk_gain_db:.1f} dB disk margin")
 
     def lines(self) -> list:
-        """The per-target report: damping reached and what limited it."""
+        """The per-target report, in plain words: the damping reached on the model and,
+        when short of the asked, what limited it."""
         out = []
         for o in self.outcomes:
-            sf = "-" if o.state_feedback is None else f"{100 * o.state_feedback:.2f} %"
-            out.append(f"  target {o.frequency_hz:7.1f} Hz: identified {100 * o.identified_damping:.3f} %,"
-                       f" asked {100 * o.asked:.1f} %, state feedback {sf}, closed loop on "
-                       f"the model {100 * o.on_model:.2f} % ({o.limited_by}: {o.detail})")
+            head = (f"  {o.frequency_hz:7.1f} Hz: {100 * o.on_model:.2f} % on the model "
+                    f"(open loop {100 * o.identified_damping:.2f} %, asked {100 * o.asked:.1f} %)")
+            if o.limited_by == "reached":
+                out.append(head + ": reached")
+            else:
+                out.append(head + f": limited by {o.limited_by}: {o.detail}")
         return out
+
+    def choice_line(self) -> str:
+        """What was kept, worded so that the state-feedback tuning is not read as the
+        damping reached (the loop on the whole model reaches less, so the tuning may aim
+        above the asked damping)."""
+        des = self.design
+        tuned = des.info["target_damping"]
+        why = ("" if abs(tuned - self.asked) < 1e-9 else
+               " (above the asked damping: the loop on the whole model, with its estimator "
+               "and the modes the design leaves out, reaches less than its state feedback)"
+               if tuned > self.asked else
+               " (below the asked damping: stronger designs failed on the model, see below)")
+        return (f"design: {len(self.attempts)} tried in {self.cpu_seconds:.1f} s CPU; kept a "
+                f"state feedback tuned to {100 * tuned:.1f} % on {len(des.target_modes)} "
+                f"modes{why}; on the model: stable, MIMO disk margin "
+                f"{self.disk_gain_db:.1f} dB; per target mode:")
 
 
 def default_band(fs: float, excited) -> tuple[float, float]:
@@ -361,7 +380,16 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
         # higher: scale the design damping by what was missing (at most twice, at most 3x
         # the asked); after a failed rung, try once between it and the one that passed.
         cands = [passed]
-        mine = [z for b, z in zip(original, passed[0].reached) if b in tset]
+
+        def reachable(att, des):
+            """Reached damping of the targets whose state feedback got to its tuning: a
+            mode the iteration left short (actuator authority) gains nothing from aiming
+            higher, which would only overdrive the others."""
+            short = {round(f, 6) for f in des.info.get("lqr_short_hz", [])}
+            return [z for b, z in zip(original, att.reached)
+                    if b in tset and round(rows[b].frequency_hz, 6) not in short]
+
+        mine = reachable(*passed)
         for _ in range(2):
             att0 = cands[-1][0]
             if over_budget() or not mine or min(mine) >= 0.95 * asked:
@@ -380,7 +408,7 @@ def design_procedure(model, u, y, *, K=None, target_damping: float | None = None
                     break
                 continue
             cands.append((att, des))
-            mine = [z for b, z in zip(original, att.reached) if b in tset]
+            mine = reachable(att, des)
         for att, des in cands:
             if best is None or att.score > best[0].score + 1e-9:
                 best = (att, des, tset)
@@ -441,28 +469,32 @@ def _outcomes(att, des, tset, original, rows, asked, attempts, model) -> list:
             telling = [a for a in bigger if a.failure not in ("no gain", "design")]
             why = (telling or bigger or [None])[-1]
             limit = _limit(why)
-            detail = ("dropped from the targets: with it " + (
+            detail = ("left out of the design: with it, " + (
                 why.detail if why else "no design scored better"))
         elif z >= 0.95 * asked:
             limit, detail = "reached", f"{100 * z:.2f} % on the model"
         elif key in short_hz:
             limit = "actuator authority"
-            detail = (f"the state feedback stopped at {100 * sf[key]:.2f} % "
-                      f"({des.info.get('lqr_stop', '')}: the actuators barely reach this mode)")
+            detail = (f"the state feedback itself stopped at {100 * sf[key]:.2f} % "
+                      f"({des.info.get('lqr_stop', '')}): the actuators barely reach this "
+                      f"mode, or only together with a close neighbour")
         elif above:
             limit = _limit(above[-1])
-            detail = (f"designed for {100 * att.target_damping:.1f} %; at "
-                      f"{100 * above[-1].target_damping:.1f} %: {above[-1].detail}")
+            detail = (f"a stronger design (state feedback tuned to "
+                      f"{100 * above[-1].target_damping:.1f} %) failed on the model: "
+                      f"{above[-1].detail}")
         else:
             neighbour = f_all[(np.abs(f_all - f) < CLUSTER * f) & (np.abs(f_all - f) > 1e-9 * f)]
             if neighbour.size:
                 limit = "model uncertainty"
                 detail = (f"another model mode at {neighbour[0]:.1f} Hz lies within "
-                          f"{100 * CLUSTER:g} %: the loop damps a mix of the two")
+                          f"{100 * CLUSTER:g} % of it: the model may not separate the two, "
+                          f"and the loop damps a mix of them")
             else:
                 limit = "spillover"
-                detail = ("the state feedback reached it on the design model; the modes the "
-                          "design model leaves out and the estimator take the rest")
+                detail = (f"the state feedback gives it {100 * sf[key]:.2f} % on the design "
+                          f"model; the estimator and the modes the design model leaves out "
+                          f"take the rest")
         out.append(TargetOutcome(f, r.damping, r.residue, asked,
                                  att.target_damping if inside else None,
                                  sf.get(key) if inside else None, float(z), limit, detail))

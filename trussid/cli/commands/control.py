@@ -106,9 +106,7 @@ def run(args) -> int:
           f"-> {c.noutputs} actuators ({', '.join(c.output_labels)}), {des.form} form, "
           f"dt {c.dt:g} s")
     proc = des.procedure
-    print(f"design: {len(proc.attempts)} tried in {proc.cpu_seconds:.1f} s CPU; chosen: "
-          f"{des.info['target_damping'] * 100:.1f} % on {len(des.target_modes)} modes, MIMO "
-          f"disk margin {proc.disk_gain_db:.1f} dB on the model")
+    print(proc.choice_line())
     for line in proc.lines():
         print(line)
     if proc.short:
