@@ -38,11 +38,16 @@ __all__ = ["BLAS_THREADS", "DENSE_MAX_DOF", "Modes", "SINGULAR_PIVOT", "factor_s
 #: could use a second thread on an idle machine, not on this shared one.
 BLAS_THREADS = 1
 
-#: Above this many reduced DOFs ``method="auto"`` switches from dense to shift-invert
-#: (unless more than a third of the modes are wanted). Measured on a 582-DOF frame, 20
-#: modes: dense 2.8 s, shift-invert 0.16 s CPU (2-core machine under load); dense LAPACK
-#: costs O(n^3) whatever the sparsity.
-DENSE_MAX_DOF = 300
+#: Above this many reduced DOFs ``method="auto"`` (and the testbed's wall sweeps,
+#: :func:`trussid.testbed.walls.wall_modes`) switch from dense LAPACK to shift-invert
+#: (unless more than a third of the modes are wanted): dense costs O(n^3) whatever the
+#: sparsity. The one threshold of the library, at the measured crossover
+#: (``benchmarks/bench_dense_crossover.py``, benchmarks/results/dense_crossover.md: CPU
+#: for 30 modes of the testbed, one BLAS thread, load ~7 on 2 cores): at 318 DOFs dense and
+#: shift-invert tie (solve_modes 22.0 / 22.1 ms, a wall-sweep design 14.9 / 14.2 ms), at 390
+#: shift-invert wins the full solution (34.1 / 23.0 ms) and ties the sweep (18.1 / 19.0),
+#: at 462 it wins both (37.9 / 17.6, 32.1 / 26.2).
+DENSE_MAX_DOF = 350
 
 
 @dataclass
