@@ -177,6 +177,8 @@ def dense_modes(K: np.ndarray, M: np.ndarray, n_modes: int | None = None, *, sig
         else:
             mu, X = la.eigh(M, B, driver=driver, **kw)
             mu, X = mu[n - k:], X[:, n - k:]
+    # LAPACK normalises X^T (K - sigma M) X = I; then X^T M X = diag(mu): mass-normalise.
+    X = X / np.sqrt(np.maximum(mu, np.finfo(float).tiny))
     return sigma + 1.0 / mu[::-1], X[:, ::-1]
 
 

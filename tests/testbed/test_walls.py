@@ -71,3 +71,4 @@ def test_wall_sweep_modes_equal_an_independent_solve_at_other_walls(case):
     f, X = wall_modes(basis, walls, N)
     assert np.max(np.abs(f / f_ref - 1)) < 1e-9
     assert mac(X, X_ref, M).min() > 0.999999
+    assert np.allclose(X.T @ (M @ X), np.eye(N), atol=1e-9)      # mass-normalised
