@@ -265,12 +265,13 @@ def _n_mass(M, massless) -> int:
     proves, at a tenth of the cost, the usual case: every direction carries mass.
     """
     m = np.flatnonzero(~massless)
-    Mm = M[np.ix_(m, m)]
-    d = 1.0 / np.sqrt(np.diag(Mm))
-    Ms = Mm * d[:, None] * d[None, :]
+    Ms = M[np.ix_(m, m)] if len(m) < len(M) else M.copy()
+    d = 1.0 / np.sqrt(np.diag(Ms))
+    Ms *= np.outer(d, d)
     bound = float(np.abs(Ms).sum(axis=1).max())
+    Ms[np.diag_indices_from(Ms)] -= MASSLESS_DIRECTION * bound
     try:
-        la.cholesky(Ms - MASSLESS_DIRECTION * bound * np.eye(len(m)), check_finite=False)
+        la.cholesky(Ms, overwrite_a=True, check_finite=False)
         return len(m)
     except la.LinAlgError:
         return _mass_basis(M, massless)[1].shape[1]
