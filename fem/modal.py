@@ -99,7 +99,7 @@ def _massless(M: sp.csr_matrix, dofs: np.ndarray) -> np.ndarray:
 
 
 def dense_modes(K: np.ndarray, M: np.ndarray, n_modes: int | None = None, *, sigma: float = 0.0,
-                max_frequency_hz: float | None = None, driver: str = "gvx",
+                max_frequency_hz: float | None = None, driver: str = "evr",
                 overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Lowest eigenpairs of a dense reduced pair ``K x = lambda M x``: the one dense solver.
 
@@ -124,9 +124,12 @@ def dense_modes(K: np.ndarray, M: np.ndarray, n_modes: int | None = None, *, sig
     max_frequency_hz : float, optional
         Instead of a count: every mode at or below this frequency [Hz], found by value
         (which costs LAPACK no more than a count).
-    driver : {"gvx", "gvd", "gv"}
-        LAPACK driver of :func:`scipy.linalg.eigh`: "gvx" computes only the subset,
-        "gvd"/"gv" compute every pair and are sliced (faster when most are wanted).
+    driver : {"evr", "gvx", "gvd", "gv"}
+        "evr": Cholesky factor of ``K - sigma M``, LAPACK's reduction to a standard problem
+        (``dsygst``) and the MRRR subset solver (``dsyevr``): the fastest for a subset (7 %
+        less CPU than "gvx" on the 318-DOF testbed, 20 modes). "gvx": LAPACK's generalised
+        subset driver (bisection and inverse iteration). "gvd"/"gv" compute every pair and
+        are sliced (faster when most are wanted).
     overwrite : bool
         Let LAPACK overwrite ``K`` and ``M`` (saves two n x n copies in sweeps).
 
@@ -153,8 +156,8 @@ def dense_modes(K: np.ndarray, M: np.ndarray, n_modes: int | None = None, *, sig
     >>> print(np.round(lam, 6), np.round((3 - np.sqrt(5)) / 2, 6))
     [0.381966 2.618034] 0.381966
     """
-    if driver not in ("gvx", "gvd", "gv"):
-        raise ValueError(f"driver must be 'gvx', 'gvd' or 'gv', got {driver!r}")
+    if driver not in ("evr", "gvx", "gvd", "gv"):
+        raise ValueError(f"driver must be 'evr', 'gvx', 'gvd' or 'gv', got {driver!r}")
     n = len(K)
     B = K - sigma * M if sigma else K
     kw = dict(overwrite_a=overwrite, overwrite_b=overwrite or bool(sigma), check_finite=False)
@@ -162,24 +165,37 @@ def dense_modes(K: np.ndarray, M: np.ndarray, n_modes: int | None = None, *, sig
         lam_max = (2.0 * np.pi * float(max_frequency_hz)) ** 2
         if lam_max <= sigma:
             return np.zeros(0), np.zeros((n, 0))
-        if driver == "gvx":
-            mu, X = la.eigh(M, B, subset_by_value=[1.0 / (lam_max - sigma), np.inf], driver="gvx", **kw)
-        else:
-            mu, X = la.eigh(M, B, driver=driver, **kw)
-            keep = mu >= 1.0 / (lam_max - sigma)
-            mu, X = mu[keep], X[:, keep]
+        subset = dict(subset_by_value=[1.0 / (lam_max - sigma), np.inf])
     else:
         if n_modes is None:
             raise ValueError("dense_modes needs n_modes or max_frequency_hz")
         k = min(int(n_modes), n)
-        if driver == "gvx":
-            mu, X = la.eigh(M, B, subset_by_index=[n - k, n - 1], driver="gvx", **kw)
-        else:
-            mu, X = la.eigh(M, B, driver=driver, **kw)
-            mu, X = mu[n - k:], X[:, n - k:]
+        subset = dict(subset_by_index=[n - k, n - 1])
+    if driver == "evr":
+        mu, X = _evr(M, B, subset, overwrite)
+    elif driver == "gvx":
+        mu, X = la.eigh(M, B, driver="gvx", **subset, **kw)
+    else:
+        mu, X = la.eigh(M, B, driver=driver, **kw)
+        keep = (mu >= subset["subset_by_value"][0] if max_frequency_hz is not None
+                else np.arange(n) >= n - k)
+        mu, X = mu[keep], X[:, keep]
     # LAPACK normalises X^T (K - sigma M) X = I; then X^T M X = diag(mu): mass-normalise.
     X = X / np.sqrt(np.maximum(mu, np.finfo(float).tiny))
     return sigma + 1.0 / mu[::-1], X[:, ::-1]
+
+
+def _evr(A, B, subset: dict, overwrite: bool):
+    """Subset of ``A x = mu B x`` (B positive definite) as LAPACK's generalised drivers do
+    it, but with the MRRR standard solver: scipy's ``eigh`` offers MRRR ("evr") only for
+    standard problems, so the reduction (``L = chol(B)``, ``C = L^-1 A L^-T`` by ``dsygst``,
+    ``x = L^-T y``) is written out here. Eigenvectors come out ``B``-normalised."""
+    L = la.cholesky(B, lower=True, overwrite_a=overwrite, check_finite=False)
+    C, info = la.lapack.dsygst(A if overwrite else A.copy(), L, itype=1, lower=1)
+    if info != 0:
+        raise la.LinAlgError(f"dsygst failed (info {info})")
+    mu, Y = la.eigh(C, driver="evr", lower=True, overwrite_a=True, check_finite=False, **subset)
+    return mu, la.solve_triangular(L, Y, lower=True, trans="T", overwrite_b=True, check_finite=False)
 
 
 def _dense(system: System, k: int, sigma: float | None, max_frequency_hz: float | None = None):

@@ -205,7 +205,7 @@ def wall_matrices(basis: WallBasis, walls) -> tuple[np.ndarray, np.ndarray]:
     return basis.dense(k), basis.dense(m)
 
 
-def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
+def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "evr"
                ) -> tuple[np.ndarray, np.ndarray]:
     """Lowest natural frequencies [Hz] and mass-normalised reduced shapes for ``walls``.
 
@@ -216,8 +216,8 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
         Wall thicknesses [m].
     n_modes : int
     driver : str
-        LAPACK driver of :func:`trussid.fem.modal.dense_modes` ("gvx" for a subset; "gvd"/"gv"
-        compute all and are sliced). Above :data:`trussid.fem.modal.DENSE_MAX_DOF` reduced
+        LAPACK driver of :func:`trussid.fem.modal.dense_modes` ("evr" or "gvx" for a subset;
+        "gvd"/"gv" compute all and are sliced). Above :data:`trussid.fem.modal.DENSE_MAX_DOF` reduced
         DOFs the modes come from sparse shift-invert instead.
 
     Returns
