@@ -166,7 +166,8 @@ def dense_modes(K: np.ndarray, M: np.ndarray, n_modes: int | None = None, *, sig
         lam_max = (2.0 * np.pi * float(max_frequency_hz)) ** 2
         if lam_max <= sigma:
             return np.zeros(0), np.zeros((n, 0))
-        subset = dict(subset_by_value=[1.0 / (lam_max - sigma), np.inf])
+        mu_min = 1.0 / (lam_max - sigma)
+        subset = dict(subset_by_value=[mu_min, np.inf])
     else:
         if n_modes is None:
             raise ValueError("dense_modes needs n_modes or max_frequency_hz")
@@ -178,8 +179,7 @@ def dense_modes(K: np.ndarray, M: np.ndarray, n_modes: int | None = None, *, sig
         mu, X = la.eigh(M, B, driver="gvx", **subset, **kw)
     else:
         mu, X = la.eigh(M, B, driver=driver, **kw)
-        keep = (mu >= subset["subset_by_value"][0] if max_frequency_hz is not None
-                else np.arange(n) >= n - k)
+        keep = mu >= mu_min if max_frequency_hz is not None else np.arange(n) >= n - k
         mu, X = mu[keep], X[:, keep]
     # LAPACK normalises X^T (K - sigma M) X = I; then X^T M X = diag(mu): mass-normalise.
     X = X / np.sqrt(np.maximum(mu, np.finfo(float).tiny))
