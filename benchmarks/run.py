@@ -49,6 +49,9 @@ BENCHMARKS = {
                         ["bench_fem_vs_opensees.py", "--cases", "boom-1.5e4,lattice-3e3", "--repeat", "1",
                          "--tools", "trussid", "--json", "{json}"]),
     "testbed": (["bench_testbed.py", "--json", "{json}"], ["bench_testbed.py", "--quick", "--json", "{json}"]),
+    # dense LAPACK vs shift-invert around fem.modal.DENSE_MAX_DOF (issue 31)
+    "dense_crossover": (["bench_dense_crossover.py", "--json", "{json}", "--out", "benchmarks/results/dense_crossover.md"],
+                        ["bench_dense_crossover.py", "--quick", "--json", "{json}"]),
     "plant": (["bench_plant.py", "--json", "{json}"], ["bench_plant.py", "--quick", "--json", "{json}"]),
     "adapt": (["bench_adapt.py", "--json", "{json}", "--out", "benchmarks/results/adapt.md"],
               ["bench_adapt.py", "--quick", "--json", "{json}"]),

@@ -38,11 +38,16 @@ __all__ = ["BLAS_THREADS", "DENSE_MAX_DOF", "Modes", "SINGULAR_PIVOT", "factor_s
 #: could use a second thread on an idle machine, not on this shared one.
 BLAS_THREADS = 1
 
-#: Above this many reduced DOFs ``method="auto"`` switches from dense to shift-invert
-#: (unless more than a third of the modes are wanted). Measured on a 582-DOF frame, 20
-#: modes: dense 2.8 s, shift-invert 0.16 s CPU (2-core machine under load); dense LAPACK
-#: costs O(n^3) whatever the sparsity.
-DENSE_MAX_DOF = 300
+#: Above this many reduced DOFs ``method="auto"`` (and the testbed's wall sweeps,
+#: :func:`trussid.testbed.walls.wall_modes`) switch from dense LAPACK to shift-invert
+#: (unless more than a third of the modes are wanted): dense costs O(n^3) whatever the
+#: sparsity. The one threshold of the library, at the measured crossover
+#: (``benchmarks/bench_dense_crossover.py``, benchmarks/results/dense_crossover.md: CPU
+#: for 30 modes of the testbed, one BLAS thread, load ~7 on 2 cores): at 318 DOFs dense and
+#: shift-invert tie (solve_modes 22.0 / 22.1 ms, a wall-sweep design 14.9 / 14.2 ms), at 390
+#: shift-invert wins the full solution (34.1 / 23.0 ms) and ties the sweep (18.1 / 19.0),
+#: at 462 it wins both (37.9 / 17.6, 32.1 / 26.2).
+DENSE_MAX_DOF = 350
 
 
 @dataclass
@@ -93,19 +98,115 @@ def _massless(M: sp.csr_matrix, dofs: np.ndarray) -> np.ndarray:
     return out
 
 
-def _dense(system: System, k: int, sigma: float | None):
-    """Lowest ``k`` eigenpairs with LAPACK; returns ``(lambda, X, proven)``.
+def dense_modes(K: np.ndarray, M: np.ndarray, n_modes: int | None = None, *, sigma: float = 0.0,
+                max_frequency_hz: float | None = None, driver: str = "evr",
+                overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest eigenpairs of a dense reduced pair ``K x = lambda M x``: the one dense solver.
 
     LAPACK's accuracy is absolute, ``eps`` times the largest eigenvalue of the problem it
     is given. Solved directly, ``K x = lambda M x`` thus gives the lowest modes only
     ``eps * lambda_max / lambda`` relative accuracy, poor when the spectrum spans many
     decades (fine meshes, stiff axial members). So the lowest modes are taken from the
     *inverted* problem ``M x = mu (K - sigma M) x``, ``mu = 1 / (lambda - sigma)``, whose
-    error ``eps * mu_max`` falls on the highest modes instead; the second matrix is
-    positive definite (``sigma = 0`` when K is proven so, else a small negative shift),
-    and a singular ``M`` (massless DOFs: ``mu = 0``) needs no special treatment. When more
-    than half of the modes are wanted, the upper part of the spectrum comes from the direct
-    problem, stitched at ``sqrt(lambda_low lambda_high)`` where the two errors cross.
+    error ``eps * mu_max`` falls on the highest modes instead; a singular ``M`` (massless
+    DOFs: ``mu = 0``) needs no special treatment.
+
+    Parameters
+    ----------
+    K, M : (n, n) float
+        Symmetric stiffness [N/m] and mass [kg] matrices on the reduced DOFs;
+        ``K - sigma M`` must be positive definite, ``M`` positive semi-definite.
+    n_modes : int, optional
+        Number of lowest modes, found by index (LAPACK's subset driver). Required unless
+        ``max_frequency_hz`` is given.
+    sigma : float
+        Shift [rad^2/s^2] below the lowest eigenvalue (0 when ``K`` is positive definite).
+    max_frequency_hz : float, optional
+        Instead of a count: every mode at or below this frequency [Hz], found by value
+        (which costs LAPACK no more than a count).
+    driver : {"evr", "gvx", "gvd", "gv"}
+        "evr": Cholesky factor of ``K - sigma M``, LAPACK's reduction to a standard problem
+        (``dsygst``) and the MRRR subset solver (``dsyevr``): as fast as "gvx" or faster
+        (CPU per solution on the 318-DOF testbed: 11.7 vs 13.2 ms for 20 modes, 11.3 vs
+        11.1 ms for 30, medians of 10 alternations under load). "gvx": LAPACK's generalised
+        subset driver (bisection and inverse iteration). "gvd"/"gv" compute every pair and
+        are sliced (faster when most are wanted).
+    overwrite : bool
+        Let LAPACK overwrite ``K`` and ``M`` (saves two n x n copies in sweeps).
+
+    Returns
+    -------
+    lam : (k,) float
+        Eigenvalues [rad^2/s^2], ascending.
+    X : (n, k) float
+        Eigenvectors, ``X.T @ M @ X = I``.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        ``K - sigma M`` is not positive definite.
+    ValueError
+        Neither ``n_modes`` nor ``max_frequency_hz``, or an unknown driver.
+
+    Examples
+    --------
+    Two masses of 1 kg on springs of 1 N/m in a chain from a wall: ``lambda = (3 -+ sqrt 5) / 2``.
+
+    >>> import numpy as np
+    >>> lam, X = dense_modes(np.array([[2.0, -1.0], [-1.0, 1.0]]), np.eye(2), 2)
+    >>> print(f"{lam[0]:.6f} {lam[1]:.6f} {(3 - np.sqrt(5)) / 2:.6f} {(3 + np.sqrt(5)) / 2:.6f}")
+    0.381966 2.618034 0.381966 2.618034
+    """
+    if driver not in ("evr", "gvx", "gvd", "gv"):
+        raise ValueError(f"driver must be 'evr', 'gvx', 'gvd' or 'gv', got {driver!r}")
+    n = len(K)
+    B = K - sigma * M if sigma else K
+    kw = dict(overwrite_a=overwrite, overwrite_b=overwrite or bool(sigma), check_finite=False)
+    if max_frequency_hz is not None:
+        lam_max = (2.0 * np.pi * float(max_frequency_hz)) ** 2
+        if lam_max <= sigma:
+            return np.zeros(0), np.zeros((n, 0))
+        mu_min = 1.0 / (lam_max - sigma)
+        subset = dict(subset_by_value=[mu_min, np.inf])
+    else:
+        if n_modes is None:
+            raise ValueError("dense_modes needs n_modes or max_frequency_hz")
+        k = min(int(n_modes), n)
+        subset = dict(subset_by_index=[n - k, n - 1])
+    if driver == "evr":
+        mu, X = _evr(M, B, subset, overwrite)
+    elif driver == "gvx":
+        mu, X = la.eigh(M, B, driver="gvx", **subset, **kw)
+    else:
+        mu, X = la.eigh(M, B, driver=driver, **kw)
+        keep = mu >= mu_min if max_frequency_hz is not None else np.arange(n) >= n - k
+        mu, X = mu[keep], X[:, keep]
+    # LAPACK normalises X^T (K - sigma M) X = I; then X^T M X = diag(mu): mass-normalise.
+    X = X / np.sqrt(np.maximum(mu, np.finfo(float).tiny))
+    return sigma + 1.0 / mu[::-1], X[:, ::-1]
+
+
+def _evr(A, B, subset: dict, overwrite: bool):
+    """Subset of ``A x = mu B x`` (B positive definite) as LAPACK's generalised drivers do
+    it, but with the MRRR standard solver: scipy's ``eigh`` offers MRRR ("evr") only for
+    standard problems, so the reduction (``L = chol(B)``, ``C = L^-1 A L^-T`` by ``dsygst``,
+    ``x = L^-T y``) is written out here. Eigenvectors come out ``B``-normalised."""
+    L = la.cholesky(B, lower=True, overwrite_a=overwrite, check_finite=False)
+    C, info = la.lapack.dsygst(A if overwrite else A.copy(), L, itype=1, lower=1)
+    if info != 0:
+        raise la.LinAlgError(f"dsygst failed (info {info})")
+    mu, Y = la.eigh(C, driver="evr", lower=True, overwrite_a=True, check_finite=False, **subset)
+    return mu, la.solve_triangular(L, Y, lower=True, trans="T", overwrite_b=True, check_finite=False)
+
+
+def _dense(system: System, k: int, sigma: float | None, max_frequency_hz: float | None = None):
+    """Lowest ``k`` eigenpairs (or every one below ``max_frequency_hz``) by
+    :func:`dense_modes`; returns ``(lambda, X, proven)``.
+
+    The shift is 0 when K is proven positive definite, else a small negative one. When
+    more than half of the modes are wanted, the upper part of the spectrum comes from the
+    direct problem (massless DOFs condensed), stitched at ``sqrt(lambda_low lambda_high)``
+    where the errors of the inverted and the direct problem cross.
     """
     n = system.n_dof
     proven = False
@@ -117,27 +218,29 @@ def _dense(system: System, k: int, sigma: float | None):
     K = system.K.toarray()
     M = system.M.toarray()
     massless = _massless(system.M, system.dofs)
-    # the modes with finite frequency: one per direction that carries mass
-    n_mass = _mass_basis(M, massless)[1].shape[1]
-    k = min(k, n_mass)
-    B = K - sigma * M
-    k_low = k
-    if k > n // 2:
-        # Direct problem on the massive DOFs (static condensation of the massless ones).
-        lam_hi, X_hi = _direct(K, M, massless, system)
-        lo, hi = lam_hi[0] - sigma, lam_hi[-1] - sigma
-        k_low = int(np.searchsorted(lam_hi - sigma, np.sqrt(max(lo, 0.0) * hi)))
-        k_low = min(max(k_low, 1), k)
     try:
-        mu, X = la.eigh(M, B, subset_by_index=[n - k_low, n - 1])
+        if max_frequency_hz is not None:
+            lam, X = dense_modes(K, M, sigma=sigma, max_frequency_hz=max_frequency_hz)
+            if len(lam) <= n // 2:
+                return lam, X, proven
+            k = len(lam)  # most of the spectrum: stitched below, by count
+        k = min(k, _n_mass(M, massless))
+        k_low = k
+        if k > n // 2:
+            # Direct problem on the massive DOFs (static condensation of the massless ones).
+            lam_hi, X_hi = _direct(K, M, massless, system)
+            lo, hi = lam_hi[0] - sigma, lam_hi[-1] - sigma
+            k_low = int(np.searchsorted(lam_hi - sigma, np.sqrt(max(lo, 0.0) * hi)))
+            k_low = min(max(k_low, 1), k)
+        lam, X = dense_modes(K, M, k_low, sigma=sigma)
     except la.LinAlgError:
         # K - sigma M is singular: a direction with neither stiffness nor mass.
+        B = K - sigma * M
         diag = np.abs(np.diag(B))
         fac = SPDFactor(sp.csc_matrix(B) + sp.diags(1e-13 * np.where(diag > 0, diag, 1.0)), backend="superlu")
         j = int(np.argmin(fac.pivots() / np.where(diag > 0, diag, 1.0)))
         raise ModelError(f"mechanism: {system.dof_label(j)} has neither mass nor a stiffness "
                          f"that restrains it") from None
-    lam, X = sigma + 1.0 / mu[::-1], X[:, ::-1]
     if k_low < k:
         lam = np.r_[lam, lam_hi[k_low:k]]
         X = np.c_[X, X_hi[:, k_low:k]]
@@ -168,6 +271,27 @@ def _mass_basis(M, massless):
     keep = s > MASSLESS_DIRECTION * s.max()
     S1, S0 = d[:, None] * U[:, keep], d[:, None] * U[:, ~keep]
     return m, S1, S0, s[keep]
+
+
+def _n_mass(M, massless) -> int:
+    """Number of directions that carry mass (the modes with a finite frequency).
+
+    The eigen decomposition of :func:`_mass_basis` costs as much as the modes themselves;
+    a Cholesky factor of the diagonally scaled mass less ``MASSLESS_DIRECTION`` times a
+    Gershgorin bound of its largest eigenvalue (>= the threshold ``_mass_basis`` applies)
+    proves, at a tenth of the cost, the usual case: every direction carries mass.
+    """
+    m = np.flatnonzero(~massless)
+    Ms = M[np.ix_(m, m)] if len(m) < len(M) else M.copy()
+    d = 1.0 / np.sqrt(np.diag(Ms))
+    Ms *= np.outer(d, d)
+    bound = float(np.abs(Ms).sum(axis=1).max())
+    Ms[np.diag_indices_from(Ms)] -= MASSLESS_DIRECTION * bound
+    try:
+        la.cholesky(Ms, overwrite_a=True, check_finite=False)
+        return len(m)
+    except la.LinAlgError:
+        return _mass_basis(M, massless)[1].shape[1]
 
 
 def _direct(K, M, massless, system):
@@ -299,7 +423,7 @@ ZERO_EIGENVALUE = 1e-12
 
 
 def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, autospc: bool = False,
-                sigma: float | None = None, tol: float = 0.0) -> Modes:
+                sigma: float | None = None, tol: float = 0.0, max_frequency_hz: float | None = None) -> Modes:
     """Lowest natural frequencies and mass-normalised mode shapes.
 
     Parameters
@@ -320,6 +444,10 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
         (:func:`default_shift`) so that free-free models (singular K) work.
     tol : float
         ARPACK relative tolerance (0 = machine precision).
+    max_frequency_hz : float, optional
+        Every mode at or below this frequency [Hz] instead of ``n_modes`` modes: the dense
+        solver finds them by value; shift-invert starts from ``n_modes`` and doubles the
+        count until a mode lies above it (``method="auto"`` then decides on ``n_modes``).
 
     Returns
     -------
@@ -352,10 +480,10 @@ def solve_modes(model_or_system, n_modes: int = 20, method: str = "auto", *, aut
     system = model_or_system if isinstance(model_or_system, System) else assemble(model_or_system, autospc=autospc)
     cholmod_available()  # loads cvxopt's own BLAS before the thread limit is set
     with blas_threads(BLAS_THREADS):
-        return _solve_modes(system, n_modes, method, sigma, tol)
+        return _solve_modes(system, n_modes, method, sigma, tol, max_frequency_hz)
 
 
-def _solve_modes(system: System, n_modes: int, method: str, sigma, tol) -> Modes:
+def _solve_modes(system: System, n_modes: int, method: str, sigma, tol, max_frequency_hz=None) -> Modes:
     if method not in ("auto", "dense", "sparse"):
         raise ValueError(f"method must be 'auto', 'dense' or 'sparse', got {method!r}")
     n = system.n_dof
@@ -366,10 +494,19 @@ def _solve_modes(system: System, n_modes: int, method: str, sigma, tol) -> Modes
                  or k >= n - 1)
     proven = False
     if use_dense:
-        lam, X, proven = _dense(system, k, sigma)
+        lam, X, proven = _dense(system, k, sigma, max_frequency_hz)
         used = "dense"
     else:
         lam, X, proven = _shift_invert(system, k, sigma, tol)
+        # Every mode below a frequency: double the count until one lies above it (the
+        # Lanczos cost grows with the count, so no more are asked for than needed).
+        while (max_frequency_hz is not None and len(lam) == k and k <= n // 3
+               and lam[-1] <= (2 * np.pi * max_frequency_hz) ** 2):
+            k = min(2 * k, n)
+            lam, X, proven = _shift_invert(system, k, sigma, tol)
+        if max_frequency_hz is not None:
+            keep = lam <= (2 * np.pi * max_frequency_hz) ** 2
+            lam, X = lam[keep], X[:, keep]
         used = "shift-invert"
     # Mass-normalise explicitly (ARPACK's normalisation is only as good as its tolerance).
     mm = np.einsum("ij,ij->j", X, system.M @ X)

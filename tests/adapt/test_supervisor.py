@@ -53,13 +53,13 @@ def test_a_better_controller_passes(structure, controller):
     v = check_candidate(structure, controller, _zero(structure),
                         SupervisorSettings(band=(40.0, 450.0)))
     assert v.accepted, v.reasons
-    assert v.figures["disk_margin_db"] >= 6
+    assert v.figures.disk_margin_db >= 6
 
 
 def test_detection_by_a_moved_mode_and_not_without(structure, controller):
     fit = ClosedLoopModel(structure, np.zeros((8, 3)), "truth", 0.0, 0.0)
-    assert not detect(fit, controller, FREQS[1:])["changed"]
+    assert not detect(fit, controller, FREQS[1:]).changed
     moved = modal_structure([f * 0.97 for f in FREQS])
     fit = ClosedLoopModel(moved, np.zeros((8, 3)), "truth", 0.0, 0.0)
     d = detect(fit, controller, FREQS[1:])
-    assert d["changed"] and max(d["shift"]) == pytest.approx(0.03, rel=0.05)
+    assert d.changed and max(d.shift) == pytest.approx(0.03, rel=0.05)

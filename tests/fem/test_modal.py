@@ -183,3 +183,22 @@ def test_lumped_mass_dense_and_shift_invert_agree_despite_massless_rotations():
     d = solve_modes(m, 6, method="dense").frequencies_hz
     s = solve_modes(m, 6, method="sparse").frequencies_hz
     assert np.max(np.abs(s / d - 1.0)) < 1e-10
+
+
+@pytest.mark.parametrize("driver", ["evr", "gvx", "gvd", "gv"])
+def test_dense_modes_of_a_spring_chain_equal_the_closed_form_by_count_and_by_value(driver):
+    """n unit masses in a chain of unit springs from a wall (fixed-free):
+    ``lambda_j = 2 - 2 cos((2 j - 1) pi / (2 n + 1))``; shapes mass-normalised."""
+    from trussid.fem.modal import dense_modes
+
+    n = 40
+    K = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    K[-1, -1] = 1.0
+    M = np.eye(n)
+    exact = 2 - 2 * np.cos((2 * np.arange(1, n + 1) - 1) * np.pi / (2 * n + 1))
+    lam, X = dense_modes(K, M, 7, driver=driver)
+    np.testing.assert_allclose(lam, exact[:7], rtol=1e-12)
+    np.testing.assert_allclose(X.T @ M @ X, np.eye(7), atol=1e-12)
+    f_cut = np.sqrt(0.5 * (exact[9] + exact[10])) / (2 * np.pi)   # ten modes below it
+    lam_v, _ = dense_modes(K, M, driver=driver, max_frequency_hz=f_cut)
+    np.testing.assert_allclose(lam_v, exact[:10], rtol=1e-12)

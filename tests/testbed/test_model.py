@@ -370,7 +370,8 @@ def test_fine_meshes_take_the_sparse_path_and_match_a_dense_solution():
     frequency found by count-doubling, and the wall sweep's sparse path agrees too."""
     import scipy.linalg as la
 
-    from trussid.testbed.walls import DENSE_MAX_DOF, solve_testbed_modes, wall_basis, wall_modes
+    from trussid.fem.modal import DENSE_MAX_DOF
+    from trussid.testbed.walls import solve_testbed_modes, wall_basis, wall_modes
 
     tbm = build_testbed(elements_per_segment=10)
     system = assemble(tbm.model)

@@ -18,7 +18,7 @@ spectral radius at every switch (a check the supervisor cannot make in a lab).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -90,11 +90,81 @@ class SupervisorSettings:
 @dataclass
 class Verdict:
     """A supervisor check: ``accepted`` and the figures behind it (``reasons`` lists every
-    failed criterion, empty when accepted)."""
+    failed criterion, empty when accepted).
+
+    Attributes
+    ----------
+    accepted : bool
+    reasons : list of str
+    figures : CandidateFigures or FreshFigures
+    """
 
     accepted: bool
     reasons: list
-    figures: dict
+    figures: object
+
+
+def _detail(record) -> dict:
+    """A typed figure record as an event's plain detail (fields that are None left out)."""
+    return {k: v for k, v in asdict(record).items() if v is not None}
+
+
+@dataclass(frozen=True)
+class CandidateFigures:
+    """The model checks' figures of a candidate controller (:func:`check_candidate`).
+
+    Attributes
+    ----------
+    stable : bool
+    spectral_radius : float
+    dominant_hz, dominant_damping, running_dominant_damping : list of float
+        The dominant modes [Hz], their damping with the candidate and with the running
+        controller (ratios).
+    others_ratio : float
+        Least fraction of its damping another mode keeps.
+    disk_margin_db : float or None
+        MIMO disk gain margin [dB] (None when the loop is unstable: not computed).
+    """
+
+    stable: bool
+    spectral_radius: float
+    dominant_hz: list
+    dominant_damping: list
+    running_dominant_damping: list
+    others_ratio: float
+    disk_margin_db: float | None = None
+
+
+@dataclass(frozen=True)
+class FreshFigures:
+    """One-step prediction ratios [dB] of a model on its own and on a fresh record
+    (:func:`check_fresh`)."""
+
+    prediction_db_identification: float
+    prediction_db_fresh: float
+
+
+@dataclass(frozen=True)
+class Detection:
+    """What :func:`detect` found.
+
+    Attributes
+    ----------
+    changed : bool
+    dominant_hz : list of float
+        Dominant modes of the new model [Hz].
+    shift : list of float
+        Each one's relative distance to the nearest reference frequency.
+    predicted_damping : list of float
+        The running controller's damping of each on the new model.
+    stable_on_model : bool
+    """
+
+    changed: bool
+    dominant_hz: list
+    shift: list
+    predicted_damping: list
+    stable_on_model: bool
 
 
 def redesign(fit: ClosedLoopModel, rec: ClosedLoopRecord,
@@ -137,11 +207,11 @@ def check_candidate(model, candidate, running,
     T = settings.thresholds
     new = mode_damping(model, candidate, settings.band)
     old = mode_damping(model, running, settings.band)
-    fig = {"stable": new.stable, "spectral_radius": new.spectral_radius,
-           "dominant_hz": new.dominant_frequency_hz.tolist(),
-           "dominant_damping": new.dominant_damping.tolist(),
-           "running_dominant_damping": old.dominant_damping.tolist(),
-           "others_ratio": new.others_ratio}
+    fig = CandidateFigures(stable=new.stable, spectral_radius=new.spectral_radius,
+                           dominant_hz=new.dominant_frequency_hz.tolist(),
+                           dominant_damping=new.dominant_damping.tolist(),
+                           running_dominant_damping=old.dominant_damping.tolist(),
+                           others_ratio=new.others_ratio)
     reasons = []
     if not new.stable:
         reasons.append(f"unstable on the model (|z| = {new.spectral_radius:.4f})")
@@ -154,7 +224,7 @@ def check_candidate(model, candidate, running,
     if new.others_ratio < T.other_ratio_nominal:
         reasons.append(f"another mode keeps {new.others_ratio:.2f} of its damping")
     dm = disk_margins(model, candidate).mimo
-    fig["disk_margin_db"] = dm.gain_db
+    fig = replace(fig, disk_margin_db=dm.gain_db)
     if dm.gain_db < T.mimo_gm_nominal_db:
         reasons.append(f"MIMO disk margin {dm.gain_db:.1f} dB (< {T.mimo_gm_nominal_db:g})")
     return Verdict(not reasons, reasons, fig)
@@ -172,7 +242,7 @@ def check_fresh(fit: ClosedLoopModel, identification: ClosedLoopRecord,
                               K=fit.K, skip=skip)["overall"]
     new = prediction_ratio_db(fit.model, fresh.plant_input, fresh.measured, K=fit.K,
                               skip=skip)["overall"]
-    fig = {"prediction_db_identification": own, "prediction_db_fresh": new}
+    fig = FreshFigures(prediction_db_identification=own, prediction_db_fresh=new)
     ok = new >= own - settings.max_prediction_loss_db
     reasons = [] if ok else [f"one-step prediction on fresh data {new:.1f} dB, "
                              f"{own - new:.1f} dB below the identification record's"]
@@ -276,7 +346,7 @@ class AdaptRun:
 
 
 def detect(fit: ClosedLoopModel, running, reference_hz,
-           settings: SupervisorSettings = SupervisorSettings()) -> dict:
+           settings: SupervisorSettings = SupervisorSettings()) -> Detection:
     """Has the plant changed? ``changed`` when a dominant mode of ``fit``'s model is more
     than ``detect_shift`` from the nearest of ``reference_hz`` (the dominant modes of the
     model the running controller was accepted on), or the running controller's least
@@ -287,9 +357,8 @@ def detect(fit: ClosedLoopModel, running, reference_hz,
     low = float(md.dominant_damping.min()) if md.stable else 0.0
     changed = (max(shift) > settings.detect_shift
                or low < settings.detect_damping * settings.target_damping)
-    return {"changed": bool(changed), "dominant_hz": md.dominant_frequency_hz.tolist(),
-            "shift": shift, "predicted_damping": md.dominant_damping.tolist(),
-            "stable_on_model": md.stable}
+    return Detection(changed=bool(changed), dominant_hz=md.dominant_frequency_hz.tolist(), shift=shift,
+                     predicted_damping=md.dominant_damping.tolist(), stable_on_model=md.stable)
 
 
 def adapt(truth, controller, reference_hz, settings: AdaptSettings = AdaptSettings(),
@@ -336,15 +405,15 @@ def adapt(truth, controller, reference_hz, settings: AdaptSettings = AdaptSettin
         det = detect(fit, running, reference_hz, sv)
         cpu = fit.cpu_seconds + time.process_time() - c0
         cpu_since_change += cpu
-        run.events.append(Event(t, "identified", cpu, det))
+        run.events.append(Event(t, "identified", cpu, _detail(det)))
         say(f"t = {t:.2f} s: identified {fit.model.nstates} states ({fit.cpu_seconds:.1f} s CPU); "
-            f"dominant modes {', '.join(f'{f:.1f}' for f in det['dominant_hz'])} Hz, "
-            f"change {'detected' if det['changed'] else 'not detected'}")
-        if not det["changed"]:
+            f"dominant modes {', '.join(f'{f:.1f}' for f in det.dominant_hz)} Hz, "
+            f"change {'detected' if det.changed else 'not detected'}")
+        if not det.changed:
             continue
         if run.detected_at is None:
             run.detected_at, run.detect_cpu_seconds = t, cpu_since_change
-            run.events.append(Event(t, "detected", 0.0, det))
+            run.events.append(Event(t, "detected", 0.0, _detail(det)))
         pending = _candidate(run, fit, rec, running, t, sv, say)
     return run
 
@@ -359,14 +428,14 @@ def _fresh_check(run: AdaptRun, pending, rec, truth, t, sv, say):
     run.redesign_cpu_seconds = (run.redesign_cpu_seconds or 0.0) + cpu
     if not v.accepted:
         run.events.append(Event(t, "rejected", cpu, {"design": label, "stage": "fresh data",
-                                                     "reasons": v.reasons, **v.figures}))
+                                                     "reasons": v.reasons, **_detail(v.figures)}))
         say(f"t = {t:.2f} s: {label} redesign rejected on fresh data: {'; '.join(v.reasons)}")
         return None
     run.controllers.append(des.controller)
     run.switch_times.append(t)
     run.truth_spectral_radius.append(_rho(truth, des.controller))
     run.switched_at = t
-    run.events.append(Event(t, "switched", cpu, {"design": label, **v.figures}))
+    run.events.append(Event(t, "switched", cpu, {"design": label, **_detail(v.figures)}))
     say(f"t = {t:.2f} s: switched to the {label} redesign "
         f"(truth's closed-loop |z|max {run.truth_spectral_radius[-1]:.6f})")
     return des.controller
@@ -385,11 +454,11 @@ def _candidate(run: AdaptRun, fit, rec, running, t, sv, say):
         v = check_candidate(fit.model, des.controller, running, sv)
         if not v.accepted:
             run.events.append(Event(t, "rejected", 0.0, {"design": label, "stage": "model",
-                                                         "reasons": v.reasons, **v.figures}))
+                                                         "reasons": v.reasons, **_detail(v.figures)}))
             say(f"t = {t:.2f} s: {label} redesign rejected on the model: "
                 f"{'; '.join(v.reasons)}")
             continue
-        score = min(v.figures["dominant_damping"])
+        score = min(v.figures.dominant_damping)
         if best is None or score > best[0]:
             best = (score, label, des, v)
     cpu = time.process_time() - c0
@@ -400,10 +469,10 @@ def _candidate(run: AdaptRun, fit, rec, running, t, sv, say):
         say(f"t = {t:.2f} s: no redesign passed; the running controller stays")
         return None
     _, label, des, v = best
-    run.events.append(Event(t, "candidate", cpu, {"design": label, **v.figures}))
+    run.events.append(Event(t, "candidate", cpu, {"design": label, **_detail(v.figures)}))
     say(f"t = {t:.2f} s: {label} redesign passed the model checks "
-        f"({', '.join(f'{100 * z:.1f}' for z in v.figures['dominant_damping'])} %, "
-        f"margin {v.figures['disk_margin_db']:.1f} dB); waiting for fresh data")
+        f"({', '.join(f'{100 * z:.1f}' for z in v.figures.dominant_damping)} %, "
+        f"margin {v.figures.disk_margin_db:.1f} dB); waiting for fresh data")
     return label, des, fit, rec
 
 
@@ -412,5 +481,5 @@ def _rho(truth, controller) -> float:
 
 
 __all__ = ["MODE_DAMPING_MAX", "DITHER_BAND", "mode_damping",
-           "SupervisorSettings", "Verdict", "redesign", "check_candidate", "check_fresh",
+           "SupervisorSettings", "Verdict", "CandidateFigures", "FreshFigures", "Detection", "redesign", "check_candidate", "check_fresh",
            "AdaptSettings", "Event", "AdaptRun", "detect", "adapt"]

@@ -26,10 +26,10 @@ importing it (the registry there imports this module).
 
 from __future__ import annotations
 
-import json
 import math
 import re
 import tempfile
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import pyarrow as pa
@@ -94,28 +94,56 @@ def _with_values(deck: ParsedDeck, targets: list) -> list:
     return cards
 
 
+@dataclass(frozen=True)
+class DeckOptions:
+    """Options of the ``deck`` evaluator.
+
+    Attributes
+    ----------
+    deck : str or None
+        The NASTRAN deck file (required).
+    n_modes : int
+        Lowest modes per point.
+    """
+
+    deck: str | None = None
+    n_modes: int = 10
+
+
+@dataclass(frozen=True)
+class DeckContext:
+    """What every point of a deck study shares: the parsed deck."""
+
+    deck: object
+
+
 class DeckModesEvaluator:
     """Natural frequencies [Hz] of a deck at the point's property values (module docstring)."""
 
     name = "deck"
-    options = {"deck": None, "n_modes": 10}
+    options = asdict(DeckOptions())
     default_chunk = 4
 
     def resolved(self, options: dict) -> dict:
+        """``options`` over the defaults, as plain data."""
         return {**self.options, **options}
+
+    def typed(self, options: dict) -> DeckOptions:
+        """``options`` over the defaults as :class:`DeckOptions`."""
+        return DeckOptions(**self.resolved(options))
 
     def check(self, spec, where: str = "spec") -> None:
         for k in spec.options:
             if k not in self.options:
                 raise StudyDeckError(f"{where}: [evaluate]: unknown option {k!r} for 'deck' "
                                      f"(expected one of {', '.join(self.options)})")
-        opts = self.resolved(spec.options)
-        n = opts["n_modes"]
+        opts = self.typed(spec.options)
+        n = opts.n_modes
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
             raise StudyDeckError(f"{where}: [evaluate] n_modes must be an integer >= 1, got {n!r}")
-        if not isinstance(opts["deck"], str):
+        if not isinstance(opts.deck, str):
             raise StudyDeckError(f"{where}: [evaluate] deck = \"file.bdf\" is needed")
-        bdf = _parse(opts["deck"])
+        bdf = _parse(opts.deck)
         for a in spec.parameters:
             _target(bdf, a.name, where)
             vals = a.values if a.values is not None else (a.low, a.high)
@@ -125,20 +153,19 @@ class DeckModesEvaluator:
                                          f"got {v!r}")
 
     def columns(self, options: dict):
-        return [(f"f{k + 1}", pa.float64()) for k in range(self.resolved(options)["n_modes"])]
+        return [(f"f{k + 1}", pa.float64()) for k in range(self.typed(options).n_modes)]
 
-    def context(self, options: dict):
-        opts = self.resolved(options)
-        return {"deck": _parse(opts["deck"]), "key": json.dumps(opts, sort_keys=True)}
+    def context(self, options: dict) -> DeckContext:
+        return DeckContext(deck=_parse(self.typed(options).deck))
 
     def point(self, ctx, params: dict, options: dict) -> dict:
-        opts = self.resolved(options)
-        deck = ctx["deck"]
+        opts = self.typed(options)
+        deck = ctx.deck
         targets = [(*_target(deck, name, "point"), v) for name, v in params.items()]
         with tempfile.TemporaryDirectory() as tmp:
-            path = Path(tmp) / Path(opts["deck"]).name
+            path = Path(tmp) / Path(opts.deck).name
             path.write_text(deck_text(deck, _with_values(deck, targets)))
             model, info = read_bdf(path)
-            f = solve_modes(model, n_modes=opts["n_modes"], autospc=info.autospc).frequencies_hz
+            f = solve_modes(model, n_modes=opts.n_modes, autospc=info.autospc).frequencies_hz
         return {f"f{k + 1}": float(f[k]) if k < len(f) else math.nan
-                for k in range(opts["n_modes"])}
+                for k in range(opts.n_modes)}

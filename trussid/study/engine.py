@@ -37,7 +37,7 @@ import socket
 import sys
 import time
 import uuid
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import dask
@@ -244,44 +244,97 @@ def plan(spec: StudySpec) -> tuple[list[str], list[tuple], pa.Schema]:
     return names, points, pa.schema(fields)
 
 
-def evaluate_chunk(evaluate: str, options: dict, names: list[str], chunk: list,
-                   timing: dict | None = None) -> list[dict]:
-    """Rows of the points ``chunk`` = ``[(point, values), ...]``.
+@dataclass(frozen=True)
+class PointStatus:
+    """How one point went: the status columns of its row (:data:`trussid.study.store.STATUS_COLUMNS`).
 
-    Every point is evaluated under a one-thread BLAS limit; an exception becomes a failed
-    row with ``"Type: message"`` (first line) as its ``error``. ``timing``, if given,
-    receives ``context_cpu_s``: the CPU of getting the evaluator's context [s].
+    Attributes
+    ----------
+    status : str
+        "ok" or "failed".
+    error : str
+        ``"Type: message"`` (first line) of a failed point, else "".
+    seconds, cpu_seconds : float
+        Wall time and CPU time of this thread [s].
     """
+
+    status: str
+    error: str
+    seconds: float
+    cpu_seconds: float
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """Rows of a chunk of points, each point's status, and the context's CPU [s]."""
+
+    rows: list
+    statuses: list
+    context_cpu_s: float
+
+
+def _evaluate(evaluate: str, options: dict, names: list[str], chunk: list) -> Chunk:
     ev = get_evaluator(evaluate)
     worker = f"{socket.gethostname()}:{os.getpid()}"
-    rows = []
+    rows, statuses = [], []
     with blas_threads(1):
         ctx_error, c0 = None, time.thread_time()
         try:
             ctx = ev.context(options)
         except Exception as exc:  # any error building the testbed or plant: every point fails with it
             ctx, ctx_error = None, exc
-        if timing is not None:
-            timing["context_cpu_s"] = time.thread_time() - c0
+        context_cpu_s = time.thread_time() - c0
         for point, values in chunk:
             params = dict(zip(names, values))
             row = {"point": int(point), **params, "worker": worker}
             t0, c0 = time.perf_counter(), time.thread_time()
+            status, error = "ok", ""
             try:
                 if ctx_error is not None:
                     raise ctx_error
                 row.update(ev.point(ctx, params, options))
-                row["status"], row["error"] = "ok", ""
             except Exception as exc:  # whatever a point raises (numerics, fits): a failed row
                 text = str(exc).strip().splitlines()
-                row["status"] = "failed"
-                row["error"] = f"{type(exc).__name__}: {text[0] if text else ''}"
-            row["seconds"] = time.perf_counter() - t0
+                status, error = "failed", f"{type(exc).__name__}: {text[0] if text else ''}"
             # CPU time of this thread (BLAS runs in it at one thread): the cost of the
             # point whatever else shares the machine.
-            row["cpu_seconds"] = time.thread_time() - c0
+            st = PointStatus(status=status, error=error, seconds=time.perf_counter() - t0,
+                             cpu_seconds=time.thread_time() - c0)
+            row.update(asdict(st))
             rows.append(row)
-    return rows
+            statuses.append(st)
+    return Chunk(rows=rows, statuses=statuses, context_cpu_s=context_cpu_s)
+
+
+def evaluate_chunk(evaluate: str, options: dict, names: list[str], chunk: list,
+                   timing: dict | None = None) -> list[dict]:
+    """Rows of the points ``chunk`` = ``[(point, values), ...]``.
+
+    Every point is evaluated under a one-thread BLAS limit; an exception becomes a failed
+    row with ``"Type: message"`` (first line) as its ``error``.
+
+    Parameters
+    ----------
+    evaluate : str
+        The evaluator's name.
+    options : dict
+        Its options.
+    names : list of str
+        Parameter names, in the order of each point's values.
+    chunk : list of (int, tuple)
+        The points and their values.
+    timing : dict, optional
+        Receives ``context_cpu_s``: the CPU of getting the evaluator's context [s].
+
+    Returns
+    -------
+    list of dict
+        One row per point: its number, parameters, outputs and status columns.
+    """
+    out = _evaluate(evaluate, options, names, chunk)
+    if timing is not None:
+        timing["context_cpu_s"] = out.context_cpu_s
+    return out.rows
 
 
 def evaluate_batch(evaluate: str, options: dict, names: list[str], batch: list,
@@ -291,17 +344,17 @@ def evaluate_batch(evaluate: str, options: dict, names: list[str], batch: list,
     The table is built here, on the worker, so that the driver only writes it.
     """
     t0, c0 = time.perf_counter(), time.thread_time()
-    timing: dict = {}
-    rows = evaluate_chunk(evaluate, options, names, batch, timing)
+    out = _evaluate(evaluate, options, names, batch)
     reasons: dict = {}
-    for r in rows:
-        if r["status"] != "ok":
-            reasons[r["error"]] = reasons.get(r["error"], 0) + 1
-    table = pa.Table.from_pylist(rows, schema=schema)
-    return BatchResult(table=table, points=len(rows), failed=sum(reasons.values()), reasons=reasons,
-                       eval_s=sum(r["seconds"] for r in rows), eval_cpu_s=sum(r["cpu_seconds"] for r in rows),
+    for st in out.statuses:
+        if st.status != "ok":
+            reasons[st.error] = reasons.get(st.error, 0) + 1
+    table = pa.Table.from_pylist(out.rows, schema=schema)
+    return BatchResult(table=table, points=len(out.rows), failed=sum(reasons.values()), reasons=reasons,
+                       eval_s=sum(st.seconds for st in out.statuses),
+                       eval_cpu_s=sum(st.cpu_seconds for st in out.statuses),
                        task_s=time.perf_counter() - t0, task_cpu_s=time.thread_time() - c0,
-                       context_cpu_s=timing["context_cpu_s"])
+                       context_cpu_s=out.context_cpu_s)
 
 
 class BatchSizer:
@@ -391,12 +444,13 @@ def local_cluster(workers: int, config: dict | None = None):
 def _thread_count(client):
     """``threads()``: the cluster's worker threads, looked up again at most once a second
     (workers may join or leave: dask-jobqueue jobs start late, a machine is lost)."""
-    seen = {"n": max(1, sum(client.nthreads().values())), "t": time.perf_counter()}
+    n, t = max(1, sum(client.nthreads().values())), time.perf_counter()
 
     def threads() -> int:
-        if time.perf_counter() - seen["t"] > 1.0:
-            seen["n"], seen["t"] = max(1, sum(client.nthreads().values())), time.perf_counter()
-        return seen["n"]
+        nonlocal n, t
+        if time.perf_counter() - t > 1.0:
+            n, t = max(1, sum(client.nthreads().values())), time.perf_counter()
+        return n
 
     return threads
 

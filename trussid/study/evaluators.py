@@ -23,7 +23,7 @@ import functools
 import json
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import MISSING, asdict, dataclass, field, fields, replace
 
 import numpy as np
 import pyarrow as pa
@@ -40,12 +40,12 @@ from trussid.study.deck import DeckModesEvaluator
 from trussid.study.errors import StudyError
 from trussid.study.plants import PLANTS, record
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.model import build_testbed
+from trussid.testbed.model import N_STRUTS, build_testbed
 from trussid.testbed.walls import design_at_walls, wall_basis, wall_modes
 from trussid.testbed.plant import testbed_plant
 from trussid.testbed.sensitivity import wall_sensitivities
 
-WALLS = tuple(f"wall{i}" for i in range(6))
+WALLS = tuple(f"wall{i}" for i in range(N_STRUTS))
 
 
 def _number(name, v, where, *, positive=False, integer=False, minimum=None):
@@ -79,16 +79,36 @@ def _check_damping(name, v, where):
         raise StudyError(f"{where}: parameter {name!r}: damping ratio must be in (0, 1), got {v!r}")
 
 
+def _defaults(options_type) -> dict:
+    """The options of an evaluator and their defaults, from its options dataclass."""
+    return {f.name: f.default if f.default_factory is MISSING else f.default_factory()
+            for f in fields(options_type)}
+
+
 class Evaluator:
-    """Base of the evaluators (module docstring)."""
+    """Base of the evaluators (module docstring).
+
+    ``Options`` is the evaluator's frozen options dataclass: a spec's ``[evaluate]`` table
+    is checked against it (unknown keys named) and read through it (:meth:`typed`).
+    """
 
     name = ""
     parameters: dict = {}
-    options: dict = {}
+    Options: type = type(None)
     default_chunk = 1
 
+    @property
+    def options(self) -> dict:
+        """Option names and their defaults."""
+        return _defaults(self.Options)
+
     def resolved(self, options: dict) -> dict:
+        """``options`` over the defaults, as plain data (the context's cache key)."""
         return {**self.options, **options}
+
+    def typed(self, options: dict):
+        """``options`` over the defaults as this evaluator's ``Options`` dataclass."""
+        return self.Options(**self.resolved(options))
 
     def check(self, spec, where: str = "spec") -> None:
         for a in spec.parameters:
@@ -126,13 +146,57 @@ def _context(name: str, options_json: str):
 
 
 # ----------------------------------------------------------------------------- testbed
-def _testbed_of(options):
-    tb = options.get("testbed")
+@dataclass(frozen=True)
+class ModesOptions:
+    """Options of the ``modes`` evaluator.
+
+    Attributes
+    ----------
+    n_modes : int
+        Lowest modes per point.
+    labels : bool
+        Label each mode (where its energy sits).
+    testbed : dict or None
+        Testbed parameter table (default: the default testbed).
+    """
+
+    n_modes: int = 20
+    labels: bool = True
+    testbed: dict | None = None
+
+
+@dataclass(frozen=True)
+class SensitivitiesOptions:
+    """Options of the ``sensitivities`` evaluator (see :class:`ModesOptions`)."""
+
+    n_modes: int = 12
+    testbed: dict | None = None
+
+
+@dataclass(frozen=True)
+class PlantOptions:
+    """Options of the ``plant`` evaluator.
+
+    Attributes
+    ----------
+    n_modes : int
+        Modes in the plant (0: every mode below Nyquist).
+    n_freq : int
+        Frequency grid points up to Nyquist.
+    testbed : dict or None
+        Testbed parameter table.
+    """
+
+    n_modes: int = 0
+    n_freq: int = 2000
+    testbed: dict | None = None
+
+
+def _testbed_of(tb: dict | None):
     return Testbed() if not tb else testbed_from_dict(tb, source="[evaluate] testbed")
 
 
-def _check_n_modes(options, where, lo=1):
-    n = options.get("n_modes")
+def _check_n_modes(n, where, lo=1):
     if isinstance(n, bool) or not isinstance(n, int) or n < lo:
         raise StudyError(f"{where}: [evaluate] n_modes must be an integer >= {lo}, got {n!r}")
 
@@ -180,47 +244,52 @@ class ModesEvaluator(Evaluator):
 
     name = "modes"
     parameters = {w: _check_wall for w in WALLS}
-    options = {"n_modes": 20, "labels": True, "testbed": None}
+    Options = ModesOptions
     default_chunk = 20
 
     def check_options(self, options, where):
-        _check_n_modes(options, where)
-        if not isinstance(options["labels"], bool):
-            raise StudyError(f"{where}: [evaluate] labels must be true or false, got {options['labels']!r}")
-        if options["testbed"] is not None and not isinstance(options["testbed"], dict):
-            raise StudyError(f"{where}: [evaluate] testbed must be a parameter table or file name")
-        if options["testbed"]:
-            try:
-                _testbed_of(options)
-            except Exception as exc:  # ParameterError, ModelError...: the testbed's message names the item
-                raise StudyError(f"{where}: [evaluate] testbed: {exc}") from None
+        o = self.typed(options)
+        _check_n_modes(o.n_modes, where)
+        if not isinstance(o.labels, bool):
+            raise StudyError(f"{where}: [evaluate] labels must be true or false, got {o.labels!r}")
+        _check_testbed(o.testbed, where)
 
     def columns(self, options):
-        n = self.resolved(options)["n_modes"]
-        cols = [(f"f{k + 1}", pa.float64()) for k in range(n)]
-        if self.resolved(options)["labels"]:
-            cols += [(f"label{k + 1}", pa.string()) for k in range(n)]
+        o = self.typed(options)
+        cols = [(f"f{k + 1}", pa.float64()) for k in range(o.n_modes)]
+        if o.labels:
+            cols += [(f"label{k + 1}", pa.string()) for k in range(o.n_modes)]
         return cols
 
     def build_context(self, options):
-        tbm = build_testbed(_testbed_of(options))
+        tbm = build_testbed(_testbed_of(self.typed(options).testbed))
         return WallContext(tbm=tbm, basis=wall_basis(tbm))
 
     def modes(self, ctx, walls, n):
         return wall_modes(ctx.basis, walls, n)
 
     def point(self, ctx, params, options):
-        opts = self.resolved(options)
+        opts = self.typed(options)
         w = ctx.basis.check_walls(_walls(ctx, params))
-        if not opts["labels"]:
-            f, _ = self.modes(ctx, w, opts["n_modes"])
+        if not opts.labels:
+            f, _ = self.modes(ctx, w, opts.n_modes)
             return {f"f{k + 1}": float(v) for k, v in enumerate(f)}
         # the design at these walls (a real model and its modes) for the labels
-        design, modes = design_at_walls(ctx.tbm, ctx.basis, w, opts["n_modes"])
+        design, modes = design_at_walls(ctx.tbm, ctx.basis, w, opts.n_modes)
         out = {f"f{k + 1}": float(v) for k, v in enumerate(modes.frequencies_hz)}
         labels = label_testbed_modes(design, modes).labels
         out.update({f"label{k + 1}": lab for k, lab in enumerate(labels)})
         return out
+
+
+def _check_testbed(tb, where):
+    if tb is not None and not isinstance(tb, dict):
+        raise StudyError(f"{where}: [evaluate] testbed must be a parameter table or file name")
+    if tb:
+        try:
+            _testbed_of(tb)
+        except Exception as exc:  # ParameterError, ModelError...: the testbed's message names the item
+            raise StudyError(f"{where}: [evaluate] testbed: {exc}") from None
 
 
 class SensitivitiesEvaluator(ModesEvaluator):
@@ -228,25 +297,27 @@ class SensitivitiesEvaluator(ModesEvaluator):
     (:func:`trussid.testbed.sensitivity.wall_sensitivities`)."""
 
     name = "sensitivities"
-    options = {"n_modes": 12, "testbed": None}
+    Options = SensitivitiesOptions
     default_chunk = 20
 
     def check_options(self, options, where):
-        ModesEvaluator.check_options(self, {**options, "labels": False}, where)
+        o = self.typed(options)
+        _check_n_modes(o.n_modes, where)
+        _check_testbed(o.testbed, where)
 
     def columns(self, options):
-        n = self.resolved(options)["n_modes"]
+        n = self.typed(options).n_modes
         return ([(f"f{k + 1}", pa.float64()) for k in range(n)]
-                + [(f"dfdt{k + 1}_{i}", pa.float64()) for k in range(n) for i in range(6)])
+                + [(f"dfdt{k + 1}_{i}", pa.float64()) for k in range(n) for i in range(N_STRUTS)])
 
     def point(self, ctx, params, options):
-        n = self.resolved(options)["n_modes"]
+        n = self.typed(options).n_modes
         with warnings.catch_warnings():
             # a repeated pair is a property of the design, reported by its values
             warnings.simplefilter("ignore", RuntimeWarning)
             f, d = wall_sensitivities(ctx.basis, ctx.basis.check_walls(_walls(ctx, params)), n)
         out = {f"f{k + 1}": float(v) for k, v in enumerate(f)}
-        out.update({f"dfdt{k + 1}_{i}": float(d[k, i]) for k in range(len(f)) for i in range(6)})
+        out.update({f"dfdt{k + 1}_{i}": float(d[k, i]) for k in range(len(f)) for i in range(N_STRUTS)})
         return out
 
 
@@ -258,39 +329,37 @@ class PlantEvaluator(Evaluator):
 
     name = "plant"
     parameters = {**{w: _check_wall for w in WALLS}, "damping": _check_damping}
-    options = {"n_modes": 0, "n_freq": 2000, "testbed": None}
+    Options = PlantOptions
     default_chunk = 1
 
     def check_options(self, options, where):
-        n = options["n_modes"]
-        if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+        o = self.typed(options)
+        if isinstance(o.n_modes, bool) or not isinstance(o.n_modes, int) or o.n_modes < 0:
             raise StudyError(f"{where}: [evaluate] n_modes must be 0 (all below Nyquist) or a positive "
-                             f"integer, got {n!r}")
-        nf = options["n_freq"]
-        if isinstance(nf, bool) or not isinstance(nf, int) or nf < 10:
-            raise StudyError(f"{where}: [evaluate] n_freq must be an integer >= 10, got {nf!r}")
-        ModesEvaluator.check_options(self, {"n_modes": 1, "labels": False, "testbed": options["testbed"]},
-                                     where)
+                             f"integer, got {o.n_modes!r}")
+        if isinstance(o.n_freq, bool) or not isinstance(o.n_freq, int) or o.n_freq < 10:
+            raise StudyError(f"{where}: [evaluate] n_freq must be an integer >= 10, got {o.n_freq!r}")
+        _check_testbed(o.testbed, where)
 
     def columns(self, options):
         return [(f"{k}_ch{c}", pa.float64()) for c in (1, 2, 3) for k in ("peak_gain", "peak_hz", "h2")]
 
     def build_context(self, options):
-        return TestbedContext(tb=_testbed_of(options))
+        return TestbedContext(tb=_testbed_of(self.typed(options).testbed))
 
     def point(self, ctx, params, options):
         import scipy.linalg as la
 
-        opts = self.resolved(options)
+        opts = self.typed(options)
         walls = np.array(ctx.tb.struts.walls, float)
         for i, name in enumerate(WALLS):
             if name in params:
                 walls[i] = params[name]
         tb = ctx.tb.with_walls(tuple(float(v) for v in walls))
-        tp = testbed_plant(tb, n_modes=opts["n_modes"] or None, damping=params.get("damping"))
+        tp = testbed_plant(tb, n_modes=opts.n_modes or None, damping=params.get("damping"))
         d = tp.discrete
         A, B, C, D = (np.asarray(x, float) for x in (d.A, d.B, d.C, d.D))
-        f = np.linspace(0.0, 0.5 / d.dt, opts["n_freq"])[1:]
+        f = np.linspace(0.0, 0.5 / d.dt, opts.n_freq)[1:]
         H_all = frequency_response(d, f)  # (n_freq, p, m)
         Wo = la.solve_discrete_lyapunov(A.T, C.T @ C)
         out = {}
@@ -340,6 +409,63 @@ def _is_float(s):
     return True
 
 
+@dataclass(frozen=True)
+class IdentifyOptions:
+    """Options of the ``identify`` evaluator: the plant, the defaults of the point's
+    parameters, and how a fit is scored (:class:`IdentifyEvaluator`).
+
+    Attributes
+    ----------
+    plant : str
+        Benchmark plant (:data:`trussid.study.plants.PLANTS`).
+    seed, noise, order, method, n_samples
+        Defaults of the point parameters of the same names.
+    n_validation : int
+        Samples of the noise-free validation record.
+    band, mode_band : list of float
+        ``[low, high]`` [Hz] of the FRF error and of the scored structural modes.
+    block_rows : list of int
+        N4SID's block rows tried (the best by FRF error kept).
+    """
+
+    plant: str = "case_a"
+    seed: int = 11
+    noise: str = "60dB"
+    order: int = 24
+    method: str = "plid-subspace"
+    n_samples: int = 10000
+    n_validation: int = 4000
+    band: list = field(default_factory=lambda: [30.0, 790.0])
+    mode_band: list = field(default_factory=lambda: [30.0, 400.0])
+    block_rows: list = field(default_factory=lambda: [20, 30, 40, 60, 80])
+
+
+@dataclass(frozen=True)
+class FitPoint:
+    """The parameters of one fit (a point's values over the options' defaults)."""
+
+    seed: int
+    noise: str
+    order: int
+    method: str
+    n_samples: int
+
+
+@dataclass(frozen=True)
+class FitScore:
+    """The row of one fit (:func:`_score`); its fields are the evaluator's columns."""
+
+    max_db: float
+    rms_db: float
+    sim_db: float
+    freq_err_max_pct: float
+    damp_err_max_pct: float
+    damp_err_median_pct: float
+    fit_seconds: float
+    stable: bool
+    block_rows: int = -1
+
+
 class IdentifyEvaluator(Evaluator):
     """Simulate a record of a known plant, fit a model, score it against the truth.
 
@@ -359,23 +485,21 @@ class IdentifyEvaluator(Evaluator):
     name = "identify"
     parameters = {"seed": _check_seed, "noise": _check_noise, "order": _check_order,
                   "method": _check_method, "n_samples": _check_samples}
-    options = {"plant": "case_a", "seed": 11, "noise": "60dB", "order": 24, "method": "plid-subspace",
-               "n_samples": 10000, "n_validation": 4000, "band": [30.0, 790.0],
-               "mode_band": [30.0, 400.0], "block_rows": [20, 30, 40, 60, 80]}
+    Options = IdentifyOptions
     default_chunk = 1
 
     def check_options(self, options, where):
-        if options["plant"] not in PLANTS:
-            raise StudyError(f"{where}: [evaluate] plant {options['plant']!r} is unknown "
+        o = self.typed(options)
+        if o.plant not in PLANTS:
+            raise StudyError(f"{where}: [evaluate] plant {o.plant!r} is unknown "
                              f"(expected one of {', '.join(PLANTS)})")
-        for k in ("seed", "noise", "order", "method", "n_samples"):
-            self.parameters[k](k, options[k], f"{where}: [evaluate]")
-        for k in ("band", "mode_band"):
-            b = options[k]
+        for k in self.parameters:
+            self.parameters[k](k, getattr(o, k), f"{where}: [evaluate]")
+        for k, b in (("band", o.band), ("mode_band", o.mode_band)):
             if not (isinstance(b, list) and len(b) == 2 and all(isinstance(x, (int, float)) for x in b)
                     and 0 <= b[0] < b[1]):
                 raise StudyError(f"{where}: [evaluate] {k} must be [low, high] in Hz with low < high, got {b!r}")
-        br = options["block_rows"]
+        br = o.block_rows
         if not (isinstance(br, list) and br and all(isinstance(x, int) and x > 0 for x in br)):
             raise StudyError(f"{where}: [evaluate] block_rows must be a list of positive integers, got {br!r}")
 
@@ -385,52 +509,50 @@ class IdentifyEvaluator(Evaluator):
             ("stable", pa.bool_()), ("block_rows", pa.int64())]
 
     def build_context(self, options):
-        return CaseContext(case=PLANTS[options["plant"]]())
+        return CaseContext(case=PLANTS[self.typed(options).plant]())
 
     def point(self, ctx, params, options):
         import time
 
-        p = {**{k: v for k, v in self.resolved(options).items() if k in self.parameters}, **params}
-        opts = self.resolved(options)
+        opts = self.typed(options)
+        p = FitPoint(**{**{k: getattr(opts, k) for k in self.parameters}, **params})
         case = ctx.case
-        ex = record(case, int(p["n_samples"]), p["noise"], int(p["seed"]))
-        val = record(case, int(opts["n_validation"]), "none", int(p["seed"]) + 1000)
-        u, y, dt, n = ex.data.u, ex.data.y, case.plant.dt, int(p["order"])
-        if p["method"] == "n4sid":
+        ex = record(case, int(p.n_samples), p.noise, int(p.seed))
+        val = record(case, int(opts.n_validation), "none", int(p.seed) + 1000)
+        u, y, dt, n = ex.data.u, ex.data.y, case.plant.dt, int(p.order)
+        if p.method == "n4sid":
             best = None
-            for i in opts["block_rows"]:
+            for i in opts.block_rows:
                 if i * y.shape[1] < n + y.shape[1]:
                     continue
                 t0 = time.perf_counter()
                 fit = n4sid(u, y, n, i, dt)
-                m = _score(fit.with_d, case, val, time.perf_counter() - t0, opts)
-                m["block_rows"] = i
-                if best is None or m["rms_db"] < best["rms_db"]:
+                m = replace(_score(fit.with_d, case, val, time.perf_counter() - t0, opts), block_rows=i)
+                if best is None or m.rms_db < best.rms_db:
                     best = m
             if best is None:
-                raise ValueError(f"no block_rows in {opts['block_rows']} gives enough rows for order {n}")
-            return best
+                raise ValueError(f"no block_rows in {opts.block_rows} gives enough rows for order {n}")
+            return asdict(best)
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             # the fits' convergence warnings are about one record; the scores say how it went
             warnings.simplefilter("ignore", PLIDWarning)
             # progress=False: the study's own bar counts points; one per fit would garble it
-            if p["method"] == "plid-reduced":
+            if p.method == "plid-reduced":
                 ident = identify_reduced(u, y, n, dt, progress=False)
             else:
-                ident = identify(u, y, n, dt, start=p["method"].split("-", 1)[1], progress=False)
+                ident = identify(u, y, n, dt, start=p.method.split("-", 1)[1], progress=False)
         out = _score(ident.model, case, val, time.perf_counter() - t0, opts, K=ident.K)
         sub = ident.provenance.subspace
-        out["block_rows"] = sub.block_rows if sub is not None else -1
-        return out
+        return asdict(replace(out, block_rows=sub.block_rows if sub is not None else -1))
 
 
-def _score(model, case, val, seconds, opts, K=None) -> dict:
+def _score(model, case, val, seconds, opts: IdentifyOptions, K=None) -> FitScore:
     """The row of one fit, from :func:`trussid.plid.evaluate.compare` (the evaluator of
     ``trussid compare``, the demo and the benchmarks) on the validation record."""
     c = compare(model, case.plant, u=val.data.u, y=val.data.y, y_clean=val.y_clean, K=K,
-                band=tuple(opts["band"]))
-    lo, hi = opts["mode_band"]
+                band=tuple(opts.band))
+    lo, hi = opts.mode_band
     fe, de = [], []
     for r in c.poles:
         tf = r.true_frequency_hz
@@ -439,11 +561,11 @@ def _score(model, case, val, seconds, opts, K=None) -> dict:
         fe.append(abs(r.frequency_error_percent))
         de.append(abs(r.damping - r.true_damping) / r.true_damping * 100)
     nan = float("nan")
-    return {"max_db": float(c.frf.max_db), "rms_db": float(c.frf.rms_db),
-            "sim_db": float(c.simulation.overall) if c.stable else nan,
-            "freq_err_max_pct": max(fe) if fe else nan, "damp_err_max_pct": max(de) if de else nan,
-            "damp_err_median_pct": float(np.median(de)) if de else nan, "fit_seconds": float(seconds),
-            "stable": bool(c.stable), "block_rows": -1}
+    return FitScore(max_db=float(c.frf.max_db), rms_db=float(c.frf.rms_db),
+                    sim_db=float(c.simulation.overall) if c.stable else nan,
+                    freq_err_max_pct=max(fe) if fe else nan, damp_err_max_pct=max(de) if de else nan,
+                    damp_err_median_pct=float(np.median(de)) if de else nan, fit_seconds=float(seconds),
+                    stable=bool(c.stable))
 
 
 EVALUATORS = {e.name: e for e in (ModesEvaluator(), SensitivitiesEvaluator(), PlantEvaluator(),

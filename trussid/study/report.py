@@ -23,6 +23,7 @@ from trussid._util.files import atomic_path
 from trussid.plots import save_figure
 from trussid.study.spec import spec_from_dict
 from trussid.study.store import read_study
+from trussid.testbed.model import N_STRUTS
 
 MM = 1e-3
 
@@ -38,6 +39,11 @@ def _varied(spec, df, numeric=True):
     return out
 
 
+def _ok(df):
+    """The rows of the points that were computed (status "ok")."""
+    return df[df["status"] == "ok"] if len(df) else df
+
+
 def modes_figure(df, walls: list[str], n_modes: int, fmax: float = 400.0, slice_at: dict | None = None,
                  title: str | None = None) -> Figure:
     """Every design's frequencies [Hz] against each wall in ``walls`` [mm], by label.
@@ -50,7 +56,7 @@ def modes_figure(df, walls: list[str], n_modes: int, fmax: float = 400.0, slice_
     keeps, in panel ``i``, only the designs whose *other* walls take those values (a
     one-at-a-time sweep).
     """
-    ok = df[df["status"] == "ok"]
+    ok = _ok(df)
     nc = min(3, len(walls))
     nr = int(np.ceil(len(walls) / nc))
     fig = Figure(figsize=(4.4 * nc + 0.6, 3.6 * nr + 0.9))
@@ -95,13 +101,13 @@ def modes_figure(df, walls: list[str], n_modes: int, fmax: float = 400.0, slice_
 
 def sensitivities_figure(df, n_modes: int) -> Figure:
     """Median ``df_k/dt_i`` [Hz per 0.01 mm] as a mode x strut map."""
-    ok = df[df["status"] == "ok"]
+    ok = _ok(df)
     S = np.array([[ok[f"dfdt{k}_{i}"].median() for i in range(6)] for k in range(1, n_modes + 1)]) * 0.01 * MM
     fig = Figure(figsize=(6.5, 0.32 * n_modes + 1.8))
     ax = fig.subplots()
     lim = np.nanmax(np.abs(S)) or 1.0
     im = ax.imshow(S, cmap="RdBu_r", vmin=-lim, vmax=lim, aspect="auto")
-    ax.set_xticks(range(6), [f"strut {i}" for i in range(6)])
+    ax.set_xticks(range(N_STRUTS), [f"strut {i}" for i in range(N_STRUTS)])
     f = [ok[f"f{k}"].median() for k in range(1, n_modes + 1)]
     ax.set_yticks(range(n_modes), [f"{k + 1}: {f[k]:.1f} Hz" for k in range(n_modes)])
     fig.colorbar(im, ax=ax, label="df/dt [Hz per 0.01 mm of wall]")
@@ -118,7 +124,7 @@ def _noise_key(v: str) -> float:
 
 def identify_figure(df, spec) -> Figure:
     """FRF RMS error [dB] against noise level and order, one series per method."""
-    ok = df[df["status"] == "ok"]
+    ok = _ok(df)
     by = [c for c in ("noise", "order", "n_samples") if c in _varied(spec, df, numeric=False)] or ["seed"]
     if "seed" not in df:
         by = by if by != ["seed"] else ["point"]
@@ -147,7 +153,7 @@ def identify_figure(df, spec) -> Figure:
 
 def plant_figure(df, params: list[str]) -> Figure:
     """Peak gain and H2 norm per channel against each varied parameter."""
-    ok = df[df["status"] == "ok"]
+    ok = _ok(df)
     fig = Figure(figsize=(4.2 * max(1, len(params)) + 0.6, 7.0))
     axes = fig.subplots(2, max(1, len(params)), squeeze=False)
     for j, p in enumerate(params):
@@ -169,11 +175,11 @@ def plant_figure(df, params: list[str]) -> Figure:
 def write_report(out) -> Path:
     """Plots and ``report.md`` of the study in ``out``, under ``out/_report``; its path."""
     meta, df = read_study(out)
-    spec = spec_from_dict(meta["spec"])
+    spec = spec_from_dict(meta.spec)
     rdir = Path(out) / "_report"
     rdir.mkdir(exist_ok=True)
     figs = []
-    if len(df) and (df["status"] == "ok").any():
+    if len(_ok(df)):
         n_modes = spec.options.get("n_modes", 20 if spec.evaluate == "modes" else 12)
         walls = [w for w in _varied(spec, df) if w.startswith("wall")]
         if spec.evaluate == "modes" and walls:
@@ -191,11 +197,11 @@ def write_report(out) -> Path:
     for name, _, fig in figs:
         save_figure(fig, rdir / name)
     n = len(df)
-    ok = int((df["status"] == "ok").sum()) if n else 0
+    ok = len(_ok(df)) if n else 0
     lines = [f"# Study {spec.name}", "",
-             f"- evaluate: `{spec.evaluate}`, sampling `{spec.sample}`, spec hash `{meta['hash']}`",
-             f"- points: {meta['points']}; rows saved {n}: {ok} ok, {n - ok} failed"
-             + (f", {meta['points'] - n} missing (run the study again to compute them)" if n < meta["points"] else ""),
+             f"- evaluate: `{spec.evaluate}`, sampling `{spec.sample}`, spec hash `{meta.hash}`",
+             f"- points: {meta.points}; rows saved {n}: {ok} ok, {n - ok} failed"
+             + (f", {meta.points - n} missing (run the study again to compute them)" if n < meta.points else ""),
              "- varied: " + (", ".join(f"`{a.name}`" for a in spec.parameters if not a.fixed) or "nothing"), ""]
     if n:
         s = df["seconds"]

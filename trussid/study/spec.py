@@ -63,6 +63,12 @@ class Axis:
     def fixed(self) -> bool:
         return self.values is not None and len(self.values) == 1 and self.low is None
 
+    def table(self) -> dict:
+        """The axis as its TOML table (the keys that are set)."""
+        return {k: v for k, v in (("values", None if self.values is None else list(self.values)),
+                                  ("low", self.low), ("high", self.high), ("num", self.num))
+                if v is not None}
+
 
 @dataclass(frozen=True)
 class StudySpec:
@@ -96,28 +102,27 @@ class StudySpec:
     name: str = "study"
     chunk: int | None = None
 
-    def identity(self) -> dict:
-        """The part of the spec that determines results (what :func:`spec_hash` hashes)."""
-        axes = {}
-        for a in self.parameters:
-            axes[a.name] = {k: v for k, v in (("values", None if a.values is None else list(a.values)),
-                                              ("low", a.low), ("high", a.high), ("num", a.num))
-                            if v is not None}
+    def _axes(self) -> dict:
+        return {a.name: a.table() for a in self.parameters}
+
+    def _sample(self) -> dict:
         samp = {"method": self.sample}
         if self.sample in ("lhs", "random"):
             samp.update(n=self.n, seed=self.seed)
-        return {"evaluate": self.evaluate, "options": _plain(self.options), "sample": samp,
-                "parameters": axes}
+        return samp
+
+    def identity(self) -> dict:
+        """The part of the spec that determines results (what :func:`spec_hash` hashes)."""
+        return {"evaluate": self.evaluate, "options": _plain(self.options), "sample": self._sample(),
+                "parameters": self._axes()}
 
     def to_dict(self) -> dict:
         """A TOML/JSON-ready dict that :func:`spec_from_dict` reads back."""
-        d = self.identity()
         study = {"name": self.name, "evaluate": self.evaluate}
         if self.chunk is not None:
             study["chunk"] = self.chunk
-        params = {k: (v["values"][0] if list(v) == ["values"] and len(v["values"]) == 1 else v)
-                  for k, v in d["parameters"].items()}
-        return {"study": study, "evaluate": d["options"], "sample": d["sample"], "parameters": params}
+        params = {a.name: (a.values[0] if a.fixed else a.table()) for a in self.parameters}
+        return {"study": study, "evaluate": _plain(self.options), "sample": self._sample(), "parameters": params}
 
 
 def _plain(x):

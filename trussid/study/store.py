@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import os
 import uuid
+from dataclasses import dataclass
 from pathlib import Path
 
 import pyarrow as pa
@@ -45,6 +46,38 @@ def _describe_difference(a: dict, b: dict, prefix: str = "") -> str:
     return prefix.rstrip(".") or "spec"
 
 
+@dataclass(frozen=True)
+class StudyMeta:
+    """The description a study output keeps in :data:`META`.
+
+    Attributes
+    ----------
+    hash : str
+        :func:`trussid.study.spec.spec_hash` of the study.
+    points : int
+        Points of the study.
+    spec : dict
+        The spec in its TOML layout (:meth:`trussid.study.spec.StudySpec.to_dict`).
+    """
+
+    hash: str
+    points: int
+    spec: dict
+
+    @classmethod
+    def read(cls, path: Path) -> "StudyMeta":
+        """Parse ``path``; a :class:`StudyError` naming it (and the missing key) if it is
+        not a study description."""
+        try:
+            raw = json.loads(path.read_text())
+        except ValueError:
+            raise StudyError(f"{path.parent}: {META} is not a study description") from None
+        missing = [k for k in ("hash", "points", "spec") if not isinstance(raw, dict) or k not in raw]
+        if missing:
+            raise StudyError(f"{path.parent}: {META} is not a study description (no {missing[0]!r})")
+        return cls(hash=str(raw["hash"]), points=int(raw["points"]), spec=raw["spec"])
+
+
 class StudyStore:
     """An output directory bound to one study spec.
 
@@ -60,14 +93,11 @@ class StudyStore:
         self.hash = spec_hash(spec)
         meta = self.out / META
         if meta.exists():
-            try:
-                old = json.loads(meta.read_text())
-                old_hash = old["hash"]
-            except (ValueError, KeyError):
-                raise StudyError(f"{self.out}: {META} is not a study description") from None
+            old = StudyMeta.read(meta)
+            old_hash = old.hash
             if old_hash != self.hash:
                 try:
-                    what = _describe_difference(spec_from_dict(old["spec"]).identity(), spec.identity())
+                    what = _describe_difference(spec_from_dict(old.spec).identity(), spec.identity())
                 except StudyError:
                     what = "spec"
                 raise StudyError(f"{self.out}: holds another study (spec hash {old_hash}, this spec "
@@ -102,19 +132,20 @@ class StudyStore:
         return path
 
 
-def read_study(out) -> tuple[dict, "pandas.DataFrame"]:  # noqa: F821
-    """The stored spec (TOML layout) and the results of a study output, sorted by point."""
+def read_study(out) -> tuple[StudyMeta, "pandas.DataFrame"]:  # noqa: F821
+    """The stored description (spec in its TOML layout, hash, points) and the results of a
+    study output, sorted by point."""
     import pandas as pd
 
     out = Path(out)
     meta = out / META
     if not meta.exists():
         raise StudyError(f"{out}: not a study output (no {META})")
-    m = json.loads(meta.read_text())
+    m = StudyMeta.read(meta)
     if not any(out.glob("part-*.parquet")):
         return m, pd.DataFrame()
     df = pd.read_parquet(out).sort_values("point").reset_index(drop=True)
     return m, df
 
 
-__all__ = ["StudyStore", "read_study", "META", "STATUS_COLUMNS"]
+__all__ = ["StudyStore", "StudyMeta", "read_study", "META", "STATUS_COLUMNS"]

@@ -44,6 +44,7 @@ import numpy as np
 
 from trussid.fem.assembly import beam_matrices, mass_blocks, spring_matrices
 from trussid.fem.elements import frame_matrices, local_axes
+from trussid.testbed.model import N_STRUTS
 
 #: A component dominates a mode when it holds at least this fraction of the energy.
 DOMINANT = 0.5
@@ -223,11 +224,11 @@ def label_testbed_modes(tbm, modes) -> ModeLabels:
     e = element_energies(model, X)
     b, s = model.beams, model.springs
     strut_of_beam = mp.strut_of_element(b.ids)
-    components = [f"strut {k}" for k in range(6)] + ["UDF", "base", "bungees"]
+    components = [f"strut {k}" for k in range(N_STRUTS)] + ["UDF", "base", "bungees"]
     nm = X.shape[1]
     kin = np.zeros((len(components), nm))
     strain = np.zeros((len(components), nm))
-    for k in range(6):
+    for k in range(N_STRUTS):
         kin[k] = e.beam_kinetic[strut_of_beam == k].sum(axis=0)
         strain[k] = e.beam_strain[strut_of_beam == k].sum(axis=0)
         flex = mp.flexure_springs[k][mp.flexure_springs[k] >= 0]
@@ -235,9 +236,9 @@ def label_testbed_modes(tbm, modes) -> ModeLabels:
             strain[k] += e.spring_strain[np.isin(s.ids, flex)].sum(axis=0)
     pm = model.point_masses
     pm_strut = np.full(len(pm), -1)
-    for k in range(6):
+    for k in range(N_STRUTS):
         pm_strut[np.isin(pm.nodes, mp.strut_nodes[k])] = k
-    for k in range(6):
+    for k in range(N_STRUTS):
         kin[k] += e.mass_kinetic[pm_strut == k].sum(axis=0)
     kin[6] = e.mass_kinetic[pm_strut < 0].sum(axis=0)  # the accelerometers ride on the UDF
     for bid, val in zip(e.body_ids, e.body_kinetic):

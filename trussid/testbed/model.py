@@ -48,12 +48,16 @@ Model (see ``docs/testbed.md``)
 
 Node and element numbering
 --------------------------
-Strut ``i`` (0..5) owns node and beam ids ``1000 (i + 1) + j``, ``j`` along the strut from
-its base end (``j = 0``) to its top end; each strut has its own end nodes (coincident with
-its neighbour's at a base point or top vertex). UDF master ``10``, accelerometers ``11, 12,
-13``; base master ``20``, bungee nodes ``21..``. Springs: bungees ``8000 + j``, top
-flexures ``9100 + i``, base flexures ``9200 + i``. Rigid bodies: ``1`` UDF, ``2`` base,
-``3``/``4`` translation links of top/base flexure ends.
+Strut ``i`` (0..5) owns node and beam ids ``STRUT_ID_STRIDE (i + 1) + j`` (1000 (i + 1) +
+j), ``j`` along the strut from its base end (``j = 0``) to its top end; each strut has its
+own end nodes (coincident with its neighbour's at a base point or top vertex). UDF master
+:data:`UDF_MASTER` (10), accelerometers :data:`ACCELEROMETER_NODES` (11, 12, 13); base
+master :data:`BASE_MASTER` (20), bungee nodes from :data:`FIRST_BUNGEE_NODE` (21).
+Springs: bungees from :data:`FIRST_BUNGEE_SPRING` (8000), top flexures
+:data:`FIRST_TOP_FLEXURE_SPRING` + i (9100 + i), base flexures
+:data:`FIRST_BASE_FLEXURE_SPRING` + i (9200 + i). Rigid bodies: :class:`Body` (1 UDF, 2 base,
+3/4 translation links of top/base flexure ends). What each strut element is:
+:class:`StrutPart`.
 
 The wall sweeps on this model (:class:`WallBasis`, :func:`wall_modes`,
 :func:`design_at_walls`) and its eigen solution (:func:`solve_testbed_modes`) are
@@ -63,7 +67,8 @@ The wall sweeps on this model (:class:`WallBasis`, :func:`wall_modes`,
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from enum import IntEnum
 
 import numpy as np
 
@@ -85,9 +90,103 @@ MIN_LIP = 0.01
 #: tube's outside diameter (a wall-independent scale).
 TORSION_RIGID_FACTOR = 1.0e3
 
+#: The testbed's six struts (two per bipod, three bipods).
+N_STRUTS = 6
+#: Strut ``i`` owns node and beam ids ``STRUT_ID_STRIDE * (i + 1) + j``, ``j`` from its base
+#: end: room for 999 nodes per strut, and ``id // STRUT_ID_STRIDE - 1`` is the strut.
+STRUT_ID_STRIDE = 1000
+#: Master node of the UDF rigid body (at its centre of gravity).
 UDF_MASTER = 10
+#: The three accelerometer nodes (slaves of the UDF), ``k`` above strut junction ``k``.
+ACCELEROMETER_NODES = (11, 12, 13)
+#: Master node of the suspended base plate's rigid body.
 BASE_MASTER = 20
-UDF_BODY, BASE_BODY, TOP_LINK_BODY, BASE_LINK_BODY = 1, 2, 3, 4
+#: Bungee attachment nodes are ``FIRST_BUNGEE_NODE + j``, their springs ``FIRST_BUNGEE_SPRING + j``.
+FIRST_BUNGEE_NODE = 21
+FIRST_BUNGEE_SPRING = 8000
+#: Flexure springs of strut ``i``: ``FIRST_TOP_FLEXURE_SPRING + i`` at its top end,
+#: ``FIRST_BASE_FLEXURE_SPRING + i`` at its base end.
+FIRST_TOP_FLEXURE_SPRING = 9100
+FIRST_BASE_FLEXURE_SPRING = 9200
+
+
+class Body(IntEnum):
+    """Rigid-body ids of the testbed model."""
+
+    UDF = 1
+    BASE = 2
+    TOP_LINKS = 3    # translation links of the top flexure ends
+    BASE_LINKS = 4   # translation links of the base flexure ends
+
+
+class StrutPart(IntEnum):
+    """What a strut element is: the section it carries (:func:`strut_stations`)."""
+
+    TUBE = 0             # bare tube
+    ADAPTER = 1          # adapter block on the tube, no wafers
+    ADAPTER_WAFERS = 2   # adapter block with the PZT wafers bonded on
+
+
+def strut_ids(n_nodes: int) -> np.ndarray:
+    """Node ids ``(N_STRUTS, n_nodes)`` of the struts; element ``j`` of a strut takes the id
+    of its node ``j`` (its base-side end)."""
+    return (STRUT_ID_STRIDE * (np.arange(N_STRUTS)[:, None] + 1) + np.arange(n_nodes)[None, :]).astype(np.int64)
+
+
+@dataclass(frozen=True)
+class CompositeSection:
+    """Sums over the parts of a composite strut section, in the strut's local axes.
+
+    Attributes
+    ----------
+    EA : float
+        Axial stiffness [N].
+    EIy, EIz : float
+        Bending stiffnesses [N m^2].
+    GJ : float
+        Torsional stiffness [N m^2].
+    rhoA : float
+        Mass per length [kg/m].
+    rhoIp : float
+        Polar mass moment per length [kg m].
+    """
+
+    EA: float = 0.0
+    EIy: float = 0.0
+    EIz: float = 0.0
+    GJ: float = 0.0
+    rhoA: float = 0.0
+    rhoIp: float = 0.0
+
+    def __add__(self, other: "CompositeSection") -> "CompositeSection":
+        return CompositeSection(*(getattr(self, f.name) + getattr(other, f.name) for f in fields(self)))
+
+
+@dataclass(frozen=True)
+class StrutSectionArrays:
+    """Per-element arrays of one strut as the Model stores them (see the module docstring).
+
+    Attributes
+    ----------
+    A, Iy, Iz, J : (n,) float
+        Section area [m^2], second moments [m^4] and torsion constant [m^4].
+    E, G, rho : (n,) float
+        The tube's moduli [Pa] and density [kg/m^3].
+    nsm : (n,) float
+        Non-structural mass per length [kg/m].
+    ip_missing : (n,) float
+        Torsional mass moment per length the element cannot carry [kg m].
+    """
+
+    A: np.ndarray
+    Iy: np.ndarray
+    Iz: np.ndarray
+    J: np.ndarray
+    E: np.ndarray
+    G: np.ndarray
+    rho: np.ndarray
+    nsm: np.ndarray
+    ip_missing: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -159,8 +258,8 @@ class TestbedMap:
     def strut_of_element(self, element_ids) -> np.ndarray:
         """Strut number (0..5) of beam element ids (-1 for non-strut ids)."""
         ids = np.asarray(element_ids)
-        k = ids // 1000 - 1
-        return np.where((k >= 0) & (k < 6), k, -1)
+        k = ids // STRUT_ID_STRIDE - 1
+        return np.where((k >= 0) & (k < N_STRUTS), k, -1)
 
 
 @dataclass
@@ -195,20 +294,26 @@ def tube_property_derivatives(r_out: float, t) -> tuple[np.ndarray, np.ndarray]:
     return 2.0 * math.pi * ri, math.pi * ri**3
 
 
-def adapter_constant_properties(tb, with_wafers: bool) -> dict:
+def adapter_constant_properties(tb, with_wafers: bool) -> CompositeSection:
     """The adapter's constant (non-tube) contributions to the composite section.
 
-    Returns the sums over the block (and the wafers when ``with_wafers``) of ``E A``,
-    ``E Iy``, ``E Iz`` [N, N m^2], ``G J`` [N m^2], ``rho A`` [kg/m] and ``rho Ip``
-    [kg m] (polar mass moment per length), in the strut's local axes.
+    Parameters
+    ----------
+    tb : trussid.geometry.Testbed
+    with_wafers : bool
+        Include the PZT wafers.
+
+    Returns
+    -------
+    CompositeSection
+        The sums over the block (and the wafers when ``with_wafers``).
     """
     s, a, p = tb.struts, tb.adapter, tb.pzt
     blk = Section.square_with_bore(a.side, s.outer_radius, name="adapter block")
     Gb = a.youngs_modulus / (2.0 * (1.0 + a.poisson_ratio))
-    out = {
-        "EA": a.youngs_modulus * blk.A, "EIy": a.youngs_modulus * blk.Iy, "EIz": a.youngs_modulus * blk.Iz,
-        "GJ": Gb * blk.J, "rhoA": a.density * blk.A, "rhoIp": a.density * (blk.Iy + blk.Iz),
-    }
+    out = CompositeSection(EA=a.youngs_modulus * blk.A, EIy=a.youngs_modulus * blk.Iy,
+                           EIz=a.youngs_modulus * blk.Iz, GJ=Gb * blk.J, rhoA=a.density * blk.A,
+                           rhoIp=a.density * (blk.Iy + blk.Iz))
     if with_wafers:
         W, T = p.width, p.thickness
         Aw = W * T
@@ -220,40 +325,36 @@ def adapter_constant_properties(tb, with_wafers: bool) -> dict:
         Iz = iz_pair + (iy_pair if n_pairs == 2 else 0.0)
         Iy = iy_pair + (iz_pair if n_pairs == 2 else 0.0)
         Aws = p.wafers_per_strut * Aw
-        out["EA"] += p.youngs_modulus * Aws
-        out["EIy"] += p.youngs_modulus * Iy
-        out["EIz"] += p.youngs_modulus * Iz
-        out["rhoA"] += p.density * Aws
-        out["rhoIp"] += p.density * (Iy + Iz)
+        out = out + CompositeSection(EA=p.youngs_modulus * Aws, EIy=p.youngs_modulus * Iy,
+                                     EIz=p.youngs_modulus * Iz, rhoA=p.density * Aws,
+                                     rhoIp=p.density * (Iy + Iz))
     return out
 
 
-def _strut_section_arrays(tb, kinds: np.ndarray, wall: float) -> dict:
-    """Per-element Model arrays (A, Iy, Iz, J, E, G, rho, nsm) for one strut, and the
-    torsional mass moment per length [kg m] that the element cannot carry (``ip_missing``).
-
-    ``kinds``: 0 bare tube, 1 adapter block only, 2 adapter with wafers. See the module
-    docstring for the mapping.
-    """
+def _strut_section_arrays(tb, kinds: np.ndarray, wall: float) -> StrutSectionArrays:
+    """Per-element Model arrays for one strut of elements ``kinds`` (:class:`StrutPart`)
+    and wall ``wall`` [m]. See the module docstring for the mapping."""
     s = tb.struts
     E, G, rho = s.youngs_modulus, s.youngs_modulus / (2.0 * (1.0 + s.poisson_ratio)), s.density
     At, It = (float(v) for v in tube_properties(s.outer_radius, wall))
-    parts = [{k: 0.0 for k in ("EA", "EIy", "EIz", "GJ", "rhoA", "rhoIp")},
-             adapter_constant_properties(tb, False), adapter_constant_properties(tb, True)]
-    c = {k: np.array([parts[kind][k] for kind in kinds]) for k in parts[0]}
-    A, Iy, Iz, J = At + c["EA"] / E, It + c["EIy"] / E, It + c["EIz"] / E, 2 * It + c["GJ"] / G
+    parts = {StrutPart.TUBE: CompositeSection(), StrutPart.ADAPTER: adapter_constant_properties(tb, False),
+             StrutPart.ADAPTER_WAFERS: adapter_constant_properties(tb, True)}
+    # per element, each sum of the parts of its kind
+    c = CompositeSection(*(np.array([getattr(parts[StrutPart(kind)], f.name) for kind in kinds])
+                           for f in fields(CompositeSection)))
+    A, Iy, Iz, J = At + c.EA / E, It + c.EIy / E, It + c.EIz / E, 2 * It + c.GJ / G
     # rho = the tube's density: the tube's own mass terms stay exact (and linear in A_t, I_t);
     # the rest of the mass per length goes to nsm, the rest of the polar moment to point
     # inertias (ip_missing).
-    nsm = c["rhoA"] - rho * c["EA"] / E
-    ip_missing = c["rhoIp"] - rho * (c["EIy"] + c["EIz"]) / E
-    if (nsm < -1e-9 * np.maximum(c["rhoA"], 1e-300)).any():
+    nsm = c.rhoA - rho * c.EA / E
+    ip_missing = c.rhoIp - rho * (c.EIy + c.EIz) / E
+    if (nsm < -1e-9 * np.maximum(c.rhoA, 1e-300)).any():
         raise ModelError("adapter: the block and wafers are stiffer for their mass than the tube "
                          f"(E/rho above {E / rho:.4g} m^2/s^2); this composite section cannot be "
                          "represented with the tube's density (adapter.density, pzt.density)")
     n = len(kinds)
-    return {"A": A, "Iy": Iy, "Iz": Iz, "J": J, "E": np.full(n, E), "G": np.full(n, G), "rho": np.full(n, rho),
-            "nsm": np.maximum(nsm, 0.0), "ip_missing": ip_missing}
+    return StrutSectionArrays(A=A, Iy=Iy, Iz=Iz, J=J, E=np.full(n, E), G=np.full(n, G), rho=np.full(n, rho),
+                              nsm=np.maximum(nsm, 0.0), ip_missing=ip_missing)
 
 
 # ----------------------------------------------------------------------------- mesh
@@ -265,7 +366,7 @@ def strut_stations(tb, elements_per_segment: int = ELEMENTS_PER_SEGMENT) -> tupl
     s : (n,) float
         Distances of the nodes from the base end.
     kinds : (n - 1,) int
-        0 bare tube, 1 adapter block only, 2 adapter with wafers.
+        :class:`StrutPart` of each element.
     """
     if int(elements_per_segment) != elements_per_segment or elements_per_segment < 1:
         raise ModelError(f"elements_per_segment must be a positive integer, got {elements_per_segment!r}")
@@ -277,12 +378,12 @@ def strut_stations(tb, elements_per_segment: int = ELEMENTS_PER_SEGMENT) -> tupl
     if La - Lw > MIN_LIP * La:
         w0, w1 = 0.5 * (L - Lw), 0.5 * (L + Lw)
         adapter = np.array([w0, w1])
-        akinds = [1, 2, 1]
+        akinds = [StrutPart.ADAPTER, StrutPart.ADAPTER_WAFERS, StrutPart.ADAPTER]
     else:
         adapter = np.zeros(0)
-        akinds = [2]
+        akinds = [StrutPart.ADAPTER_WAFERS]
     s = np.concatenate([seg1, adapter, seg2])
-    kinds = np.array([0] * n + akinds + [0] * n)
+    kinds = np.array([StrutPart.TUBE] * n + akinds + [StrutPart.TUBE] * n, dtype=int)
     return s, kinds
 
 
@@ -311,23 +412,22 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
     model = Model(beam_theory=beam_theory, mass=mass, name="testbed")
     frames = lay.strut_frames()
 
-    strut_nodes = (1000 * (np.arange(6)[:, None] + 1) + np.arange(n_nodes)[None, :]).astype(np.int64)
+    strut_nodes = strut_ids(n_nodes)
     strut_elements = strut_nodes[:, :-1].copy()
     xyz = lay.strut_start[:, None, :] + s[None, :, None] * lay.strut_axis[:, None, :]
     model.add_nodes(strut_nodes.ravel(), xyz.reshape(-1, 3))
-    names = {0: "tube", 1: "adapter", 2: "adapter+wafers"}
-    for i in range(6):
+    names = {StrutPart.TUBE: "tube", StrutPart.ADAPTER: "adapter", StrutPart.ADAPTER_WAFERS: "adapter+wafers"}
+    for i in range(N_STRUTS):
         props = _strut_section_arrays(tb, kinds, tb.struts.walls[i])
-        for kind in (0, 1, 2):
+        for kind in StrutPart:
             sel = np.flatnonzero(kinds == kind)
             if not len(sel):
                 continue
-            sec = {k: props[k][sel] for k in ("A", "Iy", "Iz", "J")}
-            sec.update(Asy=np.inf, Asz=np.inf)
-            mat = {k: props[k][sel] for k in ("E", "G", "rho")}
+            sec = dict(A=props.A[sel], Iy=props.Iy[sel], Iz=props.Iz[sel], J=props.J[sel], Asy=np.inf, Asz=np.inf)
+            mat = dict(E=props.E[sel], G=props.G[sel], rho=props.rho[sel])
             model.add_beams(strut_elements[i, sel], np.column_stack([strut_nodes[i, sel], strut_nodes[i, sel + 1]]),
-                            sec, mat, orient=lay.strut_y[i], nsm=props["nsm"][sel], label=f"strut {i} {names[kind]}")
-        lumped = props["ip_missing"] * np.diff(s)  # kg m^2 per element
+                            sec, mat, orient=lay.strut_y[i], nsm=props.nsm[sel], label=f"strut {i} {names[kind]}")
+        lumped = props.ip_missing * np.diff(s)  # kg m^2 per element
         # (lumped beam mass has no rotary inertia at all: nothing to complete then)
         el = np.flatnonzero(lumped > 0) if mass == "consistent" else np.zeros(0, int)
         if len(el):
@@ -335,19 +435,19 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
             half = 0.5 * lumped[el]
             model.add_point_masses(np.r_[strut_nodes[i, el], strut_nodes[i, el + 1]], 0.0,
                                    inertia=np.r_[half, half][:, None, None] * np.outer(axis, axis))
-    adapter_idx = np.flatnonzero(kinds > 0)
-    wafer_idx = np.flatnonzero(kinds == 2)
+    adapter_idx = np.flatnonzero(kinds != StrutPart.TUBE)
+    wafer_idx = np.flatnonzero(kinds == StrutPart.ADAPTER_WAFERS)
 
     # UDF rigid body and accelerometers.
     m_udf, cg_udf, i_udf = udf_rigid_body(tb)
     model.add_node(UDF_MASTER, cg_udf)
-    acc_nodes = np.array([11, 12, 13])
+    acc_nodes = np.array(ACCELEROMETER_NODES)
     model.add_nodes(acc_nodes, lay.accelerometer_points)
     model.add_point_masses(acc_nodes, tb.accelerometers.mass)
 
     top, base = strut_nodes[:, -1], strut_nodes[:, 0]
     k_top, k_base = tb.struts.top_rotational_stiffness, tb.struts.base_rotational_stiffness
-    flex = np.full((6, 2), -1, dtype=np.int64)
+    flex = np.full((N_STRUTS, 2), -1, dtype=np.int64)
     G = tb.struts.youngs_modulus / (2.0 * (1.0 + tb.struts.poisson_ratio))
     # Scaled on a solid rod of the tube's outside diameter: independent of the walls, so
     # that wall sweeps (wall_basis) leave it unchanged.
@@ -360,38 +460,39 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
     if math.isinf(k_top):
         udf_slaves += list(top)
     else:
-        model.add_rigid_body(TOP_LINK_BODY, UDF_MASTER, top, dofs="123", label="top flexure links")
-        flex[:, 1] = 9100 + np.arange(6)
-        model.add_springs(flex[:, 1], np.column_stack([top, np.full(6, UDF_MASTER)]), rot_spring(k_top), frame=frames)
-    model.add_rigid_body(UDF_BODY, UDF_MASTER, udf_slaves, mass=m_udf, cg=cg_udf, inertia=i_udf, label="UDF")
+        model.add_rigid_body(Body.TOP_LINKS, UDF_MASTER, top, dofs="123", label="top flexure links")
+        flex[:, 1] = FIRST_TOP_FLEXURE_SPRING + np.arange(N_STRUTS)
+        model.add_springs(flex[:, 1], np.column_stack([top, np.full(N_STRUTS, UDF_MASTER)]), rot_spring(k_top),
+                          frame=frames)
+    model.add_rigid_body(Body.UDF, UDF_MASTER, udf_slaves, mass=m_udf, cg=cg_udf, inertia=i_udf, label="UDF")
 
     bungee_nodes = np.zeros(0, np.int64)
     bungee_springs = np.zeros(0, np.int64)
     base_master, base_body = None, -1
     if tb.base.support == "suspended":
         m_b, cg_b, i_b = base_rigid_body(tb)
-        base_master, base_body = BASE_MASTER, BASE_BODY
+        base_master, base_body = BASE_MASTER, int(Body.BASE)
         model.add_node(BASE_MASTER, cg_b)
-        bungee_nodes = 21 + np.arange(tb.base.bungee_count)
+        bungee_nodes = FIRST_BUNGEE_NODE + np.arange(tb.base.bungee_count)
         model.add_nodes(bungee_nodes, lay.bungee_points)
-        bungee_springs = 8000 + np.arange(tb.base.bungee_count)
+        bungee_springs = FIRST_BUNGEE_SPRING + np.arange(tb.base.bungee_count)
         kl, kv = tb.base.bungee_lateral_stiffness, tb.base.bungee_vertical_stiffness
         model.add_springs(bungee_springs, bungee_nodes, [kl, kl, kv, 0.0, 0.0, 0.0])
         base_slaves = list(bungee_nodes)
         if math.isinf(k_base):
             base_slaves += list(base)
         else:
-            model.add_rigid_body(BASE_LINK_BODY, BASE_MASTER, base, dofs="123", label="base flexure links")
-            flex[:, 0] = 9200 + np.arange(6)
-            model.add_springs(flex[:, 0], np.column_stack([base, np.full(6, BASE_MASTER)]), rot_spring(k_base),
-                              frame=frames)
-        model.add_rigid_body(BASE_BODY, BASE_MASTER, base_slaves, mass=m_b, cg=cg_b, inertia=i_b, label="base")
+            model.add_rigid_body(Body.BASE_LINKS, BASE_MASTER, base, dofs="123", label="base flexure links")
+            flex[:, 0] = FIRST_BASE_FLEXURE_SPRING + np.arange(N_STRUTS)
+            model.add_springs(flex[:, 0], np.column_stack([base, np.full(N_STRUTS, BASE_MASTER)]),
+                              rot_spring(k_base), frame=frames)
+        model.add_rigid_body(Body.BASE, BASE_MASTER, base_slaves, mass=m_b, cg=cg_b, inertia=i_b, label="base")
     else:
         if math.isinf(k_base):
             model.fix(base, "123456")
         else:
             model.fix(base, "123")
-            flex[:, 0] = 9200 + np.arange(6)
+            flex[:, 0] = FIRST_BASE_FLEXURE_SPRING + np.arange(N_STRUTS)
             model.add_springs(flex[:, 0], base, rot_spring(k_base), frame=frames)
 
     tmap = TestbedMap(
@@ -404,11 +505,14 @@ def build_testbed(tb=None, elements_per_segment: int = ELEMENTS_PER_SEGMENT,
         accelerometer_nodes=acc_nodes, accelerometer_directions=np.array(lay.accelerometer_axes),
         base_master=base_master, bungee_nodes=bungee_nodes, bungee_springs=bungee_springs,
         flexure_springs=flex, channel_struts=np.array(lay.channel_struts), strut_frames=np.array(frames),
-        udf_body=UDF_BODY, base_body=base_body,
+        udf_body=int(Body.UDF), base_body=base_body,
     )
     return TestbedModel(model=model, map=tmap, testbed=tb, elements_per_segment=int(elements_per_segment))
 
 
 __all__ = ["TestbedMap", "TestbedModel", "build_testbed", "strut_stations", "tube_properties",
            "tube_property_derivatives", "adapter_constant_properties", "ELEMENTS_PER_SEGMENT",
-           "TORSION_RIGID_FACTOR", "UDF_MASTER", "BASE_MASTER"]
+           "TORSION_RIGID_FACTOR", "N_STRUTS", "STRUT_ID_STRIDE", "UDF_MASTER", "ACCELEROMETER_NODES",
+           "BASE_MASTER", "FIRST_BUNGEE_NODE", "FIRST_BUNGEE_SPRING", "FIRST_TOP_FLEXURE_SPRING",
+           "FIRST_BASE_FLEXURE_SPRING", "Body", "StrutPart", "strut_ids", "CompositeSection",
+           "StrutSectionArrays"]

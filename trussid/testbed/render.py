@@ -10,6 +10,7 @@ import numpy as np
 
 from trussid.fem.render import Decoration, decorations_from_solids
 from trussid.geometry.solids import testbed_solids
+from trussid.testbed.model import N_STRUTS
 
 #: Colours of named parts (a word of the solid's name); ``None``: coloured by displacement.
 PART_COLOURS = {"wafer": "#c8a23c", "adapter": None, "udf": None, "base": None}
@@ -32,7 +33,7 @@ def testbed_decorations(tbm, sections: int = 48) -> list[Decoration]:
     mp, xyz = tbm.map, tbm.model.xyz
     attach: dict[str, int | None] = {"udf": int(mp.udf_master),
                                       "base": None if mp.base_master is None else int(mp.base_master)}
-    for i in range(6):
+    for i in range(N_STRUTS):
         nodes = np.asarray(mp.strut_nodes[i])
         a, b = (int(np.flatnonzero(nodes == n)[0]) for n in mp.adapter_nodes[i])
         candidates = nodes[a:b + 1]

@@ -4,8 +4,10 @@
 constant part plus, per strut, terms proportional to ``A_t(t_i)`` and ``I_t(t_i)``, all as
 data vectors on one sparse pattern. :func:`wall_matrices` then forms the dense reduced
 matrices for new walls with a matrix-vector product, and :func:`wall_modes` solves for the
-lowest modes with LAPACK's subset generalised eigensolver: no topology, geometry, layout or
-rigid-body work per design.
+lowest modes with :func:`trussid.fem.modal.dense_modes` (LAPACK's subset generalised
+eigensolver; shift-invert above :data:`trussid.fem.modal.DENSE_MAX_DOF`): no topology,
+geometry, layout or rigid-body work per design. The eigen solution of a whole testbed,
+:func:`solve_testbed_modes`, is :func:`trussid.fem.modal.solve_modes`.
 """
 
 from __future__ import annotations
@@ -13,18 +15,17 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.linalg as la
 import scipy.sparse as sp
 
 from trussid.fem.assembly import System, assemble
 from trussid.fem.elements import frame_matrices, local_axes
 from trussid.fem.errors import ModelError
-from trussid.fem.modal import Modes, solve_modes
+from trussid.fem.modal import DENSE_MAX_DOF, Modes, dense_modes, solve_modes
 
-from .model import TestbedModel, tube_properties
+from .model import N_STRUTS, TestbedModel, tube_properties
 
 __all__ = ["WallBasis", "wall_basis", "wall_matrices", "wall_modes", "design_at_walls",
-           "solve_testbed_modes", "DENSE_MAX_DOF"]
+           "solve_testbed_modes"]
 
 
 @dataclass
@@ -68,8 +69,8 @@ class WallBasis:
     def check_walls(self, walls) -> np.ndarray:
         """Walls as a (6,) array; an error naming the strut if one is not in (0, r_out)."""
         w = np.asarray(walls, float).reshape(-1)
-        if w.shape != (6,):
-            raise ModelError(f"walls must hold 6 thicknesses (one per strut), got {w.shape[0]}")
+        if w.shape != (N_STRUTS,):
+            raise ModelError(f"walls must hold {N_STRUTS} thicknesses (one per strut), got {w.shape[0]}")
         bad = ~((w > 0) & (w < self.r_out))
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
@@ -169,7 +170,7 @@ def wall_basis(tbm: TestbedModel, system: System | None = None) -> WallBasis:
     xyz = model.xyz
     idx = model.index_of(tbm.map.strut_nodes)  # (6, n)
     pieces = []  # per strut: KA, KI, MA, MI as COO
-    for i in range(6):
+    for i in range(N_STRUTS):
         a, b = idx[i, :-1], idx[i, 1:]
         orient = np.broadcast_to(tbm.map.strut_frames[i, 1], (len(a), 3))
         L, R = local_axes(xyz[a], xyz[b], orient)
@@ -198,38 +199,13 @@ def wall_basis(tbm: TestbedModel, system: System | None = None) -> WallBasis:
                      walls_ref=np.asarray(s.walls, float), r_out=s.outer_radius, system=system)
 
 
-#: Above this many reduced DOFs the testbed's modes (:func:`solve_testbed_modes`,
-#: :func:`wall_modes`) come from the sparse shift-invert of
-#: :func:`trussid.fem.modal.solve_modes` instead of a dense subset ``eigh``, whose O(n^2)
-#: memory and O(n^3) time do not scale with the mesh. Measured (CPU, 30 modes, shared
-#: 2-core machine): 318 DOF (the default mesh) dense 0.08 s / sparse 0.14 s; 1 182 DOF
-#: 1.9 s / 0.04 s; 2 910 DOF 18.5 s / 0.08 s.
-DENSE_MAX_DOF = 600
-
-
-def _sparse_modes(system: System, n_modes: int, max_frequency_hz: float | None):
-    """:func:`trussid.fem.modal.solve_modes` for a count, or for every mode below a
-    frequency by doubling the count until one lies above it."""
-    if max_frequency_hz is None:
-        return solve_modes(system, n_modes)
-    k = max(int(n_modes), 1)
-    while True:
-        modes = solve_modes(system, k)
-        if len(modes) < k or modes.frequencies_hz[-1] > max_frequency_hz or k > system.n_dof // 3:
-            break
-        k *= 2
-    keep = modes.frequencies_hz <= max_frequency_hz
-    return replace(modes, frequencies_hz=modes.frequencies_hz[keep], omega=modes.omega[keep],
-                   shapes=modes.shapes[:, keep], shapes_full=modes.shapes_full[:, keep])
-
-
 def wall_matrices(basis: WallBasis, walls) -> tuple[np.ndarray, np.ndarray]:
     """Dense reduced ``K`` and ``M`` for the six tube walls ``walls`` [m]."""
     k, m = basis.data(walls)
     return basis.dense(k), basis.dense(m)
 
 
-def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
+def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "evr"
                ) -> tuple[np.ndarray, np.ndarray]:
     """Lowest natural frequencies [Hz] and mass-normalised reduced shapes for ``walls``.
 
@@ -240,8 +216,9 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
         Wall thicknesses [m].
     n_modes : int
     driver : str
-        LAPACK driver of :func:`scipy.linalg.eigh` for a subset ("gvx"; "gvd"/"gv" compute
-        all and are sliced).
+        LAPACK driver of :func:`trussid.fem.modal.dense_modes` ("evr" or "gvx" for a subset;
+        "gvd"/"gv" compute all and are sliced). Above :data:`trussid.fem.modal.DENSE_MAX_DOF` reduced
+        DOFs the modes come from sparse shift-invert instead.
 
     Returns
     -------
@@ -270,16 +247,11 @@ def wall_modes(basis: WallBasis, walls, n_modes: int = 30, driver: str = "gvx"
     if basis.n > DENSE_MAX_DOF:
         k_data, m_data = basis.data(walls)
         system = replace(basis.system, K=basis.sparse(k_data), M=basis.sparse(m_data))
-        modes = _sparse_modes(system, n_modes, None)
+        modes = solve_modes(system, n_modes)
         return modes.frequencies_hz, modes.shapes
     K, M = wall_matrices(basis, walls)
-    k = min(int(n_modes), basis.n)
-    if driver == "gvx":
-        lam, X = la.eigh(K, M, subset_by_index=[0, k - 1], driver="gvx", overwrite_a=True, overwrite_b=True,
-                         check_finite=False)
-    else:
-        lam, X = la.eigh(K, M, driver=driver, overwrite_a=True, overwrite_b=True, check_finite=False)
-        lam, X = lam[:k], X[:, :k]
+    # K is positive definite (the testbed is clamped or hangs on grounded bungees): no shift.
+    lam, X = dense_modes(K, M, n_modes, driver=driver, overwrite=True)
     return np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi), X
 
 
@@ -327,46 +299,24 @@ def design_at_walls(tbm: TestbedModel, basis: WallBasis, walls, n_modes: int = 3
 
 
 def solve_testbed_modes(tbm: TestbedModel, n_modes: int = 30, system: System | None = None,
-                        max_frequency_hz: float | None = None):
-    """Lowest modes of a testbed model as :class:`trussid.fem.modal.Modes`, by dense subset
-    ``eigh`` up to :data:`DENSE_MAX_DOF` reduced DOFs, sparse shift-invert above.
+                        max_frequency_hz: float | None = None) -> Modes:
+    """Lowest modes of a testbed model: :func:`trussid.fem.modal.solve_modes` of its system.
 
-    ``max_frequency_hz`` [Hz], when given, replaces ``n_modes``: every mode below it (LAPACK
-    finds them by value, which costs no more than a fixed count).
+    Parameters
+    ----------
+    tbm : TestbedModel
+    n_modes : int
+        Lowest modes wanted.
+    system : fem.assembly.System, optional
+        ``assemble(tbm.model)`` if already available.
+    max_frequency_hz : float, optional
+        Every mode at or below this frequency [Hz] instead of ``n_modes`` of them.
 
-    It gives the same modes as :func:`trussid.fem.modal.solve_modes` (which keeps the sub-hertz
-    suspension modes too: it clamps only the rigid-body null space), and adds finding all
-    modes below a frequency by value, which the plant uses. The testbed has no
-    zero-frequency mode (clamped, or hung on bungees).
+    Returns
+    -------
+    fem.modal.Modes
+        The sub-hertz suspension modes are kept (only a rigid-body null space is clamped
+        to 0, and the testbed has none: it is clamped, or hangs on bungees).
     """
     system = assemble(tbm.model) if system is None else system
-    if system.n_dof > DENSE_MAX_DOF:
-        return _sparse_modes(system, n_modes, max_frequency_hz)
-    K, M = system.K.toarray(), system.M.toarray()
-    d = np.abs(np.diag(M))
-    rot = (system.dofs % 6) >= 3
-    massless = np.zeros(len(d), bool)
-    for sel in (rot, ~rot):
-        massless[sel] = d[sel] <= 1e-12 * d[sel].max()
-    z, m = np.flatnonzero(massless), np.flatnonzero(~massless)
-    if len(z):
-        # Lumped mass leaves the rotations massless: condense them statically (exact, they
-        # carry no inertia).
-        G = -la.cho_solve(la.cho_factor(K[np.ix_(z, z)]), K[np.ix_(z, m)])
-        Kc = K[np.ix_(m, m)] + K[np.ix_(m, z)] @ G
-        K, M = 0.5 * (Kc + Kc.T), M[np.ix_(m, m)]
-    if max_frequency_hz is None:
-        k = min(int(n_modes), len(m))
-        lam, Y = la.eigh(K, M, subset_by_index=[0, k - 1], driver="gvx", check_finite=False)
-    else:
-        w_max = 2 * np.pi * float(max_frequency_hz)
-        lam, Y = la.eigh(K, M, subset_by_value=[-np.inf, w_max**2], driver="gvx", check_finite=False)
-        k = len(lam)
-    X = np.zeros((system.n_dof, k))
-    X[m] = Y
-    if len(z):
-        X[z] = G @ Y
-    lam = np.maximum(lam, 0.0)
-    omega = np.sqrt(lam)
-    return Modes(frequencies_hz=omega / (2 * np.pi), omega=omega, shapes=X, shapes_full=system.T @ X,
-                 node_ids=system.node_ids, xyz=system.xyz, n_dof=system.n_dof, method="dense")
+    return solve_modes(system, n_modes, max_frequency_hz=max_frequency_hz)
