@@ -26,6 +26,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from trussid.fem.errors import ModelError
+from trussid.fem.eigen import DENSE_MAX_DOF, dense_modes
 
 __all__ = ["MAX_A_SET", "guyan", "craig_bampton"]
 
@@ -60,20 +61,19 @@ def _static_shapes(system, omit: np.ndarray):
     return a, o, lu, X
 
 
-#: Omitted DOFs up to which the fixed-interface modes come from LAPACK (dense); beyond,
-#: from ARPACK shift-invert at 0 (``K_oo`` is positive definite there).
-CB_DENSE_MAX = 2000
-
-
 def _fixed_interface_modes(Koo, Moo, lu, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
     """Lowest ``n_modes`` eigenpairs of ``K_oo phi = lambda M_oo phi`` that carry mass,
-    mass-normalised: ``(lambda, Phi)``, fewer when ``M_oo`` has a smaller rank."""
+    mass-normalised: ``(lambda, Phi)``, fewer when ``M_oo`` has a smaller rank.
+
+    Up to :data:`trussid.fem.eigen.DENSE_MAX_DOF` omitted DOFs from the one dense solver,
+    :func:`trussid.fem.eigen.dense_modes` (its inverted problem suits ``K_oo``, which is
+    definite, and a singular ``M_oo``: massless omitted DOFs get ``mu = 0``); beyond, from
+    ARPACK shift-invert at 0."""
     n_o = Koo.shape[0]
-    if n_o <= CB_DENSE_MAX:
-        # Inverted problem M phi = mu K phi: K_oo is definite, M_oo may be singular
-        # (massless omitted DOFs have mu = 0), and the lowest modes get the best accuracy.
-        mu, P = la.eigh(Moo.toarray(), Koo.toarray())
-        mu, P = mu[::-1], P[:, ::-1]
+    if n_o <= DENSE_MAX_DOF:
+        lam, P = dense_modes(Koo.toarray(), Moo.toarray(), min(n_modes, n_o))
+        with np.errstate(divide="ignore"):
+            mu = 1.0 / lam  # massless directions come back at lambda = inf: mu = 0
     else:
         op = spla.LinearOperator(Koo.shape, matvec=lu.solve, dtype=float)
         lam, P = spla.eigsh(Koo, k=min(n_modes, n_o - 1), M=Moo, sigma=0.0, OPinv=op,
