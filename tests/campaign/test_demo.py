@@ -201,7 +201,7 @@ def test_prediction_ratio_recomputes_from_the_written_model_and_data(report):
         assert meta["input_names"] == val.input_names == m["input_names"]
         r = prediction_ratio_db(model, val.u, val.y, K=meta["K"],
                                 skip=m["prediction_skip_samples"])
-        assert r["overall"] == pytest.approx(m["signal_to_prediction_error_db"], abs=1e-9)
+        assert r.overall == pytest.approx(m["signal_to_prediction_error_db"], abs=1e-9)
 
 
 @pytest.mark.slow

@@ -144,7 +144,7 @@ def test_identify_finds_the_modes_and_reports_the_prediction_ratio(work, identif
     data = read_data(work / "data.npz")
     r = prediction_ratio_db(model, data.u, data.y, K=meta["K"],
                             skip=identified["prediction_skip_samples"])
-    assert identified["signal_to_prediction_error_db"] == pytest.approx(r["overall"], rel=1e-9)
+    assert identified["signal_to_prediction_error_db"] == pytest.approx(r.overall, rel=1e-9)
     assert identified["signal_to_prediction_error_db"] > 20.0
 
 
@@ -164,7 +164,7 @@ def test_identify_via_higher_orders_keeps_the_best_predicting_candidate(work, si
     data = read_data(work / "data.npz")
     r = prediction_ratio_db(model, data.u, data.y, K=meta["K"],
                             skip=summary["prediction_skip_samples"])
-    assert summary["signal_to_prediction_error_db"] == pytest.approx(r["overall"], rel=1e-9)
+    assert summary["signal_to_prediction_error_db"] == pytest.approx(r.overall, rel=1e-9)
 
 
 @pytest.mark.parametrize("via, match", [("5", "multiples of the 2 outputs"),

@@ -106,9 +106,9 @@ def test_simulation_fit_of_a_gain_error_is_closed_form(plant, rng):
     u = rng.standard_normal((2000, 1))
     y = simulate(plant, u)
     fit = simulation_fit(plant * (1 + 1e-3), u, y)
-    np.testing.assert_allclose(fit["per_channel_db"], [60.0, 60.0], rtol=1e-9)
-    assert fit["overall_db"] == pytest.approx(60.0, rel=1e-9)
-    np.testing.assert_allclose(fit["nrmse_percent"], 99.9, atol=1e-3)
+    np.testing.assert_allclose(fit.per_output, [60.0, 60.0], rtol=1e-9)
+    assert fit.overall == pytest.approx(60.0, rel=1e-9)
+    np.testing.assert_allclose(fit.nrmse_percent, 99.9, atol=1e-3)
 
 
 def test_prediction_ratio_of_the_true_plant_is_the_sensor_snr(plant):
@@ -121,13 +121,13 @@ def test_prediction_ratio_of_the_true_plant_is_the_sensor_snr(plant):
     r = prediction_ratio_db(plant, e.data.u, e.data.y, K=K)
     noise = e.data.y - e.y_clean
     realised = 20 * np.log10(np.sqrt(np.mean(e.data.y**2, 0) / np.mean(noise**2, 0)))
-    np.testing.assert_allclose(r["per_channel"], realised, rtol=1e-9)
+    np.testing.assert_allclose(r.per_output, realised, rtol=1e-9)
     # overall: the thesis's RMS over all sensors and samples; mean_normalised: the mean of
     # the per-channel normalised error powers
     pooled = 10 * np.log10(np.sum(e.data.y**2) / np.sum(noise**2))
-    assert r["overall"] == pytest.approx(pooled, rel=1e-9)
+    assert r.overall == pytest.approx(pooled, rel=1e-9)
     normalised = -10 * np.log10(np.mean(np.mean(noise**2, 0) / np.mean(e.data.y**2, 0)))
-    assert r["mean_normalised"] == pytest.approx(normalised, rel=1e-9)
+    assert r.mean_normalised == pytest.approx(normalised, rel=1e-9)
     # and that is the requested SNR up to the sampling spread of the noise power
     # (relative std 1/sqrt(2 N) = 0.5 %, i.e. 0.03 dB; allow 4 sigma)
     np.testing.assert_allclose(realised, 30.0 + 10 * np.log10(1 + 1e-3), atol=0.13)
@@ -212,5 +212,5 @@ def test_best_predictor_is_never_worse_than_simulation_and_near_the_true_gain(rn
     sc = info["identification_ratio_db"]
     assert sc[label] == max(sc.values()) >= sc["none (free-run simulation)"]
     skip = u.shape[0] // 8
-    truth = prediction_ratio_db(model, u, y, K=K, skip=skip)["mean_normalised"]
+    truth = prediction_ratio_db(model, u, y, K=K, skip=skip).mean_normalised
     assert sc[label] > truth - 0.05          # as good as the true noise model, to 0.05 dB

@@ -133,11 +133,11 @@ def test_thesis_scale_simo_subspace_start_beats_n4sid_in_simulation(full):
     u, y = data(plant, n_samples, snr_db=60, seed=22)
     uv, yv = data(plant, 3000, seed=23)
     fits = [n4sid(u, y, n, i, 1 / FS).with_d for i in (20, 40, 60)]
-    best_sim = max(simulation_fit(m, uv, yv)["overall_db"] for m in fits)
+    best_sim = max(simulation_fit(m, uv, yv).overall for m in fits)
     best_frf = min(frf_error(m, plant, band=(30, 790))["rms_db"] for m in fits)
     ident = identify(u, y, n, 1 / FS, block_rows=[20, 40, 60])
     # measured (reduced form): sim 81.7 dB against 72.5, FRF RMS 0.12 dB against 0.41
-    assert simulation_fit(ident.model, uv, yv)["overall_db"] > best_sim
+    assert simulation_fit(ident.model, uv, yv).overall > best_sim
     assert frf_error(ident.model, plant, band=(30, 790))["rms_db"] < best_frf
 
 
@@ -178,7 +178,7 @@ def test_identify_reduced_returns_the_candidate_with_the_best_identification_pre
     assert kinfo["identification_ratio_db"][start] == pytest.approx(
         best["identification_ratio_db"], rel=1e-12)
     r = prediction_ratio_db(idn.model, u, y, K=idn.K, skip=kinfo["skip"])
-    assert r["overall"] >= best["identification_ratio_db"] - 0.05
+    assert r.overall >= best["identification_ratio_db"] - 0.05
 
 
 def test_identify_reduced_never_simulates_worse_than_identify_at_the_same_order():
@@ -349,7 +349,7 @@ def test_returned_predictor_is_never_worse_than_free_run_simulation_on_the_ident
     assert scores[start] >= scores["none (free-run simulation)"]
     assert scores[start] == max(scores.values())
     returned = prediction_ratio_db(ident.model, u, y, K=ident.K, skip=kinfo["skip"])
-    assert returned["mean_normalised"] >= scores[start] - 0.05
+    assert returned.mean_normalised >= scores[start] - 0.05
 
 
 def test_prediction_error_gain_predicts_better_than_every_candidate_and_keeps_the_plant():
@@ -376,8 +376,8 @@ def test_prediction_error_gain_predicts_better_than_every_candidate_and_keeps_th
         assert np.array_equal(getattr(cand.model, M), getattr(pem.model, M))
     assert pem.provenance.predictor["pem"]["logdet_end"] < pem.provenance.predictor["pem"]["logdet_start"]
     skip = 200
-    r_c = prediction_ratio_db(cand.model, uv, yv, K=cand.K, skip=skip)["mean_normalised"]
-    r_p = prediction_ratio_db(pem.model, uv, yv, K=pem.K, skip=skip)["mean_normalised"]
+    r_c = prediction_ratio_db(cand.model, uv, yv, K=cand.K, skip=skip).mean_normalised
+    r_p = prediction_ratio_db(pem.model, uv, yv, K=pem.K, skip=skip).mean_normalised
     assert r_p > r_c + 1.0
     rho = np.max(np.abs(np.linalg.eigvals(pem.model.A - pem.K @ pem.model.C)))
     assert rho < 0.999 + 1e-9

@@ -407,7 +407,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         # its own: by the one-step prediction on the identification record.
         alt = _subspace_with_d(u, y, order, dt, block_rows or (40, 80))
         if alt is not None:
-            ours = prediction_ratio_db(model, u, y, K=K, skip=alt[3])["overall"]
+            ours = prediction_ratio_db(model, u, y, K=K, skip=alt[3]).overall
             if alt[2] > ours:
                 alt_info = {"subspace_with_d_db": alt[2], "plid_db": ours}
                 model, K = alt[0], alt[1]
@@ -447,7 +447,7 @@ def _subspace_with_d(u, y, order: int, dt: float, block_rows):
             continue
         K, _, kinfo = choose_predictor(m, u, y)
         skip = int(kinfo.get("skip", 0))
-        r = prediction_ratio_db(m, u, y, K=K, skip=skip)["overall"]
+        r = prediction_ratio_db(m, u, y, K=K, skip=skip).overall
         if best is None or r > best[2]:
             best = (m, K, float(r), skip, int(br))
     return best

@@ -271,9 +271,9 @@ def run(args) -> int:
         "R": [float(r) for r in np.atleast_1d(ident.R)],
         "seconds": seconds, "K_source": prov.K_source,
         # in-sample: scored on the identification data itself
-        "signal_to_prediction_error_db": ratio["overall"],
-        "signal_to_prediction_error_db_per_output": ratio["per_channel"],
-        "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
+        "signal_to_prediction_error_db": ratio.overall,
+        "signal_to_prediction_error_db_per_output": ratio.per_output,
+        "signal_to_prediction_error_db_mean_normalised": ratio.mean_normalised,
         "prediction_skip_samples": skip, "unstable_poles": unstable,
         "poles": [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(freq, damp)],
         # complex pairs with 95 % intervals (plid.uncertainty: first-order propagation of
