@@ -97,7 +97,7 @@ def test_a_stabilised_winner_reports_the_poles_reflected_in_itself(monkeypatch):
     monkeypatch.setattr(mp, "identify_reduced", lambda *a, **k: idn)
     u, y = rng.standard_normal((200, 1)), rng.standard_normal((200, 1))
     fit = demo.identify_model(u, y, 2, dt)
-    assert fit.info["stabilised"] == Stabilised(applied=True, reflected_poles=1)
+    assert fit.info.stabilised == Stabilised(applied=True, reflected_poles=1)
 
 
 # --------------------------------------------------------------------------- the report

@@ -52,7 +52,6 @@ from __future__ import annotations
 import json
 import math
 import time
-import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -61,7 +60,6 @@ import numpy as np
 from trussid import plots
 from trussid._util.errors import UserError
 from trussid._util.files import atomic_directory, atomic_path
-from trussid._util.jsonio import json_safe
 from trussid.campaign.adapt import demo_section as adapt_demo_section
 from trussid.campaign.adapt import write_files as write_adapt_files
 from trussid.campaign.control import demo_section
@@ -70,24 +68,18 @@ from trussid.campaign.orders import scan_orders
 from trussid.campaign.report import report_markdown
 from trussid.campaign.structure import DEFAULT_SNR_DB, STRUCTURAL_DAMPING_MAX
 from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
-                                      DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
+                                      DemoSummary, ExperimentRow, ModeAudit, ModeCheck,
+                                      ModelIdentification, ModelSummary,
                                       PlantSummary, ReportProvenance, ReportFiles)
 from trussid.geometry.lab import G0, lab_record
 from trussid.lqg.grading import LoopSettings
+from trussid.plid.chosen import choose_model
 from trussid.plid.datafile import with_channels, write_data
-from trussid.plid.estimator import PLID, PLIDWarning
 from trussid.plid.evaluate import compare
 from trussid.plid.experiment import excitation, run_experiment, simulate
 from trussid.plid.frf import frequency_response, h1
-from trussid.plid.metrics import choose_predictor, prediction_ratio_db
 from trussid.plid.modal import mac, modal_table
 from trussid.plid.modelfile import save_model
-from trussid.plid.frontend import fit_model
-from trussid.plid.provenance import Stabilised
-from trussid.plid.reduced import default_via
-from trussid.plid.stability import stabilise
-from trussid.plid.subspace import n4sid
-from trussid.plid.uncertainty import mode_intervals
 from trussid.plots import save_figure
 from trussid.testbed.plant import testbed_plant
 
@@ -345,7 +337,7 @@ def run_experiments(tp, settings: DemoSettings, progress=None) -> dict:
 class Identified:
     """An identified model with what the report needs from the identification."""
 
-    model: object                      # discrete control.StateSpace, D = 0
+    model: object                      # discrete control.StateSpace
     K: np.ndarray                      # one-step predictor gain used for prediction
     K_source: str
     seconds: float
@@ -353,7 +345,7 @@ class Identified:
     innovations: np.ndarray            # (N, p) of the (last) PLID pass
     theta_history: np.ndarray          # (k, q)
     history_index: np.ndarray          # (k,)
-    info: dict = field(default_factory=dict)
+    info: ModelIdentification
     modes: list = field(default_factory=list)  # plid.uncertainty.ModeInterval per mode
 
 
@@ -368,101 +360,22 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     balanced truncation and refined by PLID; the candidate with the best one-step
     prediction on the identification record wins, with its predictor gain
     (:func:`trussid.plid.metrics.choose_predictor`). Measured in
-    ``benchmarks/results/plid_thesis.md``. The parameter history of the winning PLID pass is
-    kept for the convergence plot.
+    ``benchmarks/results/plid_thesis.md``. :func:`trussid.plid.chosen.choose_model` makes the
+    winner simulable, sets the subspace fit with D against it when ``direct`` is asked for,
+    and keeps the parameter history of the winning PLID pass for the convergence plot.
     """
     t0 = time.perf_counter()
-    with warnings.catch_warnings():
-        # The candidates' PLID passes warn when a pass loses positive definiteness; the
-        # recipe handles that (a failed candidate is dropped) and the report lists them.
-        warnings.simplefilter("ignore", PLIDWarning)
-        p = np.asarray(y).reshape(len(y), -1).shape[1]
-        idn = fit_model(u, y, order, dt, start="subspace",
-                        via=default_via(order, p) if via is None else via, progress=progress,
-                        log=log, block_rows=None if block_rows is None else list(block_rows),
-                        direct=direct)
-    res = idn.result
-    model = idn.model
-    prov = idn.provenance
-    chosen = prov.chosen or ""
-    stab = prov.stabilised or Stabilised()
-    if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
-        # No stable candidate (none was measured on the testbed): reflect the poles outside
-        # the unit circle in (plid.stability keeps the magnitude response) so that the model
-        # can be simulated, and choose its predictor afresh.
-
-        st = stabilise(model)
-        model = st.model
-        stab = Stabilised(bool(st.applied), int(np.size(st.reflected)))
-        K, K_source, kinfo = choose_predictor(model, u, y)
-    else:
-        K, kinfo = idn.K, prov.predictor or {}
-        K_source = kinfo.get("chosen", "")
-    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
-    alt_info = {}
-    if direct is not False:
-        # The recipe's N4SID prior is strictly proper (D = 0); on a plant with a large
-        # feed-through (accelerometers on a bare structure) PLID can stay far from the
-        # subspace fit with D. That fit is a candidate too, judged as the recipe judges
-        # its own: by the one-step prediction on the identification record.
-        alt = _subspace_with_d(u, y, order, dt, block_rows or (40, 80))
-        if alt is not None:
-            ours = prediction_ratio_db(model, u, y, K=K, skip=alt[3]).overall
-            if alt[2] > ours:
-                alt_info = {"subspace_with_d_db": alt[2], "plid_db": ours}
-                model, K = alt[0], alt[1]
-                K_source = "kalman (N4SID with D, chosen on the identification record)"
-                method = (f"N4SID with D (block rows {alt[4]}): {alt[2]:.1f} dB one-step on "
-                          f"the identification record against {ours:.1f} dB for PLID's "
-                          f"{chosen}")
-                chosen = f"subspace with D, {alt[4]} block rows"
-    hist, hidx = res.theta_history, res.history_index
-    if hist.shape[0] < 2 and idn.prior is not None:
-        # The recipe ran without a parameter history: repeat the winner's last PLID pass
-        # with one (same basis, prior and settings, so the same estimate) for the plot.
-        hist, hidx = _history_of_last_pass(idn, u, y, res.model.nstates, dt)
-    info = {"recipe": "trussid.plid.multipass.identify_reduced", "start": idn.start,
-            "stabilised": stab, "basis": getattr(idn.basis, "name", ""),
-            "R": np.asarray(idn.R).tolist(), "predictor": kinfo,
-            **{k: v for k, v in prov.as_dict().items() if k not in ("passes", "predictor")},
-            "passes": prov.passes}
-    info["chosen"] = chosen
-    if alt_info:
-        info["candidate_with_d"] = alt_info
-    modes = mode_intervals(model, res.model, res.theta_cov)
-    return Identified(model, K, K_source, time.perf_counter() - t0, method,
-                      res.innovations, hist, hidx, info, modes)
-
-
-def _subspace_with_d(u, y, order: int, dt: float, block_rows):
-    """The best N4SID model with a direct term over ``block_rows`` by one-step prediction on
-    ``(u, y)``: ``(model, K, dB, skip, block rows)``, or None if none is stable."""
-    best = None
-    for br in block_rows:
-        try:
-            m = n4sid(u, y, order, int(br), dt).with_d
-        except (ValueError, np.linalg.LinAlgError):
-            continue
-        if np.max(np.abs(np.linalg.eigvals(np.asarray(m.A)))) >= 1:
-            continue
-        K, _, kinfo = choose_predictor(m, u, y)
-        skip = int(kinfo.get("skip", 0))
-        r = prediction_ratio_db(m, u, y, K=K, skip=skip).overall
-        if best is None or r > best[2]:
-            best = (m, K, float(r), skip, int(br))
-    return best
-
-
-def _history_of_last_pass(idn, u, y, order, dt):
-    last = (idn.provenance.passes or [{}])[-1]
-    est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
-               Q_theta=last.get("Q_theta", 0.0), prior=idn.prior,
-               prior_theta_var=last.get("prior_theta_var", 1e-4), basis=idn.basis,
-               history_every=10, progress=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PLIDWarning)  # as in identify_model
-        r = est.fit(u, y)
-    return r.theta_history, r.history_index
+    ch = choose_model(u, y, order, dt, block_rows=block_rows, via=via, progress=progress,
+                      log=log, direct=direct)
+    idn = ch.identification
+    info = ModelIdentification(
+        recipe="trussid.plid.multipass.identify_reduced", start=idn.start,
+        basis=getattr(idn.basis, "name", ""), R=np.asarray(idn.R).tolist(),
+        provenance=idn.provenance, stabilised=ch.stabilised, predictor=ch.predictor,
+        chosen=ch.chosen, candidate_with_d=ch.with_direct_term)
+    return Identified(ch.model, ch.K, ch.K_source, time.perf_counter() - t0, ch.method,
+                      idn.result.innovations, ch.theta_history, ch.history_index, info,
+                      ch.modes)
 
 
 # --------------------------------------------------------------------------- evaluation
@@ -513,7 +426,7 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
         simulation_fit_db=s.overall,
         simulation_fit_db_per_output=s.per_output,
         seconds=fit.seconds, method=fit.method, unstable_poles=c.unstable_poles,
-        stabilised=fit.info.get("stabilised") or Stabilised(),
+        stabilised=fit.info.stabilised,
         poles=c.poles,
         poles_in_band_matched=sum(r.frequency_hz is not None for r in in_band),
         poles_in_band_true=len(in_band),
@@ -521,7 +434,7 @@ def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings
         h1_coherence=coherence,
         modes_check=mode_audit(c.poles, settings.frf_band, settings.excitation_band),
         mode_checks=_mode_checks(c.poles, fit.modes, model, tcols),
-        identification=json_safe(fit.info),
+        identification=fit.info,
     )
 
 
@@ -709,9 +622,9 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
                                     log=lambda msg: say(f"        {msg}"),
                                     direct=settings.direct)
         if choice is not None:
-            fits[name].info["order_scan"] = json_safe(choice)
+            fits[name].info = replace(fits[name].info, order_scan=choice)
         h1s[name] = h1_estimate(rid, settings.h1_nperseg)
-        say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
+        say(f"      {name}: kept {fits[name].info.chosen} "
             f"({fits[name].seconds:.1f} s)")
     return fits, h1s
 
