@@ -198,8 +198,8 @@ def test_prediction_ratio_recomputes_from_the_written_model_and_data(report):
     for m in summary["models"]:
         model, meta = load_model(out / f"model_{m['name']}.npz")
         val = read_data(out / f"data_{m['name']}_val.npz")
-        assert meta["input_names"] == val.input_names == m["input_names"]
-        r = prediction_ratio_db(model, val.u, val.y, K=meta["K"],
+        assert meta.input_names == val.input_names == m["input_names"]
+        r = prediction_ratio_db(model, val.u, val.y, K=meta.K,
                                 skip=m["prediction_skip_samples"])
         assert r.overall == pytest.approx(m["signal_to_prediction_error_db"], abs=1e-9)
 
