@@ -29,6 +29,7 @@ import numpy as np
 from trussid.plid.estimator import PLID, PLIDWarning
 from trussid.plid.frontend import fit_model
 from trussid.plid.metrics import choose_predictor, prediction_ratio_db
+from trussid.plid.passes import PassRecord
 from trussid.plid.provenance import Identification, Stabilised
 from trussid.plid.reduced import default_via
 from trussid.plid.stability import stabilise
@@ -228,11 +229,12 @@ def subspace_with_d(u, y, order: int, dt: float, block_rows) -> SubspaceWithD | 
 
 
 def _history_of_last_pass(idn: Identification, u, y, order, dt):
-    last = (idn.provenance.passes or [{}])[-1]
-    est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
-               Q_theta=last.get("Q_theta", 0.0), prior=idn.prior,
-               prior_theta_var=last.get("prior_theta_var", 1e-4), basis=idn.basis,
-               history_every=10, progress=False)
+    passes = idn.provenance.passes
+    last = passes[-1] if passes else PassRecord(0, idn.result.form, 0.0)
+    est = PLID(order, form=idn.result.form, dt=dt, Q=last.Q, R=idn.R, Q_theta=last.Q_theta,
+               prior=idn.prior,
+               prior_theta_var=1e-4 if last.prior_theta_var is None else last.prior_theta_var,
+               basis=idn.basis, history_every=10, progress=False)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PLIDWarning)  # as in choose_model
         r = est.fit(u, y)

@@ -19,20 +19,7 @@ from trussid.plid.frf import FRF, frequency_response
 from trussid.plid.metrics import (PoleMatch, compare_poles, default_noise_covariances, frf_error,
                                   modal_parameters, prediction_burn_in, prediction_ratio_db,
                                   predictor_gain, simulation_fit,
-                                  PredictionScore, SimulationScore)
-
-
-@dataclass(frozen=True)
-class FRFScore:
-    """Magnitude [dB] and phase [deg] error against a reference over ``band`` [Hz]."""
-
-    max_db: float
-    rms_db: float
-    max_deg: float
-    rms_deg: float
-    per_channel: dict
-    band: tuple
-    reference: str
+                                  FRFScore, PredictionScore, SimulationScore)
 
 
 @dataclass(frozen=True)
@@ -152,8 +139,7 @@ def _frf_score(model, reference, band, label, n_freq) -> FRFScore:
     else:
         f = frf_grid(reference, band, n_freq)
         e = frf_error(model, FRF(f, frequency_response(reference, f)), band)
-    return FRFScore(e["max_db"], e["rms_db"], e["max_deg"], e["rms_deg"], e["per_channel"],
-                    tuple(e["band"]), label)
+    return replace(e, reference=label)
 
 
 def compare(model: control.StateSpace, plant: control.StateSpace | None = None, *,

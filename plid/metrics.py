@@ -573,7 +573,37 @@ def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) 
     return rows
 
 
-def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
+@dataclass(frozen=True)
+class FRFScore:
+    """Magnitude [dB] and phase [deg] error against a reference over ``band`` [Hz].
+
+    The one shape of that result: :func:`frf_error` returns it and
+    :func:`trussid.plid.evaluate.compare` reports it.
+
+    Attributes
+    ----------
+    max_db, rms_db : float
+        Largest absolute and RMS magnitude error over every channel and frequency [dB].
+    max_deg, rms_deg : float
+        The same for the phase [deg].
+    per_channel : dict
+        The same four figures per channel, each a nested list (outputs x inputs), by name.
+    band : tuple of float
+        The frequencies [Hz] actually compared, lowest and highest.
+    reference : str
+        What the model was set against ("" when the caller did not say).
+    """
+
+    max_db: float
+    rms_db: float
+    max_deg: float
+    rms_deg: float
+    per_channel: dict
+    band: tuple
+    reference: str = ""
+
+
+def frf_error(model, reference, band=None, n_freq: int = 400) -> FRFScore:
     """Magnitude [dB] and phase [deg] error of ``model`` against ``reference`` over a band.
 
     Parameters
@@ -589,8 +619,8 @@ def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
 
     Returns
     -------
-    dict with ``max_db``, ``rms_db``, ``max_deg``, ``rms_deg`` (overall, floats) and
-    ``per_channel`` {same keys: nested lists p x m}, ``band`` and ``n_freq``.
+    FRFScore
+        Its ``reference`` is empty (the caller knows what ``reference`` is).
     """
     if isinstance(reference, FRF):
         f = np.asarray(reference.f, dtype=float)
@@ -626,20 +656,17 @@ def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
     with np.errstate(divide="ignore", invalid="ignore"):
         mag = 20 * np.log10(np.abs(H)) - 20 * np.log10(np.abs(H_ref))
         ph = np.degrees(np.angle(H / H_ref))
-    out = {"band": [float(f.min()), float(f.max())], "n_freq": int(f.size), "per_channel": {}}
-    for key, arr, fn in (("max_db", mag, lambda a: np.max(np.abs(a), axis=0)),
-                         ("rms_db", mag, lambda a: np.sqrt(np.mean(a**2, axis=0))),
-                         ("max_deg", ph, lambda a: np.max(np.abs(a), axis=0)),
-                         ("rms_deg", ph, lambda a: np.sqrt(np.mean(a**2, axis=0)))):
-        out["per_channel"][key] = fn(arr).tolist()
-    out["max_db"] = float(np.max(np.abs(mag)))
-    out["rms_db"] = float(np.sqrt(np.mean(mag**2)))
-    out["max_deg"] = float(np.max(np.abs(ph)))
-    out["rms_deg"] = float(np.sqrt(np.mean(ph**2)))
-    return out
+    per_channel = {key: fn(arr).tolist() for key, arr, fn in (
+        ("max_db", mag, lambda a: np.max(np.abs(a), axis=0)),
+        ("rms_db", mag, lambda a: np.sqrt(np.mean(a**2, axis=0))),
+        ("max_deg", ph, lambda a: np.max(np.abs(a), axis=0)),
+        ("rms_deg", ph, lambda a: np.sqrt(np.mean(a**2, axis=0))))}
+    return FRFScore(float(np.max(np.abs(mag))), float(np.sqrt(np.mean(mag**2))),
+                    float(np.max(np.abs(ph))), float(np.sqrt(np.mean(ph**2))), per_channel,
+                    (float(f.min()), float(f.max())))
 
 
-__all__ = ["PoleMatch", "PredictionScore", "SimulationScore", "predictor_gain",
+__all__ = ["PoleMatch", "PredictionScore", "SimulationScore", "FRFScore", "predictor_gain",
            "default_noise_covariances", "one_step_predict",
            "prediction_ratio_db", "choose_predictor", "simulation_fit", "modal_parameters", "compare_poles",
            "frf_error", "prediction_burn_in", "s_plane", "best_predictor", "refine_predictor_gain"]

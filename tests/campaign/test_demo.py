@@ -215,8 +215,8 @@ def test_frf_error_recomputes_against_the_written_true_plant(report):
     model, _ = load_model(out / f"model_{m['name']}.npz")
     # frf_error on its own grid, from the files: the summary's figure is reproducible.
     e = frf_error(model, truth[:, [0]], (50.0, 350.0))
-    assert e["max_db"] == pytest.approx(m["frf_max_error_db"], rel=1e-6)
-    assert e["rms_db"] == pytest.approx(m["frf_rms_error_db"], rel=1e-6)
+    assert e.max_db == pytest.approx(m["frf_max_error_db"], rel=1e-6)
+    assert e.rms_db == pytest.approx(m["frf_rms_error_db"], rel=1e-6)
 
 
 @pytest.mark.slow

@@ -25,7 +25,7 @@ from trussid.lqg.evaluate import ChannelMargin, DiskMargins, Margin, ModeRow
 from trussid.lqg.grading import (Checks, Converters, DominantMode, LoopEvaluation, LoopSettings,
                                  WatchedMode)
 from trussid.plid.metrics import PoleMatch
-from trussid.plid.multipass import Provenance, Stabilised
+from trussid.plid.multipass import PassRecord, Provenance, Stabilised
 
 
 def _audit():
@@ -65,7 +65,7 @@ def _model(name="mimo", kind="MIMO"):
 def _identification():
     prov = Provenance(chosen="direct 18", candidates=[
         {"label": "direct 18", "identification_ratio_db": 31.42, "seconds": 2.5}],
-        passes=[{"Q": 0.0}], predictor={"chosen": "kalman"}, seconds=3.5)
+        passes=[PassRecord(0, "direct", 0.0)], predictor={"chosen": "kalman"}, seconds=3.5)
     return ModelIdentification(recipe="trussid.plid.multipass.identify_reduced",
                                start="subspace", basis="rotation", R=[1e-4], provenance=prov,
                                stabilised=Stabilised(), predictor={"chosen": "kalman"},
@@ -215,7 +215,9 @@ def test_the_identification_json_puts_the_provenance_beside_the_demo_s_choices()
     ident = dataclasses.replace(_identification(),
                                 stabilised=Stabilised(applied=True, reflected_poles=2))
     out = ident.to_dict()
-    assert out["chosen"] == "direct 18" and out["passes"] == [{"Q": 0.0}]
+    assert out["chosen"] == "direct 18"
+    assert out["passes"] == [{"pass": 0, "form": "direct", "Q": 0.0, "Q_theta": 0.0,
+                              "prior_theta_var": None, "finite": True, "seconds": None}]
     assert out["stabilised"] == {"applied": True, "reflected_poles": 2}
     assert out["seconds"] == 3.5 and out["candidates"][0]["identification_ratio_db"] == 31.42
     assert "subspace" not in out and "candidate_with_d" not in out  # not set: left out

@@ -75,25 +75,25 @@ def test_far_pairs_are_not_called_matches(plant):
 
 def test_frf_error_of_a_gain_error_is_that_gain_in_db(plant):
     err = frf_error(plant * 1.1, plant, band=(10, 450))
-    assert err["max_db"] == pytest.approx(20 * np.log10(1.1), rel=1e-9)
-    assert err["rms_db"] == pytest.approx(20 * np.log10(1.1), rel=1e-9)
-    assert err["max_deg"] < 1e-9
-    assert np.shape(err["per_channel"]["max_db"]) == (2, 1)
+    assert err.max_db == pytest.approx(20 * np.log10(1.1), rel=1e-9)
+    assert err.rms_db == pytest.approx(20 * np.log10(1.1), rel=1e-9)
+    assert err.max_deg < 1e-9
+    assert np.shape(err.per_channel["max_db"]) == (2, 1)
 
 
 def test_frf_error_of_a_one_sample_delay_is_a_linear_phase(plant):
     delay = control.ss([[0.0]], [[1.0]], [[1.0]], [[0.0]], 1 / FS)  # z^-1
     err = frf_error(plant * delay, plant, band=(10, 450))
-    assert err["max_db"] < 1e-9
-    assert err["max_deg"] == pytest.approx(360 * 450 / FS, rel=1e-6)
+    assert err.max_db < 1e-9
+    assert err.max_deg == pytest.approx(360 * 450 / FS, rel=1e-6)
 
 
 def test_frf_error_against_an_estimate_uses_its_grid(plant):
     f = np.linspace(0, 500, 101)
     ref = FRF(f=f, H=frequency_response(plant, f) * 10 ** (0.5 / 20))
     err = frf_error(plant, ref, band=(20, 400))
-    assert err["max_db"] == pytest.approx(0.5, rel=1e-9)
-    assert err["band"] == [20.0, 400.0]
+    assert err.max_db == pytest.approx(0.5, rel=1e-9)
+    assert err.band == (20.0, 400.0)
 
 
 def test_frf_error_refuses_mismatched_sizes(plant):

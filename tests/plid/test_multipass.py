@@ -71,7 +71,7 @@ def test_scratch_multipass_converges_on_noiseless_data(simo):
     u, y = data(simo, 2000, seed=4)
     ident = identify(u, y, 6, 1 / FS, start="scratch", R=1e-10)
     err = frf_error(ident.model, simo, band=(30, 790))
-    assert err["rms_db"] < 1e-4
+    assert err.rms_db < 1e-4
     assert len(ident.provenance.passes) == 4
 
 
@@ -82,16 +82,16 @@ def test_a_pass_started_at_the_truth_with_a_tight_prior_stays_there(simo):
     basis = basis_for(6, 2, FS, model_frequencies(simo, 3, FS))
     res, hist = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-8)] * 2, basis=basis,
                           prior=simo, R=1e-10)
-    assert [h["pass"] for h in hist] == [0, 1]
-    assert frf_error(res.model, simo, band=(30, 790))["max_db"] < 1e-6
+    assert [h.index for h in hist] == [0, 1]
+    assert frf_error(res.model, simo, band=(30, 790)).max_db < 1e-6
 
 
 def test_subspace_start_is_at_least_as_accurate_as_n4sid_on_the_same_noisy_data(simo):
     u, y = data(simo, 3000, snr_db=40, seed=6)
-    best_n4sid = min(frf_error(n4sid(u, y, 6, i, 1 / FS).with_d, simo, band=(30, 790))["rms_db"]
+    best_n4sid = min(frf_error(n4sid(u, y, 6, i, 1 / FS).with_d, simo, band=(30, 790)).rms_db
                      for i in (8, 12, 20))
     ident = identify(u, y, 6, 1 / FS, block_rows=[8, 12, 20])   # prior picked from data only
-    assert frf_error(ident.model, simo, band=(30, 790))["rms_db"] <= best_n4sid
+    assert frf_error(ident.model, simo, band=(30, 790)).rms_db <= best_n4sid
 
 
 def test_identify_refuses_an_unknown_start(simo):
@@ -134,11 +134,11 @@ def test_thesis_scale_simo_subspace_start_beats_n4sid_in_simulation(full):
     uv, yv = data(plant, 3000, seed=23)
     fits = [n4sid(u, y, n, i, 1 / FS).with_d for i in (20, 40, 60)]
     best_sim = max(simulation_fit(m, uv, yv).overall for m in fits)
-    best_frf = min(frf_error(m, plant, band=(30, 790))["rms_db"] for m in fits)
+    best_frf = min(frf_error(m, plant, band=(30, 790)).rms_db for m in fits)
     ident = identify(u, y, n, 1 / FS, block_rows=[20, 40, 60])
     # measured (reduced form): sim 81.7 dB against 72.5, FRF RMS 0.12 dB against 0.41
     assert simulation_fit(ident.model, uv, yv).overall > best_sim
-    assert frf_error(ident.model, plant, band=(30, 790))["rms_db"] < best_frf
+    assert frf_error(ident.model, plant, band=(30, 790)).rms_db < best_frf
 
 
 # --------------------------------------------------------------------------- identify_reduced
@@ -324,7 +324,7 @@ def test_identify_chooses_no_direct_term_for_a_strictly_proper_plant(simo):
     assert not ident.provenance.direct.estimated
     assert not np.any(ident.model.D)
     test = ident.provenance.direct.test
-    assert test["held_out_nmse_with"] > (1 - test["margin"]) * test["held_out_nmse_without"]
+    assert test.held_out_nmse_with > (1 - test.margin) * test.held_out_nmse_without
 
 
 def test_identify_can_be_told_to_estimate_or_omit_D(simo):
@@ -425,8 +425,8 @@ def test_a_first_pass_that_diverges_is_restarted_from_its_prior_in_the_square_ro
     basis = basis_for(6, 2, FS, model_frequencies(simo, 3, FS))
     res, hist = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-4)], basis=basis, prior=simo,
                           R=1e-6, form="direct")
-    assert [(h["form"], h["finite"]) for h in hist] == [("direct", False), ("sqrt", True)]
-    assert "square-root form" in hist[1]["restart"]
+    assert [(h.form, h.finite) for h in hist] == [("direct", False), ("sqrt", True)]
+    assert "square-root form" in hist[1].restart
     same, _ = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-4)], basis=basis, prior=simo,
                         R=1e-6, form="sqrt")
     assert res.form == "sqrt" and np.array_equal(res.theta, same.theta)

@@ -271,7 +271,7 @@ def run(args) -> int:
         "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
         "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
         "start": start, "form": ident.result.form,
-        "passes": len(prov.passes), "Q": [ps["Q"] for ps in prov.passes],
+        "passes": len(prov.passes), "Q": [ps.Q for ps in prov.passes],
         "R": [float(r) for r in np.atleast_1d(ident.R)],
         "seconds": seconds, "K_source": prov.K_source,
         # in-sample: scored on the identification data itself
@@ -315,8 +315,8 @@ def _print_fit(prov, outputs, ratio, modes, poles) -> None:
     if prov.direct is not None:
         d = prov.direct
         t = d.test
-        why = (f" (held-out output error {t['held_out_nmse_with']:.3g} with D against "
-               f"{t['held_out_nmse_without']:.3g} without)" if t else "")
+        why = (f" (held-out output error {t.held_out_nmse_with:.3g} with D against "
+               f"{t.held_out_nmse_without:.3g} without)" if t else "")
         print(f"direct term D: {'estimated' if d.estimated else 'none (D = 0)'}"
               f"{' (' + str(d.mode) + ')' if d.mode != 'auto' else ''}{why}")
     print(f"predictor gain K: {prov.K_source}")
