@@ -79,7 +79,7 @@ MODAL_BAND = (50.0, 360.0)   # the modes' band: the 30-790 Hz maximum sits at de
 def measure_all(model, case, val, seconds, extra=None):
     """``bench_plid_thesis.measure`` plus the FRF RMS over the modes' band alone."""
     r = measure(model, case, val, seconds, extra)
-    r["rms_db_modal_band"] = frf_error(model, case.plant, band=MODAL_BAND)["rms_db"]
+    r["rms_db_modal_band"] = frf_error(model, case.plant, band=MODAL_BAND).rms_db
     return r
 
 
@@ -161,7 +161,7 @@ def accuracy_case(name, m, n_samples, seed, plant_seed, log=print, block_rows=BL
     real = real_nfoursid(u, y, ORDER, best_rms, dt)
     sec = time.perf_counter() - t0
     r = measure_all(real, case, val, sec, {"block_rows": best_rms})
-    diff = frf_error(real, rows[best_rms][0].with_d, band=(30.0, 790.0))["max_db"]
+    diff = frf_error(real, rows[best_rms][0].with_d, band=(30.0, 790.0)).max_db
     r["max_frf_difference_to_thin_db"] = diff
     out["methods"]["nfoursid (package)"] = r
     log(f"  nfoursid package i={best_rms}: max {r['max_db']:.4f} rms {r['rms_db']:.5f} "

@@ -519,7 +519,7 @@ def cli_check(name, res, log=print):
             out["error"] = (r.stderr.strip().splitlines() or ["exit %d" % r.returncode])[-1]
             return out
         model, meta = load_model(npz)
-        mdl = _mk(model.A, model.B, model.C, model.D, meta["K"])
+        mdl = _mk(model.A, model.B, model.C, model.D, meta.K)
         out.update(sim=sim_fit(mdl, uv, yv), pred=pred_fit(mdl, uv, yv))
     log(f"[{name}] trussid identify --order {s['order']}: 1-step {_f(out['pred'])} "
         f"sim {_f(out['sim'])} ({out['wall']:.1f} s wall)")

@@ -68,8 +68,8 @@ def setup(work: Path) -> None:
         "from trussid.plid.reduce import balanced_truncation; "
         "p, meta = load_model(sys.argv[1]); "
         "r = balanced_truncation(p, 36).model; "
-        "save_model(sys.argv[2], r, input_names=meta['input_names'], "
-        "output_names=meta['output_names'])")
+        "save_model(sys.argv[2], r, input_names=meta.input_names, "
+        "output_names=meta.output_names)")
     subprocess.run([sys.executable, "-c", code, str(work / "plant.npz"),
                     str(work / "m36.npz")], check=True, env=_env())
 

@@ -9,7 +9,7 @@ definitions of :mod:`trussid.plid.metrics`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import control
 import numpy as np
@@ -18,59 +18,8 @@ from trussid.plid.errors import DataError
 from trussid.plid.frf import FRF, frequency_response
 from trussid.plid.metrics import (PoleMatch, compare_poles, default_noise_covariances, frf_error,
                                   modal_parameters, prediction_burn_in, prediction_ratio_db,
-                                  predictor_gain, simulation_fit)
-
-
-@dataclass(frozen=True)
-class PredictionScore:
-    """One-step signal-to-prediction-error ratios [dB] on a record (:mod:`.metrics`).
-
-    Attributes
-    ----------
-    overall : float
-        The thesis's ratio: signal power over error power, all outputs pooled.
-    per_output : list of float
-    mean_normalised : float
-        ``-10 log10(mean_j MS(e_j) / MS(y_j))``, dominated by the weakest output.
-    skip : int
-        Samples left out at the start (:func:`.metrics.prediction_burn_in`).
-    gain : str
-        Where the predictor gain came from.
-    """
-
-    overall: float
-    per_output: list
-    mean_normalised: float
-    skip: int
-    gain: str
-
-
-@dataclass(frozen=True)
-class SimulationScore:
-    """Free-run simulation from x0 = 0 against a record's outputs [dB and %].
-
-    ``overall`` is the mean-normalised ratio (as :func:`.metrics.simulation_fit`);
-    ``against`` says which outputs (noise-free or measured).
-    """
-
-    overall: float
-    per_output: list
-    nrmse_percent: list
-    skip: int
-    against: str
-
-
-@dataclass(frozen=True)
-class FRFScore:
-    """Magnitude [dB] and phase [deg] error against a reference over ``band`` [Hz]."""
-
-    max_db: float
-    rms_db: float
-    max_deg: float
-    rms_deg: float
-    per_channel: dict
-    band: tuple
-    reference: str
+                                  predictor_gain, simulation_fit,
+                                  FRFScore, PredictionScore, SimulationScore)
 
 
 @dataclass(frozen=True)
@@ -190,8 +139,7 @@ def _frf_score(model, reference, band, label, n_freq) -> FRFScore:
     else:
         f = frf_grid(reference, band, n_freq)
         e = frf_error(model, FRF(f, frequency_response(reference, f)), band)
-    return FRFScore(e["max_db"], e["rms_db"], e["max_deg"], e["rms_deg"], e["per_channel"],
-                    tuple(e["band"]), label)
+    return replace(e, reference=label)
 
 
 def compare(model: control.StateSpace, plant: control.StateSpace | None = None, *,
@@ -265,13 +213,11 @@ def compare(model: control.StateSpace, plant: control.StateSpace | None = None, 
             gain = "steady state, default noise"
         with np.errstate(all="ignore"):  # an unstable model overflows; it is reported as such
             skip = prediction_burn_in(model, K, u.shape[0])
-            r = prediction_ratio_db(model, u, y, K=K, skip=skip)
-            prediction = PredictionScore(r["overall"], r["per_channel"], r["mean_normalised"],
-                                         skip, gain)
+            prediction = replace(prediction_ratio_db(model, u, y, K=K, skip=skip), gain=gain)
             clean = y_clean is not None
-            s = simulation_fit(model, u, y_clean if clean else y, skip=skip)
-        simulation = SimulationScore(s["overall_db"], s["per_channel_db"], s["nrmse_percent"], skip,
-                                     "noise-free outputs" if clean else "measured (noisy) outputs")
+            simulation = replace(simulation_fit(model, u, y_clean if clean else y, skip=skip),
+                                 against="noise-free outputs" if clean
+                                 else "measured (noisy) outputs")
     if plant is not None:
         if not control.isdtime(plant, strict=True):
             plant = control.c2d(plant, model.dt, "zoh")

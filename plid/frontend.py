@@ -12,6 +12,7 @@ import numpy as np
 from trussid.plid.errors import IdentificationError
 from trussid.plid.estimator import PLID, PLIDWarning
 from trussid.plid.metrics import predictor_gain
+from trussid.plid.passes import PassRecord
 from trussid.plid.provenance import Identification, Provenance
 from trussid.plid.recipe import identify
 from trussid.plid.reduced import identify_reduced
@@ -78,7 +79,8 @@ def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
                        progress=progress).fit(u, y)
             idn = Identification(res, res.model, res.K, "plain", res.basis,
                                  np.atleast_1d(np.asarray(R, float)), None,
-                                 Provenance(passes=[{"Q": Q}] * passes, K_source=res.K_source))
+                                 Provenance(passes=[PassRecord(k, form, Q) for k in range(passes)],
+                                            K_source=res.K_source))
         elif via is not None:
             idn = identify_reduced(u, y, order, dt, via=via, start=start, form=form,
                                    block_rows=block_rows, progress=progress, log=log,

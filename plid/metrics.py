@@ -17,7 +17,7 @@ One-step signal-to-prediction-error ratio [dB]
     The first ``skip`` samples (the predictor's start-up from x0 = 0) are left out.
 Simulation fit [dB]
     The same ratios for the model simulated open loop (no K) against the noise-free output
-    of validation data, ``overall_db`` being the mean-normalised one; also the NRMSE fit ``100 (1 - ||e|| / ||y - mean(y)||)`` [%].
+    of validation data, ``overall`` being the mean-normalised one; also the NRMSE fit ``100 (1 - ||e|| / ||y - mean(y)||)`` [%].
 FRF error
     Per channel (output i, input j) over a band: magnitude error
     ``20 log10|H_model| - 20 log10|H_ref|`` [dB] and phase error ``angle(H_model / H_ref)``
@@ -134,7 +134,7 @@ def choose_predictor(model: control.StateSpace, u, y, candidates=None,
     scores = []
     for label, K in cands:
         with np.errstate(all="ignore"):
-            r = prediction_ratio_db(model, u, y, K=K, skip=skip)["overall"]
+            r = prediction_ratio_db(model, u, y, K=K, skip=skip).overall
         scores.append(r if np.isfinite(r) else -np.inf)
     best = int(np.argmax(scores))
     return cands[best][1], cands[best][0], {
@@ -349,25 +349,107 @@ def _ratio_db(ref, err, skip):
     return per, float(pooled), float(normalised)
 
 
-def prediction_ratio_db(sys, u, y, K=None, Q=None, R=None, skip: int = 0) -> dict:
+@dataclass(frozen=True)
+class PredictionScore:
+    """One-step signal-to-prediction-error ratios [dB] on a record (module docstring).
+
+    The one shape of that result: :func:`prediction_ratio_db` returns it and
+    :func:`trussid.plid.evaluate.compare` reports it.
+
+    Attributes
+    ----------
+    overall : float
+        The thesis's ratio: signal power over error power, all outputs pooled.
+    per_output : list of float
+    mean_normalised : float
+        ``-10 log10(mean_j MS(e_j) / MS(y_j))``, dominated by the weakest output.
+    skip : int
+        Samples left out at the start (:func:`prediction_burn_in`).
+    gain : str
+        Where the predictor gain came from ("" when the caller did not say).
+    """
+
+    overall: float
+    per_output: list
+    mean_normalised: float
+    skip: int
+    gain: str = ""
+
+
+@dataclass(frozen=True)
+class SimulationScore:
+    """Free-run simulation from x0 = 0 against a record's outputs [dB and %].
+
+    The one shape of that result: :func:`simulation_fit` returns it and
+    :func:`trussid.plid.evaluate.compare` reports it.
+
+    Attributes
+    ----------
+    overall : float
+        The mean-normalised ratio [dB] (module docstring).
+    per_output : list of float
+        Ratio per output [dB].
+    nrmse_percent : list of float
+        NRMSE fit per output [%].
+    skip : int
+        Samples left out at the start.
+    against : str
+        Which outputs the simulation was set against (noise-free or measured; "" when the
+        caller did not say).
+    """
+
+    overall: float
+    per_output: list
+    nrmse_percent: list
+    skip: int
+    against: str = ""
+
+
+def prediction_ratio_db(sys, u, y, K=None, Q=None, R=None, skip: int = 0) -> PredictionScore:
     """One-step signal-to-prediction-error ratio [dB] (see the module docstring).
 
-    Returns ``{"per_channel": [dB per output], "overall": dB, "mean_normalised": dB,
-    "skip": skip}``.
+    Parameters
+    ----------
+    sys : control.StateSpace
+        Discrete model.
+    u, y : arrays (N, m), (N, p)
+        Record.
+    K : array (n, p), optional
+        Predictor gain; default the steady-state gain of ``Q``, ``R``.
+    Q, R : arrays, optional
+        Noise covariances of the default gain.
+    skip : int
+        Samples left out at the start (the predictor's start-up).
+
+    Returns
+    -------
+    PredictionScore
+        Its ``gain`` is empty (the caller knows where ``K`` came from).
     """
     u, y = _check_sizes(sys, u, y)
     if not 0 <= skip < u.shape[0]:
         raise DataError(f"skip={skip} leaves no samples of {u.shape[0]}")
     yhat = one_step_predict(sys, u, y, K, Q, R)
     per, overall, normalised = _ratio_db(y, y - yhat, skip)
-    return {"per_channel": per.tolist(), "overall": overall, "mean_normalised": normalised,
-            "skip": int(skip)}
+    return PredictionScore(overall, per.tolist(), normalised, int(skip))
 
 
-def simulation_fit(sys, u, y_clean, skip: int = 0) -> dict:
+def simulation_fit(sys, u, y_clean, skip: int = 0) -> SimulationScore:
     """Open-loop simulation of ``sys`` from x0 = 0 against noise-free outputs.
 
-    Returns ``{"per_channel_db", "overall_db", "nrmse_percent"}`` (see module docstring).
+    Parameters
+    ----------
+    sys : control.StateSpace
+        Model.
+    u, y_clean : arrays (N, m), (N, p)
+        Inputs and the outputs to match.
+    skip : int
+        Samples left out at the start.
+
+    Returns
+    -------
+    SimulationScore
+        Its ``against`` is empty (the caller knows what ``y_clean`` is).
     """
     u, y_clean = _check_sizes(sys, u, y_clean)
     ysim = simulate(sys, u)
@@ -375,8 +457,7 @@ def simulation_fit(sys, u, y_clean, skip: int = 0) -> dict:
     per, _, overall = _ratio_db(y_clean, y_clean - ysim, skip)
     yc = y_clean[skip:]
     nrmse = 100 * (1 - np.linalg.norm(e, axis=0) / np.linalg.norm(yc - yc.mean(axis=0), axis=0))
-    return {"per_channel_db": per.tolist(), "overall_db": overall,
-            "nrmse_percent": nrmse.tolist()}
+    return SimulationScore(overall, per.tolist(), nrmse.tolist(), int(skip))
 
 
 def modal_parameters(sys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -492,7 +573,37 @@ def compare_poles(identified, truth, max_relative_distance: float | None = 0.5) 
     return rows
 
 
-def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
+@dataclass(frozen=True)
+class FRFScore:
+    """Magnitude [dB] and phase [deg] error against a reference over ``band`` [Hz].
+
+    The one shape of that result: :func:`frf_error` returns it and
+    :func:`trussid.plid.evaluate.compare` reports it.
+
+    Attributes
+    ----------
+    max_db, rms_db : float
+        Largest absolute and RMS magnitude error over every channel and frequency [dB].
+    max_deg, rms_deg : float
+        The same for the phase [deg].
+    per_channel : dict
+        The same four figures per channel, each a nested list (outputs x inputs), by name.
+    band : tuple of float
+        The frequencies [Hz] actually compared, lowest and highest.
+    reference : str
+        What the model was set against ("" when the caller did not say).
+    """
+
+    max_db: float
+    rms_db: float
+    max_deg: float
+    rms_deg: float
+    per_channel: dict
+    band: tuple
+    reference: str = ""
+
+
+def frf_error(model, reference, band=None, n_freq: int = 400) -> FRFScore:
     """Magnitude [dB] and phase [deg] error of ``model`` against ``reference`` over a band.
 
     Parameters
@@ -508,8 +619,8 @@ def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
 
     Returns
     -------
-    dict with ``max_db``, ``rms_db``, ``max_deg``, ``rms_deg`` (overall, floats) and
-    ``per_channel`` {same keys: nested lists p x m}, ``band`` and ``n_freq``.
+    FRFScore
+        Its ``reference`` is empty (the caller knows what ``reference`` is).
     """
     if isinstance(reference, FRF):
         f = np.asarray(reference.f, dtype=float)
@@ -545,19 +656,17 @@ def frf_error(model, reference, band=None, n_freq: int = 400) -> dict:
     with np.errstate(divide="ignore", invalid="ignore"):
         mag = 20 * np.log10(np.abs(H)) - 20 * np.log10(np.abs(H_ref))
         ph = np.degrees(np.angle(H / H_ref))
-    out = {"band": [float(f.min()), float(f.max())], "n_freq": int(f.size), "per_channel": {}}
-    for key, arr, fn in (("max_db", mag, lambda a: np.max(np.abs(a), axis=0)),
-                         ("rms_db", mag, lambda a: np.sqrt(np.mean(a**2, axis=0))),
-                         ("max_deg", ph, lambda a: np.max(np.abs(a), axis=0)),
-                         ("rms_deg", ph, lambda a: np.sqrt(np.mean(a**2, axis=0)))):
-        out["per_channel"][key] = fn(arr).tolist()
-    out["max_db"] = float(np.max(np.abs(mag)))
-    out["rms_db"] = float(np.sqrt(np.mean(mag**2)))
-    out["max_deg"] = float(np.max(np.abs(ph)))
-    out["rms_deg"] = float(np.sqrt(np.mean(ph**2)))
-    return out
+    per_channel = {key: fn(arr).tolist() for key, arr, fn in (
+        ("max_db", mag, lambda a: np.max(np.abs(a), axis=0)),
+        ("rms_db", mag, lambda a: np.sqrt(np.mean(a**2, axis=0))),
+        ("max_deg", ph, lambda a: np.max(np.abs(a), axis=0)),
+        ("rms_deg", ph, lambda a: np.sqrt(np.mean(a**2, axis=0))))}
+    return FRFScore(float(np.max(np.abs(mag))), float(np.sqrt(np.mean(mag**2))),
+                    float(np.max(np.abs(ph))), float(np.sqrt(np.mean(ph**2))), per_channel,
+                    (float(f.min()), float(f.max())))
 
 
-__all__ = ["PoleMatch", "predictor_gain", "default_noise_covariances", "one_step_predict",
+__all__ = ["PoleMatch", "PredictionScore", "SimulationScore", "FRFScore", "predictor_gain",
+           "default_noise_covariances", "one_step_predict",
            "prediction_ratio_db", "choose_predictor", "simulation_fit", "modal_parameters", "compare_poles",
            "frf_error", "prediction_burn_in", "s_plane", "best_predictor", "refine_predictor_gain"]

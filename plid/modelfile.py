@@ -11,6 +11,7 @@ names ``c_A, c_B, c_C, c_D`` (the ``plant`` command stores the continuous plant 
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import warnings
@@ -20,7 +21,7 @@ import numpy as np
 
 from trussid.plid.errors import DataError
 from trussid._util.files import atomic_path
-from trussid.plid.stability import check_stability, UnstableModelWarning
+from trussid.plid.stability import Stability, UnstableModelWarning, check_stability
 
 FORMAT_VERSION = 1
 
@@ -94,7 +95,7 @@ def save_model(path, sys: control.StateSpace, K=None, input_names=None, output_n
     >>> G = control.ss([[0.9, 0.1], [0.0, 0.8]], [[1.0], [0.5]], [[1.0, 0.0]], [[0.0]], 1e-3)
     >>> path = save_model("model.npz", G, input_names=["force"], output_names=["acc"])
     >>> again, meta = load_model(path)
-    >>> np.array_equal(again.A, G.A), again.dt, meta["input_names"], meta["output_names"]
+    >>> np.array_equal(again.A, G.A), again.dt, meta.input_names, meta.output_names
     (True, 0.001, ['force'], ['acc'])
     """
     path = Path(path)
@@ -157,7 +158,40 @@ def is_model_file(path) -> bool:
         return False
 
 
-def load_model(path, which: str = "auto"):
+@dataclass(frozen=True)
+class ModelMeta:
+    """What a model file holds beside the returned model (:func:`load_model`).
+
+    Attributes
+    ----------
+    K : array (n, p) or None
+        One-step predictor gain (None: none stored, or the continuous model was asked for).
+    dt : float
+        Sample time of the returned model [s] (0: continuous).
+    input_names, output_names : list of str
+        Channel names.
+    format_version : int
+        The file's format version (0: written before versions were recorded).
+    has_continuous : bool
+        Whether a continuous model can be read from the file (``which="continuous"``).
+    extra : dict
+        Every other array of the file, by name.
+    stability : trussid.plid.stability.Stability
+        Of the returned model; its ``message(...)`` is the one line to show a user (None
+        when stable).
+    """
+
+    K: np.ndarray | None
+    dt: float
+    input_names: list
+    output_names: list
+    format_version: int
+    has_continuous: bool
+    extra: dict
+    stability: Stability
+
+
+def load_model(path, which: str = "auto") -> tuple[control.StateSpace, ModelMeta]:
     """Read a model file.
 
     Parameters
@@ -173,11 +207,8 @@ def load_model(path, which: str = "auto"):
     -------
     sys : control.StateSpace
         With the channel names as its input/output labels.
-    meta : dict
-        ``K`` (ndarray or None), ``dt``, ``input_names``, ``output_names``,
-        ``format_version``, ``has_continuous``, ``extra`` (dict of other arrays) and
-        ``stability`` (:class:`trussid.plid.stability.Stability` of the returned model;
-        its ``message(...)`` is the one line to show a user, None when stable).
+    meta : ModelMeta
+        What else the file holds, parsed once here.
 
     Examples
     --------
@@ -231,10 +262,8 @@ def load_model(path, which: str = "auto"):
         for key in (f"c_{k}" for k in _CORE):
             if key not in arrays:
                 raise DataError(f"{source}: continuous model incomplete: missing array '{key}'")
-    meta = dict(K=K, dt=dt, input_names=in_names, output_names=out_names,
-                format_version=int(np.asarray(arrays.get("format_version", 0)).ravel()[0]),
-                has_continuous=has_c or dt == 0,
-                extra={k: v for k, v in arrays.items() if k not in _RESERVED})
+    version = int(np.asarray(arrays.get("format_version", 0)).ravel()[0])
+    extra = {k: v for k, v in arrays.items() if k not in _RESERVED}
     if which == "discrete" and dt == 0:
         raise DataError(f"{source}: the model is continuous (dt = 0); a discrete one is needed "
                         "(make one with a sampling frequency, e.g. trussid plant --fs HZ)")
@@ -245,14 +274,13 @@ def load_model(path, which: str = "auto"):
         if cB.shape[1] != m or cC.shape[0] != p:
             raise DataError(f"{source}: continuous model has {cB.shape[1]} inputs and "
                             f"{cC.shape[0]} outputs, the main model {m} and {p}")
-        meta["K"] = None
-        meta["dt"] = 0.0
+        K, dt_out = None, 0.0
         sys = control.ss(cA, cB, cC, cD, inputs=in_names, outputs=out_names)
     else:
+        dt_out = dt
         sys = control.ss(A, B, C, D, dt, inputs=in_names, outputs=out_names)
+    return sys, ModelMeta(K, dt_out, in_names, out_names, version, has_c or dt == 0, extra,
+                          check_stability(sys))
 
-    meta["stability"] = check_stability(sys)
-    return sys, meta
 
-
-__all__ = ["save_model", "load_model", "is_model_file", "FORMAT_VERSION"]
+__all__ = ["ModelMeta", "save_model", "load_model", "is_model_file", "FORMAT_VERSION"]

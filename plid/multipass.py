@@ -14,11 +14,11 @@ from here for code written against it; new code imports from those modules or fr
 from __future__ import annotations
 
 from trussid.plid.frontend import RECIPES, fit_model
-from trussid.plid.passes import SCRATCH_SCHEDULE, Pass, multipass
+from trussid.plid.passes import SCRATCH_SCHEDULE, Pass, PassRecord, multipass
 from trussid.plid.provenance import DirectTerm, Identification, Provenance, Stabilised
 from trussid.plid.recipe import check_data, identify
 from trussid.plid.reduced import Candidate, default_via, identify_reduced
 
 __all__ = ["Pass", "multipass", "identify", "identify_reduced", "fit_model", "default_via",
-           "Identification", "Provenance", "Stabilised", "DirectTerm", "Candidate", "RECIPES",
+           "Identification", "PassRecord", "Provenance", "Stabilised", "DirectTerm", "Candidate", "RECIPES",
            "SCRATCH_SCHEDULE", "check_data"]

@@ -144,10 +144,10 @@ def order_table(u, y, orders, dt: float, u_val=None, y_val=None, holdout: float 
             pr = -10 * np.log10(np.mean(np.mean(e ** 2, 0) / np.mean(y_val ** 2, 0)))
         else:
             skip = prediction_burn_in(model, K, u_val.shape[0])
-            pr = prediction_ratio_db(model, u_val, y_val, K=K, skip=skip)["overall"]
+            pr = prediction_ratio_db(model, u_val, y_val, K=K, skip=skip).overall
         with np.errstate(all="ignore"):
             pid = prediction_ratio_db(model, u, y, K=K,
-                                      skip=prediction_burn_in(model, K, u.shape[0]))["overall"]
+                                      skip=prediction_burn_in(model, K, u.shape[0])).overall
         H = frequency_response(model, f)
         change = None
         if H_prev is not None:

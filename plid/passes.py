@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import control
 
@@ -21,7 +21,7 @@ from trussid.plid.canonical import ObserverBasis
 from trussid.plid.errors import IdentificationError
 from trussid.plid.estimator import PLID, PLIDWarning
 
-__all__ = ["Pass", "SCRATCH_SCHEDULE", "multipass"]
+__all__ = ["Pass", "PassRecord", "SCRATCH_SCHEDULE", "multipass"]
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,7 @@ def multipass(u, y, order: int, dt: float, schedule, *, basis: ObserverBasis | N
     -------
     result : PLIDResult
         Of the last pass.
-    history : list of dict
+    history : list of PassRecord
         Per pass: its settings (with its form), seconds, whether it stayed finite. A first
         pass that diverged is restarted from the same prior in the square-root form, then
         also with a 100 times tighter parameter prior; each attempt has its record, the
@@ -89,7 +89,7 @@ def multipass(u, y, order: int, dt: float, schedule, *, basis: ObserverBasis | N
                 ps2 = Pass(ps.Q, ps.Q_theta, ps.prior_theta_var * var)
                 r, rec = _pass(u, y, order, dt, ps2, k, current, basis, R, N, retry_form,
                                progress, history_every)
-                rec["restart"] = why
+                rec = replace(rec, restart=why)
                 if r.finite:
                     break
         history.append(rec)
@@ -113,6 +113,45 @@ _RESTARTS = (
 )
 
 
+@dataclass(frozen=True)
+class PassRecord:
+    """One PLID pass as it ran (:func:`multipass`).
+
+    Attributes
+    ----------
+    index : int
+        Its place in the schedule (0 first; a restarted first pass has several records).
+    form : str
+        The estimator's form (``"direct"`` or ``"sqrt"``).
+    Q, Q_theta, prior_theta_var : float
+        Its settings (:class:`Pass`).
+    finite : bool
+        Whether its estimate stayed finite.
+    seconds : float or None
+        Wall seconds it took (None: not timed).
+    restart : str or None
+        Why it is a restart of a first pass that diverged (None: it is not one).
+    """
+
+    index: int
+    form: str
+    Q: float
+    Q_theta: float = 0.0
+    prior_theta_var: float | None = None
+    finite: bool = True
+    seconds: float | None = None
+    restart: str | None = None
+
+    def json_form(self) -> dict:
+        """The JSON record of the pass (``pass`` for ``index``; ``restart`` only when set)."""
+        out = {"pass": self.index, "form": self.form, "Q": self.Q, "Q_theta": self.Q_theta,
+               "prior_theta_var": self.prior_theta_var, "finite": self.finite,
+               "seconds": self.seconds}
+        if self.restart is not None:
+            out["restart"] = self.restart
+        return out
+
+
 def _pass(u, y, order, dt, ps, k, current, basis, R, N, form, progress, history_every):
     """One PLID pass and its history record."""
     t0 = time.perf_counter()
@@ -122,6 +161,5 @@ def _pass(u, y, order, dt, ps, k, current, basis, R, N, form, progress, history_
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PLIDWarning)
         r = est.fit(u, y)
-    return r, {"pass": k, "form": form, "Q": ps.Q, "Q_theta": ps.Q_theta,
-               "prior_theta_var": ps.prior_theta_var, "finite": r.finite,
-               "seconds": time.perf_counter() - t0}
+    return r, PassRecord(k, form, ps.Q, ps.Q_theta, ps.prior_theta_var, bool(r.finite),
+                         time.perf_counter() - t0)

@@ -16,7 +16,7 @@ from trussid.plid.canonical import ObserverBasis
 from trussid.plid.estimator import PLIDResult
 from trussid.plid.subspace import SubspaceChoice
 
-__all__ = ["Stabilised", "DirectTerm", "Provenance", "Identification"]
+__all__ = ["Stabilised", "DirectTermTest", "DirectTerm", "Provenance", "Identification"]
 
 
 @dataclass
@@ -25,6 +25,26 @@ class Stabilised:
 
     applied: bool = False
     reflected_poles: int = 0
+
+
+@dataclass(frozen=True)
+class DirectTermTest:
+    """The held-out evidence for a direct term (:func:`trussid.plid.subspace.direct_term_test`).
+
+    Attributes
+    ----------
+    held_out_nmse_without, held_out_nmse_with : float
+        Normalised output-error power on the held-out segments, without and with D.
+    margin : float
+        Relative fall of that error needed to estimate D.
+    folds : int
+        Contiguous segments, each held out once.
+    """
+
+    held_out_nmse_without: float
+    held_out_nmse_with: float
+    margin: float
+    folds: int
 
 
 @dataclass
@@ -37,16 +57,15 @@ class DirectTerm:
         What was asked for.
     estimated : bool
         Whether D was estimated (else D = 0, or the prior's D).
-    test : dict or None
-        The held-out evidence of :func:`trussid.plid.subspace.direct_term_test`
-        (``held_out_nmse_without``, ``held_out_nmse_with``, ``margin``, ``folds``).
+    test : DirectTermTest or None
+        The held-out evidence, when the data decided.
     D, D_std : list of lists
         The direct term (p x m) and its standard errors (None when not estimated).
     """
 
     mode: object
     estimated: bool
-    test: dict | None
+    test: DirectTermTest | None
     D: list
     D_std: list | None
 
@@ -65,8 +84,8 @@ class Provenance:
     subspace_seconds, recursion_seconds, recursion_cpu_seconds, seconds : float or None
         Wall seconds of the prior, wall and CPU seconds of the PLID recursion alone (the
         CPU figure stays meaningful on a loaded machine), wall seconds of the whole fit.
-    passes : list of dict
-        The PLID passes run (``Q``, ``Q_theta``, ``prior_theta_var``, ...).
+    passes : list of trussid.plid.passes.PassRecord
+        The PLID passes run.
     stabilised : Stabilised or None
     direct : DirectTerm or None
     predictor : dict or None

@@ -34,7 +34,8 @@ from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.metrics import best_predictor, default_noise_covariances, predictor_gain
 from trussid.plid.passes import SCRATCH_SCHEDULE, Pass, multipass
-from trussid.plid.provenance import DirectTerm, Identification, Provenance, Stabilised
+from trussid.plid.provenance import (DirectTerm, DirectTermTest, Identification, Provenance,
+                                     Stabilised)
 from trussid.plid.reduce import balanced_truncation
 from trussid.plid.subspace import direct_term_test, output_error_fit, subspace_prior
 
@@ -233,10 +234,9 @@ def _check_predictor(predictor) -> None:
 
 def _direct_info(mode, used, test, model, D_std) -> DirectTerm:
     return DirectTerm(mode=mode, estimated=bool(used),
-                      test=None if test is None else {
-                          "held_out_nmse_without": test["held_out_nmse"]["without"],
-                          "held_out_nmse_with": test["held_out_nmse"]["with"],
-                          "margin": test["margin"], "folds": test["folds"]},
+                      test=None if test is None else DirectTermTest(
+                          test["held_out_nmse"]["without"], test["held_out_nmse"]["with"],
+                          test["margin"], test["folds"]),
                       D=np.asarray(model.D, float).tolist(),
                       D_std=None if D_std is None else np.asarray(D_std).tolist())
 

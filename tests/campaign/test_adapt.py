@@ -140,7 +140,7 @@ def test_acceptance_1_closed_loop_model_within_1_5x_the_open_loop_model(report):
     truth, _ = _load(report / "plant_true.npz")
     cl, meta = _load(report / "adapt" / "closed_loop_model.npz")
     ol, _ = _load(report / "model_mimo.npz")
-    assert meta["K"] is not None   # the noise model (innovations predictor) is kept
+    assert meta.K is not None   # the noise model (innovations predictor) is kept
     e_cl, e_ol = _frf_rms_db(cl, truth), _frf_rms_db(ol, truth)
     assert e_cl <= 1.5 * e_ol, (e_cl, e_ol)
 

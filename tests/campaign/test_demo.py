@@ -97,7 +97,7 @@ def test_a_stabilised_winner_reports_the_poles_reflected_in_itself(monkeypatch):
     monkeypatch.setattr(mp, "identify_reduced", lambda *a, **k: idn)
     u, y = rng.standard_normal((200, 1)), rng.standard_normal((200, 1))
     fit = demo.identify_model(u, y, 2, dt)
-    assert fit.info["stabilised"] == Stabilised(applied=True, reflected_poles=1)
+    assert fit.info.stabilised == Stabilised(applied=True, reflected_poles=1)
 
 
 # --------------------------------------------------------------------------- the report
@@ -198,10 +198,10 @@ def test_prediction_ratio_recomputes_from_the_written_model_and_data(report):
     for m in summary["models"]:
         model, meta = load_model(out / f"model_{m['name']}.npz")
         val = read_data(out / f"data_{m['name']}_val.npz")
-        assert meta["input_names"] == val.input_names == m["input_names"]
-        r = prediction_ratio_db(model, val.u, val.y, K=meta["K"],
+        assert meta.input_names == val.input_names == m["input_names"]
+        r = prediction_ratio_db(model, val.u, val.y, K=meta.K,
                                 skip=m["prediction_skip_samples"])
-        assert r["overall"] == pytest.approx(m["signal_to_prediction_error_db"], abs=1e-9)
+        assert r.overall == pytest.approx(m["signal_to_prediction_error_db"], abs=1e-9)
 
 
 @pytest.mark.slow
@@ -215,8 +215,8 @@ def test_frf_error_recomputes_against_the_written_true_plant(report):
     model, _ = load_model(out / f"model_{m['name']}.npz")
     # frf_error on its own grid, from the files: the summary's figure is reproducible.
     e = frf_error(model, truth[:, [0]], (50.0, 350.0))
-    assert e["max_db"] == pytest.approx(m["frf_max_error_db"], rel=1e-6)
-    assert e["rms_db"] == pytest.approx(m["frf_rms_error_db"], rel=1e-6)
+    assert e.max_db == pytest.approx(m["frf_max_error_db"], rel=1e-6)
+    assert e.rms_db == pytest.approx(m["frf_rms_error_db"], rel=1e-6)
 
 
 @pytest.mark.slow

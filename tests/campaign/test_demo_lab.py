@@ -61,7 +61,7 @@ def test_the_true_plant_file_records_the_lab(report):
     out, _, lab = report
     plant, meta = load_model(out / "plant_true.npz", which="discrete")
     assert plant.dt == 1 / RATE
-    assert recorded_lab(meta["extra"], "plant_true.npz") == lab
+    assert recorded_lab(meta.extra, "plant_true.npz") == lab
 
 
 @pytest.mark.slow

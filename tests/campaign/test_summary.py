@@ -16,7 +16,8 @@ from trussid.campaign.report import report_markdown
 from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
                                       ClosedLoopSection, ClosedLoopSummary, ControllerSummary,
                                       DemoSummary, DesignSummary, ExperimentRow, ModeAudit,
-                                      ModelSummary, PlantSummary, ReportFiles,
+                                      ModelIdentification, ModelSummary, PlantSummary,
+                                      ReportFiles,
                                       ReportProvenance)
 from trussid.geometry.lab import LabSpec
 from trussid.lqg.design import TargetMode
@@ -24,7 +25,7 @@ from trussid.lqg.evaluate import ChannelMargin, DiskMargins, Margin, ModeRow
 from trussid.lqg.grading import (Checks, Converters, DominantMode, LoopEvaluation, LoopSettings,
                                  WatchedMode)
 from trussid.plid.metrics import PoleMatch
-from trussid.plid.multipass import Stabilised
+from trussid.plid.multipass import PassRecord, Provenance, Stabilised
 
 
 def _audit():
@@ -58,8 +59,17 @@ def _model(name="mimo", kind="MIMO"):
         h1_coherence={"excited_band_hz": [0.0, 400.0], "mean_in_excited_band": [0.987, 0.9, 0.9],
                       "mean_above_excited_band": [0.123, 0.1, 0.1]},
         modes_check=_audit(),
-        identification={"chosen": "direct 18", "candidates": [
-            {"label": "direct 18", "identification_ratio_db": 31.42, "seconds": 2.5}]})
+        identification=_identification())
+
+
+def _identification():
+    prov = Provenance(chosen="direct 18", candidates=[
+        {"label": "direct 18", "identification_ratio_db": 31.42, "seconds": 2.5}],
+        passes=[PassRecord(0, "direct", 0.0)], predictor={"chosen": "kalman"}, seconds=3.5)
+    return ModelIdentification(recipe="trussid.plid.multipass.identify_reduced",
+                               start="subspace", basis="rotation", R=[1e-4], provenance=prov,
+                               stabilised=Stabilised(), predictor={"chosen": "kalman"},
+                               chosen="direct 18")
 
 
 def _evaluation(cls=LoopEvaluation, **renamed):
@@ -174,8 +184,10 @@ def _keys(obj, path="") -> dict:
 def test_summary_json_holds_exactly_the_typed_fields():
     s = _summary()
     # the closed-loop sections (control, adapt) are plain dicts of their own
+    # the identification's JSON is its own flat layout (the next test)
     typed = (set(_fields(s)) - {"/control", "/adapt"}
-             - {k for k in _fields(s) if k.startswith(("/control/", "/adapt/"))})
+             - {k for k in _fields(s)
+                if k.startswith(("/control/", "/adapt/", "/models/0/identification/"))})
     keys = {k for k in _keys(s.to_dict())
             if not any(k.startswith(p + "/") for p in
                        # plain dicts inside the typed object keep their own keys
@@ -197,6 +209,22 @@ def test_summary_json_holds_exactly_the_typed_fields():
     assert "## Closed-loop id" in report_markdown(with_adapt)
 
 
+def test_the_identification_json_puts_the_provenance_beside_the_demo_s_choices():
+    """summary.json's ``identification``: the recipe's provenance fields that are set, flat,
+    with the choices made after the recipe (stabilised, chosen) taking precedence."""
+    ident = dataclasses.replace(_identification(),
+                                stabilised=Stabilised(applied=True, reflected_poles=2))
+    out = ident.to_dict()
+    assert out["chosen"] == "direct 18"
+    assert out["passes"] == [{"pass": 0, "form": "direct", "Q": 0.0, "Q_theta": 0.0,
+                              "prior_theta_var": None, "finite": True, "seconds": None}]
+    assert out["stabilised"] == {"applied": True, "reflected_poles": 2}
+    assert out["seconds"] == 3.5 and out["candidates"][0]["identification_ratio_db"] == 31.42
+    assert "subspace" not in out and "candidate_with_d" not in out  # not set: left out
+    assert set(out) == {"recipe", "start", "stabilised", "basis", "R", "predictor", "passes",
+                        "candidates", "chosen", "seconds", "warnings"}
+
+
 def test_renaming_a_reported_field_fails_the_report():
     fields = [(f.name if f.name != "frf_rms_error_db" else "frf_rms_db", f.type)
               for f in dataclasses.fields(ModelSummary)]
@@ -204,6 +232,7 @@ def test_renaming_a_reported_field_fails_the_report():
     values = dataclasses.asdict(_model())
     values["frf_rms_db"] = values.pop("frf_rms_error_db")
     values["modes_check"] = _audit()
+    values["identification"] = _identification()
     renamed = _summary(Renamed(**values))
     with pytest.raises(AttributeError, match="frf_rms_error_db"):
         report_markdown(renamed)

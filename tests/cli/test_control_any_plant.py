@@ -83,7 +83,7 @@ def test_non_square_accelerometer_plant_from_csv_at_500_hz_designs_and_closes(tm
     assert code == 0, err
     assert "no decentralised baselines" in out  # 2 actuators, 3 sensors: said, no traceback
     ctrl, meta = load_model(tmp_path / "c.npz")
-    info = json.loads(str(meta["extra"]["design_json"]))
+    info = json.loads(str(meta.extra["design_json"]))
     targets = [t["frequency_hz"] for t in info["target_modes"]]
     # residues at the record levels: every mode below a quarter of the sample rate (the
     # default band, issue 32); 140 Hz lies above it

@@ -56,10 +56,10 @@ def test_control_writes_a_named_controller_and_closed_loop_reports_on_a_plant_fi
               "--no-baselines")
     assert res.returncode == 0, res.stderr
     c, meta = load_model(d / "ctrl.npz")
-    assert meta["input_names"] == ["acc1", "acc2", "acc3"]
-    assert meta["output_names"] == ["ch1", "ch2", "ch3"]
+    assert meta.input_names == ["acc1", "acc2", "acc3"]
+    assert meta.output_names == ["ch1", "ch2", "ch3"]
     assert c.dt == pytest.approx(1 / 1600)
-    assert "design_json" in meta["extra"]
+    assert "design_json" in meta.extra
     res = run("closed-loop", d / "ctrl.npz", d / "model.npz", "--out", d / "rep",
               "--samples", 500)
     assert res.returncode == 0, res.stderr

@@ -29,7 +29,7 @@ def test_the_example_deck_gets_a_discrete_and_continuous_plant(tmp_path, capsys)
     assert f[0] == pytest.approx(f_modes[0], rel=1e-9)
     sd, meta = load_model(out)
     sc, _ = load_model(out, which="continuous")
-    assert sd.dt == 1 / 2000 and meta["stability"].stable and sc.dt == 0
+    assert sd.dt == 1 / 2000 and meta.stability.stable and sc.dt == 0
 
 
 def test_a_deck_without_io_and_io_without_a_deck_say_what_is_needed(tmp_path, capsys):

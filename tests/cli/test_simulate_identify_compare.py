@@ -137,14 +137,14 @@ def test_identify_json_lists_each_mode_with_its_95_percent_intervals(identified)
 def test_identify_finds_the_modes_and_reports_the_prediction_ratio(work, identified):
     model, meta = load_model(work / "model.npz")
     assert model.nstates == 4 and model.dt == pytest.approx(1 / FS)
-    assert meta["K"] is not None and meta["output_names"] == ["acc1", "acc2"]
+    assert meta.K is not None and meta.output_names == ["acc1", "acc2"]
     freqs = [p["frequency_hz"] for p in identified["poles"]]
     np.testing.assert_allclose(freqs, [60.0, 210.0], rtol=2e-3)
     # The reported ratio is the documented metric of the saved model on the same data.
     data = read_data(work / "data.npz")
-    r = prediction_ratio_db(model, data.u, data.y, K=meta["K"],
+    r = prediction_ratio_db(model, data.u, data.y, K=meta.K,
                             skip=identified["prediction_skip_samples"])
-    assert identified["signal_to_prediction_error_db"] == pytest.approx(r["overall"], rel=1e-9)
+    assert identified["signal_to_prediction_error_db"] == pytest.approx(r.overall, rel=1e-9)
     assert identified["signal_to_prediction_error_db"] > 20.0
 
 
@@ -162,9 +162,9 @@ def test_identify_via_higher_orders_keeps_the_best_predicting_candidate(work, si
     model, meta = load_model(out)
     assert model.nstates == 4
     data = read_data(work / "data.npz")
-    r = prediction_ratio_db(model, data.u, data.y, K=meta["K"],
+    r = prediction_ratio_db(model, data.u, data.y, K=meta.K,
                             skip=summary["prediction_skip_samples"])
-    assert summary["signal_to_prediction_error_db"] == pytest.approx(r["overall"], rel=1e-9)
+    assert summary["signal_to_prediction_error_db"] == pytest.approx(r.overall, rel=1e-9)
 
 
 @pytest.mark.parametrize("via, match", [("5", "multiples of the 2 outputs"),

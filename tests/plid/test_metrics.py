@@ -75,25 +75,25 @@ def test_far_pairs_are_not_called_matches(plant):
 
 def test_frf_error_of_a_gain_error_is_that_gain_in_db(plant):
     err = frf_error(plant * 1.1, plant, band=(10, 450))
-    assert err["max_db"] == pytest.approx(20 * np.log10(1.1), rel=1e-9)
-    assert err["rms_db"] == pytest.approx(20 * np.log10(1.1), rel=1e-9)
-    assert err["max_deg"] < 1e-9
-    assert np.shape(err["per_channel"]["max_db"]) == (2, 1)
+    assert err.max_db == pytest.approx(20 * np.log10(1.1), rel=1e-9)
+    assert err.rms_db == pytest.approx(20 * np.log10(1.1), rel=1e-9)
+    assert err.max_deg < 1e-9
+    assert np.shape(err.per_channel["max_db"]) == (2, 1)
 
 
 def test_frf_error_of_a_one_sample_delay_is_a_linear_phase(plant):
     delay = control.ss([[0.0]], [[1.0]], [[1.0]], [[0.0]], 1 / FS)  # z^-1
     err = frf_error(plant * delay, plant, band=(10, 450))
-    assert err["max_db"] < 1e-9
-    assert err["max_deg"] == pytest.approx(360 * 450 / FS, rel=1e-6)
+    assert err.max_db < 1e-9
+    assert err.max_deg == pytest.approx(360 * 450 / FS, rel=1e-6)
 
 
 def test_frf_error_against_an_estimate_uses_its_grid(plant):
     f = np.linspace(0, 500, 101)
     ref = FRF(f=f, H=frequency_response(plant, f) * 10 ** (0.5 / 20))
     err = frf_error(plant, ref, band=(20, 400))
-    assert err["max_db"] == pytest.approx(0.5, rel=1e-9)
-    assert err["band"] == [20.0, 400.0]
+    assert err.max_db == pytest.approx(0.5, rel=1e-9)
+    assert err.band == (20.0, 400.0)
 
 
 def test_frf_error_refuses_mismatched_sizes(plant):
@@ -106,9 +106,9 @@ def test_simulation_fit_of_a_gain_error_is_closed_form(plant, rng):
     u = rng.standard_normal((2000, 1))
     y = simulate(plant, u)
     fit = simulation_fit(plant * (1 + 1e-3), u, y)
-    np.testing.assert_allclose(fit["per_channel_db"], [60.0, 60.0], rtol=1e-9)
-    assert fit["overall_db"] == pytest.approx(60.0, rel=1e-9)
-    np.testing.assert_allclose(fit["nrmse_percent"], 99.9, atol=1e-3)
+    np.testing.assert_allclose(fit.per_output, [60.0, 60.0], rtol=1e-9)
+    assert fit.overall == pytest.approx(60.0, rel=1e-9)
+    np.testing.assert_allclose(fit.nrmse_percent, 99.9, atol=1e-3)
 
 
 def test_prediction_ratio_of_the_true_plant_is_the_sensor_snr(plant):
@@ -121,13 +121,13 @@ def test_prediction_ratio_of_the_true_plant_is_the_sensor_snr(plant):
     r = prediction_ratio_db(plant, e.data.u, e.data.y, K=K)
     noise = e.data.y - e.y_clean
     realised = 20 * np.log10(np.sqrt(np.mean(e.data.y**2, 0) / np.mean(noise**2, 0)))
-    np.testing.assert_allclose(r["per_channel"], realised, rtol=1e-9)
+    np.testing.assert_allclose(r.per_output, realised, rtol=1e-9)
     # overall: the thesis's RMS over all sensors and samples; mean_normalised: the mean of
     # the per-channel normalised error powers
     pooled = 10 * np.log10(np.sum(e.data.y**2) / np.sum(noise**2))
-    assert r["overall"] == pytest.approx(pooled, rel=1e-9)
+    assert r.overall == pytest.approx(pooled, rel=1e-9)
     normalised = -10 * np.log10(np.mean(np.mean(noise**2, 0) / np.mean(e.data.y**2, 0)))
-    assert r["mean_normalised"] == pytest.approx(normalised, rel=1e-9)
+    assert r.mean_normalised == pytest.approx(normalised, rel=1e-9)
     # and that is the requested SNR up to the sampling spread of the noise power
     # (relative std 1/sqrt(2 N) = 0.5 %, i.e. 0.03 dB; allow 4 sigma)
     np.testing.assert_allclose(realised, 30.0 + 10 * np.log10(1 + 1e-3), atol=0.13)
@@ -212,5 +212,5 @@ def test_best_predictor_is_never_worse_than_simulation_and_near_the_true_gain(rn
     sc = info["identification_ratio_db"]
     assert sc[label] == max(sc.values()) >= sc["none (free-run simulation)"]
     skip = u.shape[0] // 8
-    truth = prediction_ratio_db(model, u, y, K=K, skip=skip)["mean_normalised"]
+    truth = prediction_ratio_db(model, u, y, K=K, skip=skip).mean_normalised
     assert sc[label] > truth - 0.05          # as good as the true noise model, to 0.05 dB

@@ -23,13 +23,13 @@ def test_round_trip_discrete_with_gain_names_and_continuous(tmp_path, models):
     sys, meta = load_model(path)
     for name in "ABCD":
         np.testing.assert_array_equal(getattr(sys, name), getattr(sd, name))
-    assert sys.dt == 1e-3 and meta["dt"] == 1e-3
-    np.testing.assert_array_equal(meta["K"], K)
-    assert meta["input_names"] == ["pzt"] and meta["output_names"] == ["x", "v"]
-    assert meta["format_version"] == FORMAT_VERSION and meta["has_continuous"]
-    np.testing.assert_array_equal(meta["extra"]["note"], np.arange(3))
+    assert sys.dt == 1e-3 and meta.dt == 1e-3
+    np.testing.assert_array_equal(meta.K, K)
+    assert meta.input_names == ["pzt"] and meta.output_names == ["x", "v"]
+    assert meta.format_version == FORMAT_VERSION and meta.has_continuous
+    np.testing.assert_array_equal(meta.extra["note"], np.arange(3))
     csys, cmeta = load_model(path, which="continuous")
-    assert csys.dt == 0 and cmeta["K"] is None
+    assert csys.dt == 0 and cmeta.K is None
     np.testing.assert_array_equal(csys.A, sc.A)
 
 
@@ -37,10 +37,10 @@ def test_names_come_from_the_system_labels(tmp_path, models):
     sc, sd = models
     named = control.ss(sd.A, sd.B, sd.C, sd.D, sd.dt, inputs=["pzt1"], outputs=["a", "b"])
     sys, meta = load_model(save_model(tmp_path / "n.npz", named))
-    assert meta["input_names"] == ["pzt1"] and meta["output_names"] == ["a", "b"]
+    assert meta.input_names == ["pzt1"] and meta.output_names == ["a", "b"]
     assert list(sys.input_labels) == ["pzt1"] and list(sys.output_labels) == ["a", "b"]
     _, meta = load_model(save_model(tmp_path / "d.npz", sd))  # python-control's u[0], y[0]
-    assert meta["input_names"] == ["u1"] and meta["output_names"] == ["y1", "y2"]
+    assert meta.input_names == ["u1"] and meta.output_names == ["y1", "y2"]
 
 
 def test_repeated_channel_names_are_refused(tmp_path, models):
@@ -57,7 +57,7 @@ def test_continuous_only_file(tmp_path, models):
     sc, _ = models
     path = save_model(tmp_path / "c.npz", sc)
     sys, meta = load_model(path, which="continuous")
-    assert meta["dt"] == 0 and sys.dt == 0
+    assert meta.dt == 0 and sys.dt == 0
     with pytest.raises(DataError, match="continuous \\(dt = 0\\); a discrete one is needed"):
         load_model(path, which="discrete")
 

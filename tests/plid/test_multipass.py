@@ -71,7 +71,7 @@ def test_scratch_multipass_converges_on_noiseless_data(simo):
     u, y = data(simo, 2000, seed=4)
     ident = identify(u, y, 6, 1 / FS, start="scratch", R=1e-10)
     err = frf_error(ident.model, simo, band=(30, 790))
-    assert err["rms_db"] < 1e-4
+    assert err.rms_db < 1e-4
     assert len(ident.provenance.passes) == 4
 
 
@@ -82,16 +82,16 @@ def test_a_pass_started_at_the_truth_with_a_tight_prior_stays_there(simo):
     basis = basis_for(6, 2, FS, model_frequencies(simo, 3, FS))
     res, hist = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-8)] * 2, basis=basis,
                           prior=simo, R=1e-10)
-    assert [h["pass"] for h in hist] == [0, 1]
-    assert frf_error(res.model, simo, band=(30, 790))["max_db"] < 1e-6
+    assert [h.index for h in hist] == [0, 1]
+    assert frf_error(res.model, simo, band=(30, 790)).max_db < 1e-6
 
 
 def test_subspace_start_is_at_least_as_accurate_as_n4sid_on_the_same_noisy_data(simo):
     u, y = data(simo, 3000, snr_db=40, seed=6)
-    best_n4sid = min(frf_error(n4sid(u, y, 6, i, 1 / FS).with_d, simo, band=(30, 790))["rms_db"]
+    best_n4sid = min(frf_error(n4sid(u, y, 6, i, 1 / FS).with_d, simo, band=(30, 790)).rms_db
                      for i in (8, 12, 20))
     ident = identify(u, y, 6, 1 / FS, block_rows=[8, 12, 20])   # prior picked from data only
-    assert frf_error(ident.model, simo, band=(30, 790))["rms_db"] <= best_n4sid
+    assert frf_error(ident.model, simo, band=(30, 790)).rms_db <= best_n4sid
 
 
 def test_identify_refuses_an_unknown_start(simo):
@@ -133,12 +133,12 @@ def test_thesis_scale_simo_subspace_start_beats_n4sid_in_simulation(full):
     u, y = data(plant, n_samples, snr_db=60, seed=22)
     uv, yv = data(plant, 3000, seed=23)
     fits = [n4sid(u, y, n, i, 1 / FS).with_d for i in (20, 40, 60)]
-    best_sim = max(simulation_fit(m, uv, yv)["overall_db"] for m in fits)
-    best_frf = min(frf_error(m, plant, band=(30, 790))["rms_db"] for m in fits)
+    best_sim = max(simulation_fit(m, uv, yv).overall for m in fits)
+    best_frf = min(frf_error(m, plant, band=(30, 790)).rms_db for m in fits)
     ident = identify(u, y, n, 1 / FS, block_rows=[20, 40, 60])
     # measured (reduced form): sim 81.7 dB against 72.5, FRF RMS 0.12 dB against 0.41
-    assert simulation_fit(ident.model, uv, yv)["overall_db"] > best_sim
-    assert frf_error(ident.model, plant, band=(30, 790))["rms_db"] < best_frf
+    assert simulation_fit(ident.model, uv, yv).overall > best_sim
+    assert frf_error(ident.model, plant, band=(30, 790)).rms_db < best_frf
 
 
 # --------------------------------------------------------------------------- identify_reduced
@@ -178,7 +178,7 @@ def test_identify_reduced_returns_the_candidate_with_the_best_identification_pre
     assert kinfo["identification_ratio_db"][start] == pytest.approx(
         best["identification_ratio_db"], rel=1e-12)
     r = prediction_ratio_db(idn.model, u, y, K=idn.K, skip=kinfo["skip"])
-    assert r["overall"] >= best["identification_ratio_db"] - 0.05
+    assert r.overall >= best["identification_ratio_db"] - 0.05
 
 
 def test_identify_reduced_never_simulates_worse_than_identify_at_the_same_order():
@@ -324,7 +324,7 @@ def test_identify_chooses_no_direct_term_for_a_strictly_proper_plant(simo):
     assert not ident.provenance.direct.estimated
     assert not np.any(ident.model.D)
     test = ident.provenance.direct.test
-    assert test["held_out_nmse_with"] > (1 - test["margin"]) * test["held_out_nmse_without"]
+    assert test.held_out_nmse_with > (1 - test.margin) * test.held_out_nmse_without
 
 
 def test_identify_can_be_told_to_estimate_or_omit_D(simo):
@@ -349,7 +349,7 @@ def test_returned_predictor_is_never_worse_than_free_run_simulation_on_the_ident
     assert scores[start] >= scores["none (free-run simulation)"]
     assert scores[start] == max(scores.values())
     returned = prediction_ratio_db(ident.model, u, y, K=ident.K, skip=kinfo["skip"])
-    assert returned["mean_normalised"] >= scores[start] - 0.05
+    assert returned.mean_normalised >= scores[start] - 0.05
 
 
 def test_prediction_error_gain_predicts_better_than_every_candidate_and_keeps_the_plant():
@@ -376,8 +376,8 @@ def test_prediction_error_gain_predicts_better_than_every_candidate_and_keeps_th
         assert np.array_equal(getattr(cand.model, M), getattr(pem.model, M))
     assert pem.provenance.predictor["pem"]["logdet_end"] < pem.provenance.predictor["pem"]["logdet_start"]
     skip = 200
-    r_c = prediction_ratio_db(cand.model, uv, yv, K=cand.K, skip=skip)["mean_normalised"]
-    r_p = prediction_ratio_db(pem.model, uv, yv, K=pem.K, skip=skip)["mean_normalised"]
+    r_c = prediction_ratio_db(cand.model, uv, yv, K=cand.K, skip=skip).mean_normalised
+    r_p = prediction_ratio_db(pem.model, uv, yv, K=pem.K, skip=skip).mean_normalised
     assert r_p > r_c + 1.0
     rho = np.max(np.abs(np.linalg.eigvals(pem.model.A - pem.K @ pem.model.C)))
     assert rho < 0.999 + 1e-9
@@ -425,8 +425,8 @@ def test_a_first_pass_that_diverges_is_restarted_from_its_prior_in_the_square_ro
     basis = basis_for(6, 2, FS, model_frequencies(simo, 3, FS))
     res, hist = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-4)], basis=basis, prior=simo,
                           R=1e-6, form="direct")
-    assert [(h["form"], h["finite"]) for h in hist] == [("direct", False), ("sqrt", True)]
-    assert "square-root form" in hist[1]["restart"]
+    assert [(h.form, h.finite) for h in hist] == [("direct", False), ("sqrt", True)]
+    assert "square-root form" in hist[1].restart
     same, _ = multipass(u, y, 6, 1 / FS, [Pass(0.0, 0.0, 1e-4)], basis=basis, prior=simo,
                         R=1e-6, form="sqrt")
     assert res.form == "sqrt" and np.array_equal(res.theta, same.theta)

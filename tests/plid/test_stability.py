@@ -128,13 +128,13 @@ def test_model_files_report_stability_on_load_and_warn_on_save(tmp_path):
     with pytest.warns(UnstableModelWarning, match="is unstable"):
         save_model(tmp_path / "bad.npz", _modal(1.05))
     _, meta = load_model(tmp_path / "bad.npz")
-    assert not meta["stability"].stable and meta["stability"].unstable.size == 2
+    assert not meta.stability.stable and meta.stability.unstable.size == 2
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a stable model is written without a word
         save_model(tmp_path / "good.npz", _modal(0.9))
-    assert load_model(tmp_path / "good.npz")[1]["stability"].stable
+    assert load_model(tmp_path / "good.npz")[1].stability.stable
 
 
 def test_run_experiment_refuses_an_unstable_plant():

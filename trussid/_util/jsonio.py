@@ -13,9 +13,13 @@ def json_safe(obj):
     """``obj`` with JSON-safe values, recursively.
 
     Non-finite floats (which JSON cannot hold) become ``None``; numpy scalars and arrays
-    become Python numbers and lists; dataclass instances become dicts of their fields;
-    dictionary keys become strings; tuples become lists.
+    become Python numbers and lists; dataclass instances become dicts of their fields, or
+    what their ``json_form()`` method gives where they have one (a record whose JSON keys
+    are not its field names, e.g. a key that is a Python keyword); dictionary keys become
+    strings; tuples become lists.
     """
+    if hasattr(obj, "json_form") and not isinstance(obj, type):
+        return json_safe(obj.json_form())
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         return json_safe({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)})
     if isinstance(obj, dict):

@@ -239,9 +239,9 @@ def check_fresh(fit: ClosedLoopModel, identification: ClosedLoopRecord,
     noise, fails)."""
     skip = min(400, identification.n_samples // 10)
     own = prediction_ratio_db(fit.model, identification.plant_input, identification.measured,
-                              K=fit.K, skip=skip)["overall"]
+                              K=fit.K, skip=skip).overall
     new = prediction_ratio_db(fit.model, fresh.plant_input, fresh.measured, K=fit.K,
-                              skip=skip)["overall"]
+                              skip=skip).overall
     fig = FreshFigures(prediction_db_identification=own, prediction_db_fresh=new)
     ok = new >= own - settings.max_prediction_loss_db
     reasons = [] if ok else [f"one-step prediction on fresh data {new:.1f} dB, "

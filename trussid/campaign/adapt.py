@@ -133,9 +133,9 @@ def nominal_closed_loop(truth, controller, s: AdaptDemoSettings, noise_v: float,
     fits = {"plid": identify_plid(rec, s.order, block_rows=s.block_rows),
             "n4sid": identify_n4sid(rec, s.order, block_rows=s.block_rows)}
     ref = restrict(truth, rec.input_names, rec.output_names)
-    frf = {k: frf_error(f.model, ref, s.frf_band)["rms_db"] for k, f in fits.items()}
+    frf = {k: frf_error(f.model, ref, s.frf_band).rms_db for k, f in fits.items()}
     if open_loop_model is not None:
-        frf["open_loop"] = frf_error(open_loop_model, ref, s.frf_band)["rms_db"]
+        frf["open_loop"] = frf_error(open_loop_model, ref, s.frf_band).rms_db
     fd = _truth_dominant(truth, controller)
     ident = {k: nearest_modes(f.model, [f0 for f0, _ in fd]) for k, f in fits.items()}
     for k, f in fits.items():

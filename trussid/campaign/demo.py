@@ -45,15 +45,19 @@ Signal chain of every record (:func:`trussid.plid.experiment.run_experiment`):
 - A/D quantisation at the lab's resolution, with clipping counted.
 
 Identification data and validation data are separate records with different seeds.
+
+One job per module: :mod:`trussid.campaign.plan` (the settings), :mod:`trussid.campaign.records`
+(the records and their summary rows), :mod:`trussid.campaign.identified` (each model
+identified, with its typed record), :mod:`trussid.campaign.evaluation` (its metrics and mode
+audit); this module runs them in order and writes the report directory (files, figures,
+``summary.json``, ``report.md``, ``report.html``), and re-exports their public names.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import time
-import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -61,167 +65,25 @@ import numpy as np
 from trussid import plots
 from trussid._util.errors import UserError
 from trussid._util.files import atomic_directory, atomic_path
-from trussid._util.jsonio import json_safe
 from trussid.campaign.adapt import demo_section as adapt_demo_section
 from trussid.campaign.adapt import write_files as write_adapt_files
 from trussid.campaign.control import demo_section
+from trussid.campaign.evaluation import evaluate, h1_estimate, mode_audit
 from trussid.campaign.html_report import write_report_html
+from trussid.campaign.identified import Identified, identify_model
 from trussid.campaign.orders import scan_orders
+from trussid.campaign.plan import DemoSettings, demo_settings, derived_settings
+from trussid.campaign.records import (Record, conditioner_steps, drive, experiment_summary,
+                                      run_experiments, take_record)
 from trussid.campaign.report import report_markdown
-from trussid.campaign.structure import DEFAULT_SNR_DB, STRUCTURAL_DAMPING_MAX
-from trussid.campaign.summary import (AdaptSection, AuditedIdentifiedMode, AuditedTrueMode,
-                                      DemoSummary, ExperimentRow, ModeAudit, ModeCheck, ModelSummary,
-                                      PlantSummary, ReportProvenance, ReportFiles)
+from trussid.campaign.summary import (AdaptSection, DemoSummary, PlantSummary, ReportFiles,
+                                      ReportProvenance)
 from trussid.geometry.lab import G0, lab_record
 from trussid.lqg.grading import LoopSettings
 from trussid.plid.datafile import with_channels, write_data
-from trussid.plid.estimator import PLID, PLIDWarning
-from trussid.plid.evaluate import compare
-from trussid.plid.experiment import excitation, run_experiment, simulate
-from trussid.plid.frf import frequency_response, h1
-from trussid.plid.metrics import choose_predictor, prediction_ratio_db
-from trussid.plid.modal import mac, modal_table
 from trussid.plid.modelfile import save_model
-from trussid.plid.frontend import fit_model
-from trussid.plid.provenance import Stabilised
-from trussid.plid.reduced import default_via
-from trussid.plid.stability import stabilise
-from trussid.plid.subspace import n4sid
-from trussid.plid.uncertainty import mode_intervals
 from trussid.plots import save_figure
 from trussid.testbed.plant import testbed_plant
-
-
-
-# --------------------------------------------------------------------------- settings
-
-
-@dataclass(frozen=True)
-class DemoSettings:
-    """Every number of the demo campaign (SI units unless stated).
-
-    Attributes
-    ----------
-    quick : bool
-        The reduced run (``trussid demo --quick``).
-    n_identification, n_validation : int
-        Samples of each identification and validation record (at the lab's sample rate).
-    excitation : str
-        Excitation kind (:func:`trussid.plid.experiment.excitation`).
-    excitation_rms : float
-        RMS of each driven D/A channel [V].
-    excitation_band : (float, float)
-        Excitation band [Hz].
-    range_target : float
-        Each sensor's conditioner step is the largest 1-2-5 step (x0.5 or more) that keeps
-        its RMS at most this fraction of the A/D full scale (a fifth: the lightly damped
-        structure's outputs reach 4-5 times their RMS).
-    gain_steps : tuple of float
-        Conditioner gain steps within one decade (1-2-5).
-    simo_channels : tuple of int
-        Actuator channels (0-based) that get a SIMO model.
-    simo_order, mimo_order : int
-        States of the SIMO and MIMO models; multiples of the 3 outputs (the observer form
-        gives each output n / 3 states). ``mimo_order`` 0 skips the MIMO model.
-    block_rows : tuple of int
-        Block rows tried by the N4SID prior of the identification recipe (it keeps the one
-        with the smallest output error on the identification data). The recipe's default
-        tries 20, 30, 40, 60, 80, which takes most of the run time on the shared machine;
-        40 and 80 cover the winners measured on the testbed (80 for SIMO, 60-80 for MIMO).
-    frf_band : (float, float)
-        Band of the FRF error metrics [Hz] (the thesis's band of interest).
-    plot_band : (float, float)
-        Frequency range of the Bode overlays [Hz].
-    h1_nperseg : int
-        Welch segment length of the H1 estimate (resolution fs / nperseg).
-    seed : int
-        Seed of everything random (each record derives its own).
-    direct : {False, True, "auto"}
-        Direct term D of the identified models (:func:`trussid.plid.reduced.
-        identify_reduced`): the testbed's sensors see the structure through the lab's
-        low-pass filters (no feed-through, False); accelerometers on a bare structure
-        respond at once to a force ("auto": the data decide).
-    order_scan : tuple of int
-        Orders scanned for each model (:func:`trussid.campaign.orders.scan_orders`: one-step
-        prediction on the held-back quarter of its identification record); the model is
-        identified at the order the data choose. Empty (the testbed): ``simo_order`` and
-        ``mimo_order``, the documented orders.
-    order_scan_budget_s : float
-        CPU budget of each model's scan [s].
-    """
-
-    quick: bool = False
-    n_identification: int = 16000
-    n_validation: int = 8000
-    excitation: str = "white"
-    excitation_rms: float = 2.5
-    excitation_band: tuple = (0.0, 400.0)
-    range_target: float = 0.2
-    gain_steps: tuple = (1.0, 2.0, 5.0)
-    simo_channels: tuple = (0, 1, 2)
-    simo_order: int = 30
-    mimo_order: int = 36
-    block_rows: tuple = (40, 80)
-    frf_band: tuple = (50.0, 350.0)
-    plot_band: tuple = (10.0, 450.0)
-    h1_nperseg: int = 1024
-    seed: int = 1997
-    direct: object = False
-    order_scan: tuple = ()
-    order_scan_budget_s: float = 60.0
-
-
-def demo_settings(quick: bool = False, **overrides) -> DemoSettings:
-    """The full campaign, or the quick one.
-
-    ``quick`` keeps the SIMO model of channel 1 at the full 30 states and the MIMO model
-    at 18 states instead of 36, drops the SIMO models of channels 2 and 3, and uses
-    records of 6000 samples (identification) and 4000 (validation) instead of 16000 and
-    8000.
-    """
-    s = DemoSettings()
-    if quick:
-        s = replace(s, quick=True, n_identification=6000, n_validation=4000,
-                    simo_channels=(0,), mimo_order=18, h1_nperseg=512)
-    return replace(s, **overrides)
-
-
-def derived_settings(cp, quick: bool = False, **overrides):
-    """The experiment for a deck's plant (:class:`trussid.campaign.structure.CampaignPlant`),
-    from its modes and sample rate (overridable):
-
-    - excitation white 0 to 0.4 of the sample rate, a quarter of the D/A range RMS per
-      driven channel (a crest factor of 4, as on the testbed);
-    - FRF band from half the first mode to the top of the excitation; Bode plots to 0.95
-      of Nyquist;
-    - records of 6000 + 4000 samples (quick) or 16000 + 8000, at least 100 periods of
-      the first mode;
-    - model orders chosen from the data (issue 32): multiples of the outputs (PLID's
-      observer form) from one to 48 states (quick: 36) are scanned for each model by
-      one-step prediction on the held-back quarter of its identification record
-      (:mod:`trussid.campaign.orders`), within 60 s of CPU each; the fallback, if no order
-      gives a stable model, is twice the number of the plant's modes below Nyquist, capped
-      likewise. SIMO models of every channel (quick: the first); the direct term estimated
-      when the data show one (accelerometers).
-    """
-    fs = 1.0 / cp.discrete.dt
-    f = np.asarray(cp.modes.frequencies_hz, dtype=float)
-    f = f[f > 1e-6]
-    top = 0.4 * fs
-    p = cp.discrete.noutputs
-    order = int(min(p * math.ceil(max(2 * f.size, 2) / p), p * ((36 if quick else 48) // p)))
-    base = demo_settings(quick)
-    n_min = int(math.ceil(100 * fs / f[0])) if f.size else 0
-    lo = 0.5 * f[0] if f.size else 0.0
-    kw = dict(direct="auto", excitation_band=(0.0, top),
-              excitation_rms=0.25 * cp.lab.daq.full_scale, frf_band=(lo, top),
-              plot_band=(lo, 0.95 * 0.5 * fs), n_identification=max(base.n_identification, n_min),
-              n_validation=max(base.n_validation, n_min // 2), mimo_order=order,
-              simo_order=order,
-              order_scan=tuple(range(p, p * ((36 if quick else 48) // p) + 1, p)),
-              simo_channels=(0,) if quick else tuple(range(cp.discrete.ninputs)))
-    kw.update(overrides)
-    return demo_settings(quick, **kw)
 
 
 # --------------------------------------------------------------------------- plant
@@ -231,400 +93,6 @@ def build_plant(tb=None):
     """The plant of testbed ``tb`` (default: the default testbed) at its lab's sample rate,
     with its lab chain (:class:`trussid.testbed.plant.TestbedPlant`)."""
     return testbed_plant(tb)
-
-
-# --------------------------------------------------------------------------- experiments
-
-
-@dataclass
-class Record:
-    """One simulated record and how it was taken."""
-
-    name: str
-    purpose: str                      # "identification" or "validation"
-    channels: tuple                   # driven actuator channels (0-based)
-    experiment: object                # plid.experiment.Experiment
-    gain_steps: list                  # conditioner step per output
-    adc_full_scale: list              # A/D range per output, in plant output units [V]
-    seed: int
-
-    @property
-    def data(self):
-        return self.experiment.data
-
-
-def conditioner_steps(y_rms, full_scale: float, target: float, steps=(1.0, 2.0, 5.0)):
-    """Conditioner gain step per channel relative to the nominal gain: the largest 1-2-5
-    step from 0.5 up that keeps ``rms * step <= target * full_scale`` (0.5 when even that
-    is passed).
-
-    Steps run from 0.5 to 5e4; a channel that is silent gets the largest.
-    """
-    ladder = np.sort(np.concatenate([np.asarray(steps) * 10.0**k for k in range(-1, 5)]))
-    ladder = ladder[ladder >= 0.5]
-    out = []
-    for r in np.atleast_1d(y_rms):
-        ok = ladder[ladder * r <= target * full_scale] if r > 0 else ladder
-        out.append(float(ok.max() if ok.size else ladder.min()))
-    return out
-
-
-def drive(settings: DemoSettings, plant, n: int, channels, seed: int) -> np.ndarray:
-    """The excitation of the driven ``channels`` (others zero), at the plant's own rate."""
-    u = np.zeros((n, plant.ninputs))
-    u[:, list(channels)] = excitation(settings.excitation, n, len(channels), 1.0 / plant.dt,
-                                      settings.excitation_rms, settings.excitation_band, seed)
-    return u
-
-
-def range_conditioners(plant, settings: DemoSettings, channels, seed: int, n_samples: int,
-                       noise_v: float, full_scale: float) -> list:
-    """Conditioner steps from a noise-free trial run of the experiment (its own seed), for an
-    A/D range of +-``full_scale`` [V]."""
-    trial = drive(settings, plant, n_samples, channels, seed)
-    rms = np.sqrt(np.mean(simulate(plant, trial) ** 2, axis=0) + noise_v**2)
-    return conditioner_steps(rms, full_scale, settings.range_target, settings.gain_steps)
-
-
-def take_record(plant, settings: DemoSettings, name: str, purpose: str, channels, seed: int,
-                n_samples: int, noise_v: float, steps, lab) -> Record:
-    """One record with the conditioners at ``steps`` (see the module docstring), through the
-    converters of ``lab`` (:class:`trussid.geometry.lab.LabSpec`)."""
-    full_scale, bits = lab.daq.full_scale, lab.daq.bits
-    adc_fs = [full_scale / g for g in steps]
-    u = drive(settings, plant, n_samples, channels, seed)
-    exp = run_experiment(plant, n_samples, u=u, seed=seed + 1, sensor_noise_rms=noise_v,
-                         dac_bits=bits, adc_bits=bits, dac_full_scale=full_scale,
-                         adc_full_scale=np.asarray(adc_fs),
-                         input_names=list(plant.input_labels),
-                         output_names=list(plant.output_labels))
-    return Record(name, purpose, tuple(channels), exp, steps, adc_fs, seed)
-
-
-def sensor_noise(tp, settings: DemoSettings):
-    """Sensor noise RMS in plant output units: the testbed lab's accelerometer noise at the
-    nominal conditioning gain, or for a deck :data:`trussid.campaign.structure.
-    DEFAULT_SNR_DB` under each output in a noise-free trial of the all-channel record."""
-    if hasattr(tp, "tbm"):
-        return tp.lab.accelerometers.noise_volts
-    trial = drive(settings, tp.discrete, settings.n_identification,
-                  range(tp.discrete.ninputs), settings.seed + 99)
-    rms = np.sqrt(np.mean(simulate(tp.discrete, trial) ** 2, axis=0))
-    return rms * 10 ** (-DEFAULT_SNR_DB / 20)
-
-
-def run_experiments(tp, settings: DemoSettings, progress=None) -> dict:
-    """All records of the campaign: ``{model name: (identification, validation)}``.
-
-    Model names are ``simo_ch<k>`` (k = 1..3) and ``mimo``.
-    """
-    plant, lab = tp.discrete, tp.lab
-    noise_v = sensor_noise(tp, settings)
-    plan = [(f"simo_ch{c + 1}", (c,)) for c in settings.simo_channels]
-    if settings.mimo_order:
-        plan.append(("mimo", tuple(range(plant.ninputs))))
-    out = {}
-    for k, (name, channels) in enumerate(plan):
-        base = settings.seed + 1000 * k
-        steps = range_conditioners(plant, settings, channels, base + 250,
-                                   settings.n_identification, noise_v, lab.daq.full_scale)
-        rid = take_record(plant, settings, name, "identification", channels, base,
-                          settings.n_identification, noise_v, steps, lab)
-        rval = take_record(plant, settings, name, "validation", channels, base + 500,
-                           settings.n_validation, noise_v, steps, lab)
-        out[name] = (rid, rval)
-        if progress:
-            progress(f"recorded {name}: {rid.data.n_samples} + {rval.data.n_samples} samples")
-    return out
-
-
-# --------------------------------------------------------------------------- identification
-
-
-@dataclass
-class Identified:
-    """An identified model with what the report needs from the identification."""
-
-    model: object                      # discrete control.StateSpace, D = 0
-    K: np.ndarray                      # one-step predictor gain used for prediction
-    K_source: str
-    seconds: float
-    method: str
-    innovations: np.ndarray            # (N, p) of the (last) PLID pass
-    theta_history: np.ndarray          # (k, q)
-    history_index: np.ndarray          # (k,)
-    info: dict = field(default_factory=dict)
-    modes: list = field(default_factory=list)  # plid.uncertainty.ModeInterval per mode
-
-
-def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
-                   progress: bool = False, log=None, direct=False) -> Identified:
-    """Identify an order-``order`` model from one record: the one switchable call.
-
-    Runs the project's identification recipe for under-modelled structures,
-    :func:`trussid.plid.reduced.identify_reduced`: the PLID recipe :func:`trussid.plid.recipe.identify`
-    (an N4SID prior with D = 0 in a rotation observer basis, refined by PLID) at ``order``
-    and at the higher orders ``via``, the latter reduced to ``order`` by input-weighted
-    balanced truncation and refined by PLID; the candidate with the best one-step
-    prediction on the identification record wins, with its predictor gain
-    (:func:`trussid.plid.metrics.choose_predictor`). Measured in
-    ``benchmarks/results/plid_thesis.md``. The parameter history of the winning PLID pass is
-    kept for the convergence plot.
-    """
-    t0 = time.perf_counter()
-    with warnings.catch_warnings():
-        # The candidates' PLID passes warn when a pass loses positive definiteness; the
-        # recipe handles that (a failed candidate is dropped) and the report lists them.
-        warnings.simplefilter("ignore", PLIDWarning)
-        p = np.asarray(y).reshape(len(y), -1).shape[1]
-        idn = fit_model(u, y, order, dt, start="subspace",
-                        via=default_via(order, p) if via is None else via, progress=progress,
-                        log=log, block_rows=None if block_rows is None else list(block_rows),
-                        direct=direct)
-    res = idn.result
-    model = idn.model
-    prov = idn.provenance
-    chosen = prov.chosen or ""
-    stab = prov.stabilised or Stabilised()
-    if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
-        # No stable candidate (none was measured on the testbed): reflect the poles outside
-        # the unit circle in (plid.stability keeps the magnitude response) so that the model
-        # can be simulated, and choose its predictor afresh.
-
-        st = stabilise(model)
-        model = st.model
-        stab = Stabilised(bool(st.applied), int(np.size(st.reflected)))
-        K, K_source, kinfo = choose_predictor(model, u, y)
-    else:
-        K, kinfo = idn.K, prov.predictor or {}
-        K_source = kinfo.get("chosen", "")
-    method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
-    alt_info = {}
-    if direct is not False:
-        # The recipe's N4SID prior is strictly proper (D = 0); on a plant with a large
-        # feed-through (accelerometers on a bare structure) PLID can stay far from the
-        # subspace fit with D. That fit is a candidate too, judged as the recipe judges
-        # its own: by the one-step prediction on the identification record.
-        alt = _subspace_with_d(u, y, order, dt, block_rows or (40, 80))
-        if alt is not None:
-            ours = prediction_ratio_db(model, u, y, K=K, skip=alt[3])["overall"]
-            if alt[2] > ours:
-                alt_info = {"subspace_with_d_db": alt[2], "plid_db": ours}
-                model, K = alt[0], alt[1]
-                K_source = "kalman (N4SID with D, chosen on the identification record)"
-                method = (f"N4SID with D (block rows {alt[4]}): {alt[2]:.1f} dB one-step on "
-                          f"the identification record against {ours:.1f} dB for PLID's "
-                          f"{chosen}")
-                chosen = f"subspace with D, {alt[4]} block rows"
-    hist, hidx = res.theta_history, res.history_index
-    if hist.shape[0] < 2 and idn.prior is not None:
-        # The recipe ran without a parameter history: repeat the winner's last PLID pass
-        # with one (same basis, prior and settings, so the same estimate) for the plot.
-        hist, hidx = _history_of_last_pass(idn, u, y, res.model.nstates, dt)
-    info = {"recipe": "trussid.plid.multipass.identify_reduced", "start": idn.start,
-            "stabilised": stab, "basis": getattr(idn.basis, "name", ""),
-            "R": np.asarray(idn.R).tolist(), "predictor": kinfo,
-            **{k: v for k, v in prov.as_dict().items() if k not in ("passes", "predictor")},
-            "passes": prov.passes}
-    info["chosen"] = chosen
-    if alt_info:
-        info["candidate_with_d"] = alt_info
-    modes = mode_intervals(model, res.model, res.theta_cov)
-    return Identified(model, K, K_source, time.perf_counter() - t0, method,
-                      res.innovations, hist, hidx, info, modes)
-
-
-def _subspace_with_d(u, y, order: int, dt: float, block_rows):
-    """The best N4SID model with a direct term over ``block_rows`` by one-step prediction on
-    ``(u, y)``: ``(model, K, dB, skip, block rows)``, or None if none is stable."""
-    best = None
-    for br in block_rows:
-        try:
-            m = n4sid(u, y, order, int(br), dt).with_d
-        except (ValueError, np.linalg.LinAlgError):
-            continue
-        if np.max(np.abs(np.linalg.eigvals(np.asarray(m.A)))) >= 1:
-            continue
-        K, _, kinfo = choose_predictor(m, u, y)
-        skip = int(kinfo.get("skip", 0))
-        r = prediction_ratio_db(m, u, y, K=K, skip=skip)["overall"]
-        if best is None or r > best[2]:
-            best = (m, K, float(r), skip, int(br))
-    return best
-
-
-def _history_of_last_pass(idn, u, y, order, dt):
-    last = (idn.provenance.passes or [{}])[-1]
-    est = PLID(order, form=idn.result.form, dt=dt, Q=last.get("Q", 0.0), R=idn.R,
-               Q_theta=last.get("Q_theta", 0.0), prior=idn.prior,
-               prior_theta_var=last.get("prior_theta_var", 1e-4), basis=idn.basis,
-               history_every=10, progress=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PLIDWarning)  # as in identify_model
-        r = est.fit(u, y)
-    return r.theta_history, r.history_index
-
-
-# --------------------------------------------------------------------------- evaluation
-
-
-def evaluate(fit: Identified, truth, rid: Record, rval: Record, h1_est, settings: DemoSettings,
-             name: str, kind: str) -> ModelSummary:
-    """All metrics of one model, by :func:`trussid.plid.evaluate.compare` (as ``trussid
-    compare``): validation prediction and simulation, FRF errors against the true plant and
-    the H1 estimate, matched poles."""
-    model = fit.model
-    val = rval.data
-    cols = list(rid.channels)
-    tcols = truth[:, cols]
-    c = compare(model, tcols, u=val.u[:, cols], y=val.y, y_clean=rval.experiment.y_clean,
-                K=fit.K, gain=fit.K_source, estimate=h1_est, band=settings.frf_band)
-    # H1 itself against the truth: how far the nonparametric estimate is to be trusted.
-    keep = (h1_est.f >= settings.frf_band[0]) & (h1_est.f <= settings.frf_band[1])
-    h1_true = _h1_error(h1_est, tcols, keep)
-    in_band = [r for r in c.poles if r.true_frequency_hz is not None
-               and settings.frf_band[0] <= r.true_frequency_hz <= settings.frf_band[1]]
-    y_rms = np.sqrt(np.mean(val.y**2, axis=0))
-    p, s, e, eh = c.prediction, c.simulation, c.frf, c.frf_vs_estimate
-    lo_x, hi_x = settings.excitation_band
-    inside = (h1_est.f >= max(lo_x, h1_est.f[1])) & (h1_est.f <= hi_x)
-    above = h1_est.f > hi_x
-    coherence = {
-        "excited_band_hz": [lo_x, hi_x],
-        "mean_in_excited_band": h1_est.coherence[inside].mean(axis=0).tolist(),
-        "mean_above_excited_band": (h1_est.coherence[above].mean(axis=0).tolist()
-                                    if above.any() else None),
-    }
-    return ModelSummary(
-        name=name, kind=kind, states=c.states, inputs=c.inputs, outputs=c.outputs,
-        input_names=[val.input_names[c_] for c_ in cols], output_names=list(val.output_names),
-        signal_to_prediction_error_db=p.overall,
-        signal_to_prediction_error_db_per_output=p.per_output,
-        signal_to_prediction_error_db_mean_normalised=p.mean_normalised,
-        prediction_skip_samples=p.skip,
-        predictor_gain=p.gain,
-        frf_max_error_db=e.max_db, frf_rms_error_db=e.rms_db,
-        frf_max_error_deg=e.max_deg, frf_rms_error_deg=e.rms_deg,
-        frf_error_per_channel=e.per_channel,
-        frf_band_hz=list(settings.frf_band),
-        frf_error_vs_h1={"max_db": eh.max_db, "rms_db": eh.rms_db, "max_deg": eh.max_deg,
-                         "rms_deg": eh.rms_deg},
-        h1_error_vs_true=h1_true,
-        simulation_fit_db=s.overall,
-        simulation_fit_db_per_output=s.per_output,
-        seconds=fit.seconds, method=fit.method, unstable_poles=c.unstable_poles,
-        stabilised=fit.info.get("stabilised") or Stabilised(),
-        poles=c.poles,
-        poles_in_band_matched=sum(r.frequency_hz is not None for r in in_band),
-        poles_in_band_true=len(in_band),
-        validation_output_rms_v=y_rms.tolist(),
-        h1_coherence=coherence,
-        modes_check=mode_audit(c.poles, settings.frf_band, settings.excitation_band),
-        mode_checks=_mode_checks(c.poles, fit.modes, model, tcols),
-        identification=json_safe(fit.info),
-    )
-
-
-def _mode_checks(poles, modes, model, truth) -> list[ModeCheck]:
-    """Per matched pole pair: the identified mode's 95 % intervals
-    (:mod:`trussid.plid.uncertainty`) and the MAC of the true (FE) mode shape against the
-    identified one at the sensors (:func:`trussid.plid.modal.mac`)."""
-    ident, true = modal_table(model), modal_table(truth)
-    rows = []
-    for r in poles:
-        if not r.matched:
-            continue
-        i = int(np.argmin(np.abs(ident.frequencies_hz - r.frequency_hz)))
-        j = int(np.argmin(np.abs(true.frequencies_hz - r.true_frequency_hz)))
-        m = min(modes, key=lambda q: abs(q.frequency_hz - r.frequency_hz)) if modes else None
-        ci = (m.as_dict() if m is not None
-              and abs(m.frequency_hz - r.frequency_hz) < 1e-6 * r.frequency_hz else {})
-        rows.append(ModeCheck(
-            r.true_frequency_hz, r.frequency_hz,
-            float(mac(ident.shapes[:, [i]], true.shapes[:, [j]], zero_shape="zero")[0, 0]),
-            ci.get("frequency_ci95_hz"), ci.get("damping_ratio_ci95")))
-    return rows
-
-
-#: Relative frequency error within which an identified mode counts as the true one found.
-FOUND_TOLERANCE = 0.05
-#: Identified modes below this damping ratio are listed wherever they are (a controller
-#: designed on the model would respect them).
-LIGHT_DAMPING = 0.01
-
-
-def mode_audit(poles: list, band, excited) -> ModeAudit:
-    """What a model lacks and what it adds, from matched poles (:func:`plid.metrics.compare_poles`).
-
-    Parameters
-    ----------
-    poles : list of trussid.plid.metrics.PoleMatch
-        A true pole with its match, or an unmatched identified pole (true fields None).
-    band : (float, float)
-        The band [Hz] in which every true mode should be found (the FRF band).
-    excited : (float, float)
-        The excitation band [Hz] (identified poles outside it are flagged).
-
-    Returns
-    -------
-    ModeAudit
-        ``true_modes_in_band``: every true structural mode (damping <= STRUCTURAL_DAMPING_MAX) in
-        ``band`` with ``found`` (matched within FOUND_TOLERANCE in frequency) and the
-        identified frequency and damping; ``missing``: the frequencies not found;
-        ``filter_poles_in_band``: true poles that are not modes (excluded from the count);
-        ``spurious``: identified modes with no true structural mode within
-        FOUND_TOLERANCE, anywhere; ``lightly_damped``: identified modes with damping below
-        LIGHT_DAMPING anywhere, each with ``spurious`` and ``in_excited_band``.
-    """
-    lo, hi = band
-    true_modes = sorted({(r.true_frequency_hz, r.true_damping) for r in poles
-                         if r.true_frequency_hz is not None
-                         and r.true_damping <= STRUCTURAL_DAMPING_MAX})
-    f_true = np.array([f for f, _ in true_modes]) if true_modes else np.zeros(0)
-    rows, filters = [], 0
-    for r in poles:
-        ft = r.true_frequency_hz
-        if ft is None or not lo <= ft <= hi:
-            continue
-        if r.true_damping > STRUCTURAL_DAMPING_MAX:
-            filters += 1
-            continue
-        fi = r.frequency_hz
-        found = (fi is not None and r.damping <= STRUCTURAL_DAMPING_MAX
-                 and abs(fi - ft) <= FOUND_TOLERANCE * ft)
-        rows.append(AuditedTrueMode(true_frequency_hz=ft, true_damping=r.true_damping,
-                                    found=bool(found), frequency_hz=fi if found else None,
-                                    damping=r.damping if found else None))
-
-    def nearest(f):
-        if not f_true.size:
-            return None, None
-        k = int(np.argmin(np.abs(f_true - f)))
-        return float(f_true[k]), float(abs(f_true[k] - f) / max(f_true[k], 1e-12))
-
-    identified, spurious, light = [], [], []
-    for r in poles:
-        fi = r.frequency_hz
-        if fi is None or r.damping > STRUCTURAL_DAMPING_MAX:
-            continue
-        near, rel = nearest(fi)
-        entry = AuditedIdentifiedMode(frequency_hz=fi, damping=r.damping, nearest_true_hz=near,
-                                      spurious=bool(near is None or rel > FOUND_TOLERANCE),
-                                      in_excited_band=bool(excited[0] <= fi <= excited[1]))
-        identified.append(entry)
-        if entry.spurious:
-            spurious.append(entry)
-        if r.damping < LIGHT_DAMPING:
-            light.append(entry)
-    key = lambda e: e.frequency_hz  # noqa: E731
-    return ModeAudit(band_hz=[lo, hi], excited_band_hz=list(excited),
-                     true_modes_in_band=rows,
-                     found=sum(r.found for r in rows), total=len(rows),
-                     missing=[r.true_frequency_hz for r in rows if not r.found],
-                     filter_poles_in_band=filters,
-                     spurious=sorted(spurious, key=key), lightly_damped=sorted(light, key=key),
-                     rules={"structural_damping_max": STRUCTURAL_DAMPING_MAX,
-                            "found_within": FOUND_TOLERANCE, "light_damping_below": LIGHT_DAMPING})
 
 
 def provenance(settings: "DemoSettings", command: str | None = None) -> ReportProvenance:
@@ -664,22 +132,6 @@ def provenance(settings: "DemoSettings", command: str | None = None) -> ReportPr
                       date_utc=time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()))
 
 
-def _h1_error(h1_est, truth, keep) -> dict:
-    """Magnitude/phase error of the H1 estimate against the true plant at its own frequencies."""
-    H, H_ref = h1_est.H[keep], frequency_response(truth, h1_est.f[keep])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mag = 20 * np.log10(np.abs(H)) - 20 * np.log10(np.abs(H_ref))
-        ph = np.degrees(np.angle(H / H_ref))
-    return {"max_db": float(np.max(np.abs(mag))), "rms_db": float(np.sqrt(np.mean(mag**2))),
-            "max_deg": float(np.max(np.abs(ph))), "rms_deg": float(np.sqrt(np.mean(ph**2)))}
-
-
-def h1_estimate(record: Record, nperseg: int):
-    """H1 estimate from an identification record (driven channels only)."""
-    d = record.data
-    return h1(d.u[:, list(record.channels)], d.y, d.fs, nperseg=nperseg)
-
-
 # --------------------------------------------------------------------------- the run
 
 
@@ -709,9 +161,9 @@ def identify_records(records: dict, settings: DemoSettings, say) -> tuple[dict, 
                                     log=lambda msg: say(f"        {msg}"),
                                     direct=settings.direct)
         if choice is not None:
-            fits[name].info["order_scan"] = json_safe(choice)
+            fits[name].info = replace(fits[name].info, order_scan=choice)
         h1s[name] = h1_estimate(rid, settings.h1_nperseg)
-        say(f"      {name}: kept {fits[name].info.get('chosen', '')} "
+        say(f"      {name}: kept {fits[name].info.chosen} "
             f"({fits[name].seconds:.1f} s)")
     return fits, h1s
 
@@ -981,39 +433,6 @@ def plant_section(tp) -> PlantSummary:
         sensor_noise_v_rms=acc.noise_volts,
         lab=lab,
     )
-
-
-def experiment_summary(records: dict, settings: DemoSettings) -> list[ExperimentRow]:
-    """One row per record: its size, rate, drive, converters, ranges and signal-to-noise."""
-    rows = []
-    for name, pair in records.items():
-        for rec in pair:
-            e = rec.experiment
-            d = e.data
-            y_rms = np.sqrt(np.mean(e.y_clean**2, axis=0))
-            noise = np.asarray(e.sensor_noise_rms)
-            lsb = np.asarray(e.lsb["adc"], dtype=float)
-            rows.append(ExperimentRow(
-                model=name, purpose=rec.purpose, samples=d.n_samples,
-                sample_rate_hz=d.fs,
-                driven_channels=[d.input_names[c] for c in rec.channels], seed=rec.seed,
-                excitation=settings.excitation, excitation_rms_v=settings.excitation_rms,
-                excitation_band_hz=list(settings.excitation_band),
-                dac_clipped=e.clipping["dac"], adc_clipped=e.clipping["adc"],
-                conditioner_steps=rec.gain_steps,
-                adc_full_scale_v=rec.adc_full_scale,
-                # the converters' LSB as the experiment applied them [V]
-                dac_lsb_v=np.atleast_1d(np.asarray(e.lsb["dac"], dtype=float)).tolist(),
-                adc_lsb_v=np.atleast_1d(lsb).tolist(),
-                # converter resolution from the LSB the experiment used: 2 FS / 2^bits
-                adc_bits=[int(round(np.log2(2 * fs / q)))
-                          for fs, q in zip(rec.adc_full_scale, np.atleast_1d(lsb))],
-                output_rms_v=y_rms.tolist(),
-                output_rms_fraction_of_range=(y_rms / np.asarray(rec.adc_full_scale)).tolist(),
-                sensor_snr_db=(20 * np.log10(y_rms / noise)).tolist(),
-                quantisation_snr_db=(20 * np.log10(y_rms / (lsb / np.sqrt(12)))).tolist(),
-            ))
-    return rows
 
 
 __all__ = ["DemoSettings", "demo_settings", "build_plant", "run_experiments", "take_record",

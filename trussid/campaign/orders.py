@@ -144,11 +144,11 @@ def scan_orders(u, y, dt: float, orders, *, direct: bool = True, block_rows: int
         # the predictor runs over the whole record and only its errors on the held-back
         # part are scored: started afresh there, the transient of a 0.5 %-damped mode
         # (hundreds of samples) would decide the score, not the model
-        hb = prediction_ratio_db(m, u, y, K=K, skip=max(n_fit, skip))["overall"]
+        hb = prediction_ratio_db(m, u, y, K=K, skip=max(n_fit, skip)).overall
         va = None
         if u_val is not None:
             va = prediction_ratio_db(m, u_val, y_val, K=K,
-                                     skip=min(skip, len(u_val) - 1))["overall"]
+                                     skip=min(skip, len(u_val) - 1)).overall
         rows.append(OrderRow(int(n), float(hb), None if va is None else float(va),
                              time.process_time() - c0))
     scored = [r for r in rows if r.held_back_db is not None]

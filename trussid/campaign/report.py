@@ -108,28 +108,27 @@ def report_markdown(s: DemoSummary) -> str:
           "poles reflected in (`stabilised`).", ""]
     for m in s.models:
         ident = m.identification
-        rows = ident.get("candidates") or []
         L += [f"**{m.name}**: {m.method}", "",
               "| candidate | one-step, identification record (in-sample) [dB] | seconds |",
               "| --- | --- | --- |"]
-        for r in rows:
-            mark = " (kept)" if r.get("label") == ident.get("chosen") else ""
+        for r in ident.candidates:
+            mark = " (kept)" if r.get("label") == ident.chosen else ""
             score = r.get("identification_ratio_db")
             txt = _f(score) if score is not None else (r.get("error") or "unstable")
             L.append(f"| {r.get('label', '')}{mark} | {txt} | {r.get('seconds', 0):.1f} |")
         L.append("")
-        scan = ident.get("order_scan")
+        scan = ident.order_scan
         if scan:  # the order chosen from the data (issue 32)
-            L += [f"Order {scan['chosen']} chosen from the data ({scan['rule']}; runners-up "
-                  f"{', '.join(map(str, scan['runners_up'])) or 'none'}; "
-                  f"{scan['cpu_seconds']:.1f} s CPU of a {scan['cpu_budget_s']:g} s budget). "
+            L += [f"Order {scan.chosen} chosen from the data ({scan.rule}; runners-up "
+                  f"{', '.join(map(str, scan.runners_up)) or 'none'}; "
+                  f"{scan.cpu_seconds:.1f} s CPU of a {scan.cpu_budget_s:g} s budget). "
                   "The validation column is shown only, never used to choose.", "",
                   "| states | one-step, held-back [dB] | one-step, validation [dB] | note |",
                   "| --- | --- | --- | --- |"]
-            for r in scan["rows"]:
-                mark = " (chosen)" if r["order"] == scan["chosen"] else ""
-                L.append(f"| {r['order']}{mark} | {_f(r['held_back_db'])} | "
-                         f"{_f(r['validation_db'])} | {r['note']} |")
+            for r in scan.rows:
+                mark = " (chosen)" if r.order == scan.chosen else ""
+                L.append(f"| {r.order}{mark} | {_f(r.held_back_db)} | "
+                         f"{_f(r.validation_db)} | {r.note} |")
             L.append("")
     L += ["", "## Figures", ""]
     for m in s.models:

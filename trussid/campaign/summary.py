@@ -15,10 +15,11 @@ from dataclasses import dataclass, field
 from trussid._util.jsonio import json_safe
 from trussid.geometry.lab import LabSpec
 from trussid.lqg.grading import LoopSettings
-from trussid.plid.provenance import Stabilised
+from trussid.plid.chosen import WithDirectTerm
+from trussid.plid.provenance import Provenance, Stabilised
 
 __all__ = ["ReportProvenance", "PlantSummary", "ExperimentRow", "AuditedTrueMode",
-           "AuditedIdentifiedMode", "ModeAudit", "ModelSummary", "ReportFiles",
+           "AuditedIdentifiedMode", "ModeAudit", "ModelIdentification", "ModelSummary", "ReportFiles",
            "ControllerSummary", "DesignSummary", "ClosedLoopSummary", "ClosedLoopSection",
            "AdaptSection", "DemoSummary"]
 
@@ -126,6 +127,70 @@ class ModeAudit:
 
 
 @dataclass(frozen=True)
+class ModelIdentification:
+    """How one model of the demo was identified: the recipe's typed
+    :class:`trussid.plid.provenance.Provenance` with what
+    :func:`trussid.plid.chosen.choose_model` decided after it.
+
+    Attributes
+    ----------
+    recipe : str
+        The recipe that ran.
+    start : str
+        Its start (``"subspace"``).
+    basis : str
+        The observer basis of the winning PLID pass.
+    R : list of float
+        The output-noise variances of that pass (scaled units).
+    provenance : trussid.plid.provenance.Provenance
+        What the recipe ran, tried, chose and measured.
+    stabilised : trussid.plid.provenance.Stabilised
+        Whether poles were reflected in (by the recipe or after it).
+    predictor : dict
+        How the kept model's predictor gain was chosen.
+    chosen : str
+        The kept candidate's label.
+    candidate_with_d : trussid.plid.chosen.WithDirectTerm or None
+        Set when the subspace fit with D replaced PLID's winner.
+    order_scan : trussid.campaign.orders.OrderChoice or None
+        The order chosen from the data, when the campaign scanned orders.
+    """
+
+    recipe: str
+    start: str
+    basis: str
+    R: list
+    provenance: Provenance
+    stabilised: Stabilised
+    predictor: dict
+    chosen: str
+    candidate_with_d: WithDirectTerm | None = None
+    order_scan: object = None
+
+    @property
+    def candidates(self) -> list:
+        """The recipe's candidates, one row each (empty when it compared none)."""
+        return self.provenance.candidates or []
+
+    def to_dict(self) -> dict:
+        """The JSON form (``summary.json``'s ``identification``): the provenance's fields that
+        are set, beside the others in one flat object; ``candidate_with_d`` and
+        ``order_scan`` only when set."""
+        out = {"recipe": self.recipe, "start": self.start, "stabilised": self.stabilised,
+               "basis": self.basis, "R": self.R, "predictor": self.predictor}
+        out.update((k, v) for k, v in self.provenance.as_dict().items()
+                   if k not in ("passes", "predictor"))
+        out["stabilised"] = self.stabilised
+        out["passes"] = self.provenance.passes
+        out["chosen"] = self.chosen
+        if self.candidate_with_d is not None:
+            out["candidate_with_d"] = self.candidate_with_d
+        if self.order_scan is not None:
+            out["order_scan"] = self.order_scan
+        return json_safe(out)
+
+
+@dataclass(frozen=True)
 class ModelSummary:
     """Every metric of one identified model (validation record, true plant, H1)."""
 
@@ -161,7 +226,7 @@ class ModelSummary:
     validation_output_rms_v: list
     h1_coherence: dict
     modes_check: ModeAudit
-    identification: dict          # the identification's provenance (JSON-safe)
+    identification: ModelIdentification
     mode_checks: list = field(default_factory=list)  # ModeCheck per matched pole
 
 
@@ -333,6 +398,8 @@ class DemoSummary:
         (``{"error": ...}`` when no controller was designed) and ``adapt`` the adaptive one
         (each left out when not run)."""
         out = json_safe(self)
+        for model, typed in zip(out["models"], self.models):
+            model["identification"] = typed.identification.to_dict()
         if self.control is None:
             del out["control"]
         elif self.control.summary is None:

@@ -93,7 +93,7 @@ def run(args) -> int:
     from trussid.lqg.loop import match_names
 
     ctrl, meta = load_model(args.controller, which="discrete")
-    ex = meta["extra"]
+    ex = meta.extra
     design = json.loads(str(ex["design_json"])) if "design_json" in ex else {}
     if args.plant:
         plant, pmeta = load_model(args.plant, which="discrete")
@@ -102,7 +102,7 @@ def run(args) -> int:
         if renamed:
             print("controller channels matched to the plant's by dropping the record's u_/y_ "
                   "prefix: " + ", ".join(f"{a} -> {b}" for a, b in renamed))
-        lab = recorded_lab(pmeta["extra"], args.plant)
+        lab = recorded_lab(pmeta.extra, args.plant)
         di = design.get("info", {})
         settings = plant_loop_settings(plant, input_rms=di.get("input_rms"),
                                        output_rms=di.get("output_rms"),

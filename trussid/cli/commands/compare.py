@@ -85,7 +85,7 @@ def _reference_kind(path: Path) -> str:
 
 
 def _check_channels(model_meta, ref_names, kind):
-    m_in, m_out = model_meta["input_names"], model_meta["output_names"]
+    m_in, m_out = model_meta.input_names, model_meta.output_names
     r_in, r_out = ref_names
     if len(m_in) != len(r_in) or len(m_out) != len(r_out):
         raise UserError(f"the model has {len(m_in)} input(s) and {len(m_out)} output(s) but "
@@ -114,9 +114,9 @@ def _load_reference(args, model, meta, kind, ref_path):
         elif abs(truth.dt - model.dt) > 1e-9 * model.dt:
             raise UserError(f"the model samples at {fs:g} Hz but the plant at "
                             f"{1 / truth.dt:g} Hz")
-        _check_channels(meta, (rmeta["input_names"], rmeta["output_names"]), "plant")
+        _check_channels(meta, (rmeta.input_names, rmeta.output_names), "plant")
         val = run_experiment(truth, VALIDATION_SAMPLES, seed=12345)
-        return truth, (val.data.u, val.data.y, val.y_clean, meta["K"], None)
+        return truth, (val.data.u, val.data.y, val.y_clean, meta.K, None)
     data = read_data(ref_path, inputs=names_arg(args.inputs), outputs=names_arg(args.outputs),
                      fs=args.fs)
     for note in data.notes:  # what the reader assumed, e.g. a time column in milliseconds
@@ -126,7 +126,7 @@ def _load_reference(args, model, meta, kind, ref_path):
     _check_channels(meta, (data.input_names, data.output_names), "data")
     nperseg = args.nperseg or int(2 ** np.clip(np.floor(np.log2(data.n_samples / 8)), 6, 12))
     est = h1(data.u, data.y, data.fs, nperseg=int(min(nperseg, data.n_samples)))
-    return None, (data.u, data.y, data.y_clean, meta["K"], est)
+    return None, (data.u, data.y, data.y_clean, meta.K, est)
 
 
 def run(args) -> int:
@@ -156,10 +156,10 @@ def run(args) -> int:
     c = compare(model, truth, u=u, y=y, y_clean=y_clean, K=K, gain="model file",
                 estimate=est, band=band)
     metrics = {"model": str(args.model), "reference": str(ref_path), "reference_kind": kind,
-               "input_names": meta["input_names"], "output_names": meta["output_names"],
+               "input_names": meta.input_names, "output_names": meta.output_names,
                "fs": 2 * nyq, "band": list(band), "band_source": chosen.source,
                "stable": c.stable,
-               "stability": meta["stability"].message(f"the model {args.model}"),
+               "stability": meta.stability.message(f"the model {args.model}"),
                "record": (f"seeded white-noise record of the plant, {VALIDATION_SAMPLES} "
                           "samples" if kind == "plant" else str(ref_path)),
                **json_safe(c)}
@@ -178,9 +178,9 @@ def run(args) -> int:
         curves = [(f"H1 ({est.n_averages} averages)", f_plot, est.H[keep])]
     curves.append(("model", f_plot, frequency_response(model, f_plot)))
     figs = {f"bode_{_safe_name(name)}.png": bode_figure(
-        curves, j, name, meta["output_names"],
+        curves, j, name, meta.output_names,
         title=f"Bode overlay, input {name}: model vs {curves[0][0]}", logx=logx)
-        for j, name in enumerate(meta["input_names"])}
+        for j, name in enumerate(meta.input_names)}
     figs["poles.png"] = pole_map_figure([("plant", truth), ("model", model)] if truth is not None
                                         else [("model", model)])
     out = Path(args.out)

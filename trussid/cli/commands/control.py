@@ -77,12 +77,12 @@ def run(args) -> int:
     if args.modes is not None and args.modes < 1:
         raise UserError(f"--modes must be a positive integer, got {args.modes}")
     model, meta = load_model(args.model, which="discrete")
-    data = read_data(args.data, inputs=meta["input_names"], outputs=meta["output_names"])
-    if not math.isclose(data.fs, 1.0 / meta["dt"], rel_tol=1e-6):
+    data = read_data(args.data, inputs=meta.input_names, outputs=meta.output_names)
+    if not math.isclose(data.fs, 1.0 / meta.dt, rel_tol=1e-6):
         raise UserError(f"--data {args.data}: sampled at {data.fs:g} Hz, the model at "
-                        f"{1.0 / meta['dt']:g} Hz")
+                        f"{1.0 / meta.dt:g} Hz")
     des, base, timings = design_controller(
-        model, data.u, data.y, K=meta["K"], target_damping=args.target_damping,
+        model, data.u, data.y, K=meta.K, target_damping=args.target_damping,
         band=args.band, form=args.form, baselines=not args.no_baselines, progress=print,
         n_modes=args.modes)
     info = json_safe({"form": des.form, "target_modes": des.target_modes,

@@ -48,22 +48,22 @@ def run(args) -> int:
     if out is not None and out.suffix.lower() not in SUFFIXES:
         raise UserError(f"--to {out}: give a .mat (MATLAB) or .py (python-control) file")
     model, meta = load_model(args.model, which="continuous" if args.continuous else "auto")
-    note = meta["stability"].message(f"the model {args.model}")
-    names = dict(input_names=meta["input_names"], output_names=meta["output_names"])
+    note = meta.stability.message(f"the model {args.model}")
+    names = dict(input_names=meta.input_names, output_names=meta.output_names)
     if args.python:
-        sys.stdout.write(python_code(model, meta["K"], source=str(args.model), **names))
+        sys.stdout.write(python_code(model, meta.K, source=str(args.model), **names))
     elif out.suffix.lower() == ".mat":
         continuous = None
-        if meta["has_continuous"] and not args.continuous and meta["dt"] > 0:
+        if meta.has_continuous and not args.continuous and meta.dt > 0:
             continuous = load_model(args.model, which="continuous")[0]
-        write_mat(out, model, K=meta["K"], continuous=continuous, **names)
+        write_mat(out, model, K=meta.K, continuous=continuous, **names)
         print(f"wrote {out}: {model.nstates} states, {model.ninputs} input(s), "
-              f"{model.noutputs} output(s), Ts = {meta['dt']:g} s"
-              + (", K" if meta["K"] is not None else "")
+              f"{model.noutputs} output(s), Ts = {meta.dt:g} s"
+              + (", K" if meta.K is not None else "")
               + (", continuous model as Ac..Dc" if continuous is not None else ""))
         print("in MATLAB/Octave: " + MATLAB_LOAD.format(name=out.name))
     else:
-        write_python(out, model, meta["K"], source=str(args.model), **names)
+        write_python(out, model, meta.K, source=str(args.model), **names)
         print(f"wrote {out}: python-control code; use: from {out.stem} import model, K "
               f"(or exec(open('{out}').read()))")
     if note:

@@ -263,24 +263,25 @@ def run(args) -> int:
     stability_note = stability.message(f"the identified model {out}")
     freq, damp, _ = modal_parameters(model)
     prov = ident.provenance
+    # complex pairs with 95 % intervals (plid.uncertainty: first-order propagation of the
+    # PLID pass's posterior parameter covariance)
+    modes = mode_intervals(model, ident.result.model, ident.result.theta_cov)
+    warned = prov.warnings + ([stability_note] if stability_note else [])
     summary = {
         "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
         "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
         "start": start, "form": ident.result.form,
-        "passes": len(prov.passes), "Q": [ps["Q"] for ps in prov.passes],
+        "passes": len(prov.passes), "Q": [ps.Q for ps in prov.passes],
         "R": [float(r) for r in np.atleast_1d(ident.R)],
         "seconds": seconds, "K_source": prov.K_source,
         # in-sample: scored on the identification data itself
-        "signal_to_prediction_error_db": ratio["overall"],
-        "signal_to_prediction_error_db_per_output": ratio["per_channel"],
-        "signal_to_prediction_error_db_mean_normalised": ratio["mean_normalised"],
+        "signal_to_prediction_error_db": ratio.overall,
+        "signal_to_prediction_error_db_per_output": ratio.per_output,
+        "signal_to_prediction_error_db_mean_normalised": ratio.mean_normalised,
         "prediction_skip_samples": skip, "unstable_poles": unstable,
         "poles": [{"frequency_hz": float(a), "damping": float(b)} for a, b in zip(freq, damp)],
-        # complex pairs with 95 % intervals (plid.uncertainty: first-order propagation of
-        # the PLID pass's posterior parameter covariance)
-        "modes": [mi.as_dict() for mi in mode_intervals(model, ident.result.model,
-                                                         ident.result.theta_cov)],
-        "warnings": prov.warnings + ([stability_note] if stability_note else []),
+        "modes": [mi.as_dict() for mi in modes],
+        "warnings": warned,
         "stable": stability.stable, "stability": stability_note,
     }
     if prov.direct is not None:
@@ -290,49 +291,49 @@ def run(args) -> int:
     if via is not None:
         summary.update(via=list(prov.via), chosen=prov.chosen, candidates=prov.candidates)
     modal_lines = modal_outputs(args, data, model, start, ident.result.form, summary)
-    for note in summary["warnings"]:
+    for note in warned:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
         print(dumps(summary), end="")
         return 0
-    _print_summary(summary, via is not None)
+    print(f"identified an order-{n} model ({m} input(s), {p} output(s)) from "
+          f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s "
+          f"({ident.result.form} form, {start} start"
+          f"{'; kept ' + prov.chosen if via is not None else ''})")
+    print(f"wrote {out}")
+    _print_fit(prov, data.output_names, ratio, modes, zip(freq, damp))
     for line in modal_lines:
         print(line)
     return 0
 
 
-def _print_summary(s: dict, via: bool) -> None:
-    print(f"identified an order-{s['order']} model ({len(s['inputs'])} input(s), "
-          f"{len(s['outputs'])} output(s)) from {s['samples']} samples at {s['fs']:g} Hz in "
-          f"{s['seconds']:.2f} s ({s['form']} form, {s['start']} start"
-          f"{'; kept ' + s['chosen'] if via else ''})")
-    print(f"wrote {s['model']}")
-    if "structure" in s:
-        print(f"structure: {s['structure']}")
-    if "direct_term" in s:
-        d = s["direct_term"]  # a plid.provenance.DirectTerm
+def _print_fit(prov, outputs, ratio, modes, poles) -> None:
+    """The text summary after its first two lines: structure, direct term, predictor,
+    in-sample one-step ratio, modes with intervals, poles."""
+    if prov.structure is not None:
+        print(f"structure: {prov.structure}")
+    if prov.direct is not None:
+        d = prov.direct
         t = d.test
-        why = (f" (held-out output error {t['held_out_nmse_with']:.3g} with D against "
-               f"{t['held_out_nmse_without']:.3g} without)" if t else "")
+        why = (f" (held-out output error {t.held_out_nmse_with:.3g} with D against "
+               f"{t.held_out_nmse_without:.3g} without)" if t else "")
         print(f"direct term D: {'estimated' if d.estimated else 'none (D = 0)'}"
               f"{' (' + str(d.mode) + ')' if d.mode != 'auto' else ''}{why}")
-    print(f"predictor gain K: {s['K_source']}")
-    per = ", ".join(f"{name} {v:.2f}" for name, v in
-                    zip(s["outputs"], s["signal_to_prediction_error_db_per_output"]))
+    print(f"predictor gain K: {prov.K_source}")
+    per = ", ".join(f"{name} {v:.2f}" for name, v in zip(outputs, ratio.per_output))
     print(f"one-step signal-to-prediction-error ratio on the identification data (in-sample): "
-          f"{s['signal_to_prediction_error_db']:.2f} dB ({per}; first "
-          f"{s['prediction_skip_samples']} samples left out)")
-    if s["modes"]:
+          f"{ratio.overall:.2f} dB ({per}; first {ratio.skip} samples left out)")
+    if modes:
         print("modes with 95 % intervals (first-order propagation of the parameter "
               "covariance; '-' where none):")
         print(f"  {'frequency [Hz]':>14s}  {'95 % interval [Hz]':>27s}  {'damping':>9s}  "
               f"{'95 % interval':>21s}")
-        for mo in s["modes"]:
-            fi, zi = mo["frequency_ci95_hz"], mo["damping_ratio_ci95"]
-            fci = f"[{fi[0]:.4f}, {fi[1]:.4f}]" if fi else "-"
-            zci = f"[{zi[0]:.5f}, {zi[1]:.5f}]" if zi else "-"
-            print(f"  {mo['frequency_hz']:14.4f}  {fci:>27s}  {mo['damping_ratio']:9.5f}  "
+        for mo in modes:
+            fi, zi = mo.frequency_ci95_hz, mo.damping_ratio_ci95
+            fci = f"[{fi[0]:.4f}, {fi[1]:.4f}]" if np.all(np.isfinite(fi)) else "-"
+            zci = f"[{zi[0]:.5f}, {zi[1]:.5f}]" if np.all(np.isfinite(zi)) else "-"
+            print(f"  {mo.frequency_hz:14.4f}  {fci:>27s}  {mo.damping_ratio:9.5f}  "
                   f"{zci:>21s}")
     print("poles (frequency [Hz], damping):")
-    for row in s["poles"]:
-        print(f"  {row['frequency_hz']:12.4f}  {row['damping']:10.6f}")
+    for f, z in poles:
+        print(f"  {f:12.4f}  {z:10.6f}")

@@ -157,21 +157,22 @@ def run_io(args, out: Path) -> int:
     f = np.asarray(modes.frequencies_hz[:n])
     poles = control.poles(main)
     stable = bool(np.all(np.abs(poles) < 1) if sd is not None else np.all(np.real(poles) < 0))
-    s = {"model": str(args.model), "io": str(args.io), "out": str(out),
-         "inputs": list(main.input_labels), "outputs": list(main.output_labels),
-         "states": int(main.nstates), "sample_rate_hz": args.fs or spec.fs,
-         "modes_kept": n, "mode_frequencies_hz": f.tolist(),
-         "damping": args.damping if args.damping is not None else (spec.damping or 0.02),
-         "stable": stable, "conventions": loaded.info.conventions, "notes": loaded.notes}
+    inputs, outputs = list(main.input_labels), list(main.output_labels)
+    fs = args.fs or spec.fs
+    damping = args.damping if args.damping is not None else (spec.damping or 0.02)
     if args.json:
-        print(dumps(s), end="")
+        print(dumps({"model": str(args.model), "io": str(args.io), "out": str(out),
+                     "inputs": inputs, "outputs": outputs, "states": int(main.nstates),
+                     "sample_rate_hz": fs, "modes_kept": n, "mode_frequencies_hz": f.tolist(),
+                     "damping": damping, "stable": stable,
+                     "conventions": loaded.info.conventions, "notes": loaded.notes}), end="")
         return 0
-    rate = (f"ZOH at {s['sample_rate_hz']:g} Hz" if sd is not None
+    rate = (f"ZOH at {fs:g} Hz" if sd is not None
             else "continuous only (give --fs or [plant] fs for a discrete plant)")
-    print(f"plant of {args.model} with {args.io}: {len(s['inputs'])} input(s) "
-          f"({', '.join(s['inputs'])}), {len(s['outputs'])} output(s) "
-          f"({', '.join(s['outputs'])}), {s['states']} states, {rate}")
-    print(f"modes kept: {n} ({f[0]:.4g} to {f[-1]:.4g} Hz), damping {s['damping']:g}; "
+    print(f"plant of {args.model} with {args.io}: {len(inputs)} input(s) "
+          f"({', '.join(inputs)}), {len(outputs)} output(s) "
+          f"({', '.join(outputs)}), {int(main.nstates)} states, {rate}")
+    print(f"modes kept: {n} ({f[0]:.4g} to {f[-1]:.4g} Hz), damping {damping:g}; "
           f"units: the deck's")
     for note in loaded.notes:
         print(note)

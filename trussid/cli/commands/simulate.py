@@ -99,8 +99,8 @@ def run(args) -> int:
                          seed=args.seed, snr_db=args.snr_db, sensor_noise_rms=args.noise_rms,
                          input_noise_rms=args.input_noise_rms, dac_bits=args.bits,
                          adc_bits=args.bits, dac_full_scale=args.full_scale,
-                         adc_full_scale=adc_fs, input_names=meta["input_names"],
-                         output_names=meta["output_names"])
+                         adc_full_scale=adc_fs, input_names=meta.input_names,
+                         output_names=meta.output_names)
     write_data(exp.data, out)
     d = exp.data
     # A signal far below one LSB records as quantisation only: say so, it is not clipping
@@ -150,13 +150,13 @@ def run(args) -> int:
     return 0
 
 
-def _lab_full_scale(meta: dict, path) -> float:
+def _lab_full_scale(meta, path) -> float:
     """The converter range of the lab the plant file records (``trussid plant`` writes it),
     else the default testbed lab's [V]."""
     from trussid.geometry.lab import recorded_lab
     from trussid.geometry.spec import Testbed
 
-    return (recorded_lab(meta["extra"], path) or Testbed().lab).daq.full_scale
+    return (recorded_lab(meta.extra, path) or Testbed().lab).daq.full_scale
 
 
 def _adc_full_scale(text):
