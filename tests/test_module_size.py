@@ -6,18 +6,10 @@ importable from where they were (re-exports), so the limit costs no caller anyth
 
 from __future__ import annotations
 
-import pytest
-
 from tests import test_layering as layering
 
 #: Most lines a library module may have.
 MAX_LINES = 700
-
-#: Library modules outside ``fem/`` over the limit when the fem package was split; other
-#: parts of issue 31 split them. The whole-library check is expected to fail until they are.
-STILL_TOO_LONG = ("plid/datafile.py", "plid/greybox.py", "plid/recursion_kernel.py",
-                  "trussid/campaign/demo.py")
-
 
 def too_long(paths=None) -> list[str]:
     """``path: N lines`` for every library module over :data:`MAX_LINES`."""
@@ -29,11 +21,6 @@ def too_long(paths=None) -> list[str]:
     return found
 
 
-def test_no_module_of_the_fem_package_is_over_700_lines():
-    assert [x for x in too_long() if x.startswith("fem/")] == []
-
-
-@pytest.mark.xfail(strict=False, reason=f"split by other helpers of issue 31: {', '.join(STILL_TOO_LONG)}")
 def test_no_module_of_the_library_is_over_700_lines():
     assert too_long() == []
 

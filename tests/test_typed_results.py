@@ -33,6 +33,11 @@ def test_the_count_counts_string_key_reads_only():
     assert string_key_reads(src) == 3  # d["k"], e["x"], e["x"]["y"]; not the write
 
 
+def test_the_library_reads_at_most_60_percent_of_review_3s_string_keys():
+    reads = _reads()
+    assert sum(reads.values()) <= 0.6 * REVIEW_3_READS, sorted(reads.items(), key=lambda kv: -kv[1])[:10]
+
+
 def test_the_closed_loop_campaign_reads_few_string_keys():
     assert _reads()["trussid.campaign.control"] < 20
 
