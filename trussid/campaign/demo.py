@@ -83,7 +83,7 @@ from trussid.lqg.grading import LoopSettings
 from trussid.plid.datafile import with_channels, write_data
 from trussid.plid.modelfile import save_model
 from trussid.plots import save_figure
-from trussid.testbed.plant import testbed_plant
+from trussid.testbed.plant import TestbedPlant, testbed_plant
 
 
 # --------------------------------------------------------------------------- plant
@@ -319,7 +319,7 @@ def run_demo(out, settings: DemoSettings | None = None, progress=print, *,
                                     excitation_band_hz=settings.excitation_band[1])
         control = demo_section(fits["mimo"].model, fits["mimo"].K, records["mimo"][0].data,
                                truth, settings.quick, loop,
-                               tp.tbm.testbed if hasattr(tp, "tbm") else None,
+                               tp.tbm.testbed if isinstance(tp, TestbedPlant) else None,
                                progress=lambda m: say("      " + m), lab=tp.lab,
                                excitation_rms=settings.excitation_rms)
         timings["control"] = time.perf_counter() - t0
@@ -373,7 +373,7 @@ def _write_report(out, tp, records, fits, h1s, truth, settings, models, timings,
     files = write_files(out, records, fits, truth, tp.lab)
     figures = {}  # file name -> Figure, drawn again interactively in report.html
     files.figures = write_figures(out, records, fits, h1s, truth, settings, keep=figures,
-                                  unit="V/V" if hasattr(tp, "tbm") else "IO-file units")
+                                  unit="V/V" if isinstance(tp, TestbedPlant) else "IO-file units")
     if control is not None:
         for fname, fig in control[1].items():
             save_figure(fig, out / fname)
@@ -410,7 +410,7 @@ def plant_section(tp) -> PlantSummary:
     lab = tp.lab
     f = tp.modes.frequencies_hz
     acc = lab.accelerometers
-    if not hasattr(tp, "tbm"):  # a deck's plant: outputs in its own units, no conditioner
+    if not isinstance(tp, TestbedPlant):  # a deck's plant: outputs in its own units, no conditioner
         nan = float("nan")
         return PlantSummary(
             states=int(tp.discrete.nstates), inputs=list(tp.discrete.input_labels),

@@ -49,7 +49,7 @@ from trussid.plid.frf import frequency_response, h1
 from trussid.plid.modal import modal_table
 from trussid.plid.modelfile import load_model
 from trussid.testbed.labels import label_testbed_modes
-from trussid.testbed.plant import accelerometers
+from trussid.testbed.plant import TestbedPlant, accelerometers
 
 __all__ = ["figure_data", "bode_explorer", "interval_figure", "structure_viewer",
            "report_html", "write_report_html"]
@@ -353,7 +353,7 @@ def structure_viewer(tp, summary: DemoSummary, out: Path) -> dict | None:
     :class:`trussid.campaign.structure.CampaignPlant`): its FE modes, its sensors and, per
     identified model, the modes matched to FE ones (``mode_checks``: frequency, MAC; shape
     at the sensors from the model file). None when the plant carries no FE model."""
-    if hasattr(tp, "tbm"):
+    if isinstance(tp, TestbedPlant):
         fe, sensors = tp.tbm.model, accelerometers(tp.tbm)
         labels = label_testbed_modes(tp.tbm, tp.modes).labels
     else:

@@ -14,6 +14,7 @@ from trussid.campaign.plan import DemoSettings
 from trussid.campaign.structure import DEFAULT_SNR_DB
 from trussid.campaign.summary import ExperimentRow
 from trussid.plid.experiment import excitation, run_experiment, simulate
+from trussid.testbed.plant import TestbedPlant
 
 __all__ = ["Record", "conditioner_steps", "drive", "range_conditioners", "take_record",
            "sensor_noise", "run_experiments", "experiment_summary"]
@@ -88,7 +89,7 @@ def sensor_noise(tp, settings: DemoSettings):
     """Sensor noise RMS in plant output units: the testbed lab's accelerometer noise at the
     nominal conditioning gain, or for a deck :data:`trussid.campaign.structure.
     DEFAULT_SNR_DB` under each output in a noise-free trial of the all-channel record."""
-    if hasattr(tp, "tbm"):
+    if isinstance(tp, TestbedPlant):
         return tp.lab.accelerometers.noise_volts
     trial = drive(settings, tp.discrete, settings.n_identification,
                   range(tp.discrete.ninputs), settings.seed + 99)
