@@ -239,7 +239,7 @@ def test_a_design_short_of_the_asked_damping_exits_0_warns_and_says_why_per_mode
     assert len(kept) == 1 and "kept a state feedback tuned to" in kept[0]
     per_mode = [ln for ln in out.splitlines() if "% on the model (open loop" in ln]
     ctrl, meta = load_model(tmp_path / "c.npz")
-    outcomes = json.loads(str(meta["extra"]["design_json"]))["procedure"]["outcomes"]
+    outcomes = json.loads(str(meta.extra["design_json"]))["procedure"]["outcomes"]
     assert len(per_mode) == len(outcomes) >= 2
     for line, o in zip(per_mode, outcomes):
         assert f"{o['frequency_hz']:.1f} Hz: {100 * o['on_model']:.2f} %" in line
