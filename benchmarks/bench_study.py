@@ -55,6 +55,8 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 IDLE_S = 5.0  # seconds of idle cluster measured for its background CPU
 #: The Dask settings of the study's processes before issue 35 (Dask's default timers).
@@ -336,6 +338,78 @@ def measure(name, spec, scratch, skip=()) -> dict:
     return out
 
 
+#: The configurations timed in each repetition of :func:`fits_repeated`, rotated per repetition.
+REPEATED = ("serial", "workers2", "external2", "pair")
+
+
+def serial_pair(spec) -> dict:
+    """Two :func:`serial_loop` processes at once: what the machine itself gives two processes
+    running the same evaluations (no Dask), the comparator of two workers' speed-up."""
+    res = [None, None]
+
+    def one(i):
+        res[i] = serial_loop(spec, worker_env=True)
+
+    threads = [threading.Thread(target=one, args=(i,)) for i in range(2)]
+    t0 = time.perf_counter()
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    wall = time.perf_counter() - t0
+    if None in res:
+        raise RuntimeError("a serial loop of the pair failed")
+    # wall: the longer of the two loops as each timed itself (their starts, imports included,
+    # overlap within ~0.1 s; the outer wall time would add the interpreters' start)
+    return {"points": sum(r["points"] for r in res), "wall_s": max(r["wall_s"] for r in res), "outer_wall_s": wall,
+            "cpu_s_per_point": sum(r["cpu_s"] for r in res) / sum(r["points"] for r in res),
+            "load_before": res[0]["load_before"], "load_after": res[0]["load_after"]}
+
+
+def fits_repeated(spec, scratch: Path, reps: int) -> dict:
+    """The fits on the serial loop, 2 local workers, 2 ``dask worker`` processes and two
+    independent serial processes, ``reps`` times, the order rotated each time.
+
+    One pass of 30 fits lasts ~6-12 s, and on this shared machine the CPU a fit costs moves
+    by 10-30 % from one such pass to the next whatever runs it (the serial loop alone read
+    0.34-0.52 s a fit in consecutive passes, 2026-11-28): a single pass per configuration
+    compares those swings, not the configurations. Each repetition's speed-ups are taken
+    against the serial loop of the same repetition; the medians are the result.
+    """
+    rows = []
+    for k in range(reps):
+        order = REPEATED[k % len(REPEATED):] + REPEATED[:k % len(REPEATED)]
+        row = {"order": list(order)}
+        for key in order:
+            print(f"[fits x{reps}] repetition {k + 1}: {key}", flush=True)
+            if key == "serial":
+                r = serial_loop(spec, worker_env=True)
+            elif key == "pair":
+                r = serial_pair(spec)
+            else:
+                r = engine_run(spec, 2, scratch / f"rep{k}", external=key == "external2", tag=f"{key}-{k}")
+                r["eval_cpu_s_per_point"] = r["worker_threads"]["eval_s"] / r["points"]
+            row[key] = {x: r[x] for x in ("points", "wall_s", "cpu_s_per_point", "eval_cpu_s_per_point",
+                                          "load_before") if x in r}
+        s = row["serial"]
+        n = s["points"]
+        for key in ("workers2", "external2", "pair"):
+            x = row[key]
+            # the pair does the serial loop's work twice over
+            x["speedup_wall"] = s["wall_s"] / x["wall_s"] * x["points"] / n
+            x["cpu_ratio"] = x.get("eval_cpu_s_per_point", x["cpu_s_per_point"]) / s["cpu_s_per_point"]
+        row["external2"]["rate_vs_local"] = row["workers2"]["wall_s"] / row["external2"]["wall_s"]
+        rows.append(row)
+    med = {}
+    for key in ("workers2", "external2", "pair"):
+        for q in ("speedup_wall", "cpu_ratio") + (("rate_vs_local",) if key == "external2" else ()):
+            v = sorted(r[key][q] for r in rows)
+            med[f"{key}_{q}"] = {"median": float(np.median(v)), "min": v[0], "max": v[-1]}
+    v = sorted(r["serial"]["cpu_s_per_point"] for r in rows)
+    med["serial_cpu_s_per_point"] = {"median": float(np.median(v)), "min": v[0], "max": v[-1]}
+    return {"reps": reps, "rows": rows, "summary": med}
+
+
 def derive(out: dict) -> None:
     """Speed-ups and overheads from the raw figures of :func:`measure` (in place)."""
     s = out["serial"]
@@ -500,6 +574,31 @@ def markdown(results: dict, kept: str = "") -> str:
                       f"{r['cli2']['wall_s']:.1f} s, {r['cli2']['cpu_s']:.1f} s CPU (all its processes): "
                       f"**{r['cli2']['speedup_wall']:.2f}x** (load {r['cli0']['load_before'][0]:.1f} / "
                       f"{r['cli2']['load_after'][0]:.1f}).", ""]
+    if "fit_repeats" in results:
+        fr = results["fit_repeats"]
+        lines += [f"## The identification campaign, {fr['reps']} repetitions, order rotated", "",
+                  f"Each repetition times the same {fr['rows'][0]['serial']['points']} fits on the serial loop, 2 local workers, 2 `dask worker` "
+                  "processes and two independent serial processes at once (no Dask: what the machine gives two "
+                  "processes), in a rotated order; speed-ups and CPU ratios against that repetition's serial loop "
+                  "(CPU: the workers' evaluating threads per fit; the pair's whole processes).", "",
+                  "| repetition (order) | serial: wall s, CPU s/fit | 2 local: wall s, speed-up, CPU ratio | "
+                  "2 `dask worker`: wall s, speed-up, CPU ratio | two serial processes: speed-up, CPU ratio | "
+                  "load before |", "|---|---|---|---|---|---:|"]
+        for k, row in enumerate(fr["rows"]):
+            s_, w_, e_, p_ = row["serial"], row["workers2"], row["external2"], row["pair"]
+            lines.append(f"| {k + 1} ({', '.join(row['order'])}) | {s_['wall_s']:.1f}, {s_['cpu_s_per_point']:.3f} | "
+                         f"{w_['wall_s']:.1f}, {w_['speedup_wall']:.2f}x, {w_['cpu_ratio']:.3f} | "
+                         f"{e_['wall_s']:.1f}, {e_['speedup_wall']:.2f}x, {e_['cpu_ratio']:.3f} | "
+                         f"{p_['speedup_wall']:.2f}x, {p_['cpu_ratio']:.3f} | {s_['load_before'][0]:.1f} |")
+        m_ = fr["summary"]
+
+        def q(key):
+            return f"**{m_[key]['median']:.2f}** ({m_[key]['min']:.2f}-{m_[key]['max']:.2f})"
+        lines += ["", f"Medians (range): 2 local workers {q('workers2_speedup_wall')}x the serial loop, CPU per fit "
+                  f"{q('workers2_cpu_ratio')} of its; 2 `dask worker` processes {q('external2_speedup_wall')}x, "
+                  f"CPU {q('external2_cpu_ratio')}, rate {q('external2_rate_vs_local')} of the local workers'; "
+                  f"two independent serial processes {q('pair_speedup_wall')}x, CPU {q('pair_cpu_ratio')}; the "
+                  f"serial loop's CPU per fit {q('serial_cpu_s_per_point')} s.", ""]
     if results.get("guards"):
         lines += ["## Guard", ""] + [f"- {g['name']}: {g['value']:.3f} (bound {g['bound']:.2f}): "
                                      f"**{'pass' if g['ok'] else 'FAIL'}**" for g in results["guards"]] + [""]
@@ -538,6 +637,9 @@ def main(argv=None):
                                                            "designs; --quick: 6)")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--json", default=None, help="result file (default: OUT/study.json; the markdown beside it)")
+    ap.add_argument("--fit-reps", type=int, default=5,
+                    help="repetitions of the fits on serial, local, external and a pair of serial processes, "
+                         "order rotated, medians reported (default 5; 0: none)")
     ap.add_argument("--only", choices=("wall", "fits"), default=None)
     ap.add_argument("--quick", action="store_true",
                     help="CI form: the wall study on a 6 x 6 x 6 grid, 2 s of idle cluster, no fits, no 1-worker "
@@ -582,6 +684,8 @@ def main(argv=None):
             results["estimate_1e6"] = estimate(results["wall_study"])
         if args.only in (None, "fits") and not args.quick:
             results["fit_campaign"] = measure("fits", fit_spec(args.fits), scratch, ("cli",))
+            if args.fit_reps > 0:
+                results["fit_repeats"] = fits_repeated(fit_spec(args.fits), scratch / "reps", args.fit_reps)
         results["guards"] = guards(results, args.quick)
         if args.quick and not all(g["ok"] for g in results["guards"]):
             # 216 designs in tasks of ~50 on a shared CI machine: another job's burst lands on
