@@ -43,3 +43,46 @@ def test_the_quick_form_allows_more_for_a_small_study_on_a_busy_machine():
     b.derive(res["wall_study"])
     (g,) = b.guards(res, quick=True)
     assert g["ok"] and g["bound"] == 1 + b.ALLOWED_QUICK
+
+
+def test_repeated_fits_take_each_speed_up_against_the_same_repetitions_serial_loop(monkeypatch, tmp_path):
+    """Five rotated repetitions; a repetition on a slow spell (every run 1.5x slower) leaves
+    the medians where the others put them, and the pair of serial processes, which does the
+    work twice over, counts it."""
+    b = _bench()
+    slow = iter([1.0, 1.0, 1.0, 1.0, 1.5] * 4)
+    spell = {}
+
+    def factor(k):
+        if k not in spell:
+            spell[k] = next(slow)
+        return spell[k]
+
+    calls = []
+
+    def serial_loop(spec, worker_env):
+        calls.append("serial")
+        f = factor(len([c for c in calls if c == "serial"]))
+        return {"points": 30, "wall_s": 12.0 * f, "cpu_s_per_point": 0.4 * f, "load_before": [1.0]}
+
+    def serial_pair(spec):
+        calls.append("pair")
+        return {"points": 60, "wall_s": 13.0, "cpu_s_per_point": 0.43, "load_before": [1.0]}
+
+    def engine_run(spec, workers, scratch, external=False, tag=""):
+        calls.append("ext" if external else "loc")
+        wall = 6.5 if external else 6.0
+        return {"points": 30, "wall_s": wall, "cpu_s_per_point": 0.41,
+                "worker_threads": {"eval_s": 30 * 0.4}, "load_before": [1.0]}
+
+    monkeypatch.setattr(b, "serial_loop", serial_loop)
+    monkeypatch.setattr(b, "serial_pair", serial_pair)
+    monkeypatch.setattr(b, "engine_run", engine_run)
+    out = b.fits_repeated(None, tmp_path, 5)
+    assert [r["order"][0] for r in out["rows"]] == ["serial", "workers2", "external2", "pair", "serial"]
+    assert out["rows"][0]["workers2"]["speedup_wall"] == 12.0 / 6.0
+    assert out["rows"][0]["pair"]["speedup_wall"] == 12.0 / 13.0 * 2
+    m = out["summary"]
+    assert m["workers2_speedup_wall"]["median"] == 2.0 and m["workers2_speedup_wall"]["max"] == 3.0
+    assert m["external2_rate_vs_local"]["median"] == 6.0 / 6.5
+    assert m["workers2_cpu_ratio"]["median"] == 1.0
