@@ -13,7 +13,9 @@ The posterior covariance carries the pass's noise model (``R`` estimated from th
 simulation error) and its parameter prior, so it describes the estimate ``identify``
 returns, shrinkage included. Measured coverage (``benchmarks/bench_uncertainty.py``,
 ``benchmarks/results/uncertainty.md``): on records of a known plant with four lightly damped
-modes at three noise levels, at the true order. The intervals cover the sampling variation
+modes at three noise levels, at the true order, seen by one force and two displacement
+sensors and by two forces and two accelerometers (feed-through, D estimated): 95-96 % for
+frequency, 93-97 % for damping (210 records each). The intervals cover the sampling variation
 of the record, not a wrong order or a plant outside the model class.
 
 No interval (NaN) is given for a pole that was reflected into the unit circle (the data did
