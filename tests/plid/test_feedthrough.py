@@ -121,3 +121,21 @@ def test_the_prior_with_d_predicts_as_n4sid_with_d_on_the_testbed(channels, orde
     _, _, _, ref, prior_db, final_db = _check_plant(G, order, 6000)
     assert prior_db >= ref - 1.0
     assert final_db >= ref - 1.0
+
+
+@pytest.mark.slow
+def test_the_demo_s_model_needs_no_n4sid_with_d_candidate_on_a_feed_through_plant(tmp_path):
+    """:func:`trussid.plid.chosen.choose_model` (what ``trussid demo`` keeps) has no "N4SID with
+    D" fallback any more: its PLID model, started from the prior with ``D``, predicts the
+    feed-through cantilever's record at least as well as N4SID's model with ``D`` less 1 dB
+    (the former candidate's criterion), and carries the direct term."""
+    from trussid.plid.chosen import choose_model
+    G = _cantilever(tmp_path)
+    u, y = _record(G, 4000)
+    skip = 1000
+    ref = _n4sid_with_d(u, y, 12, G.dt, skip)
+    ch = choose_model(u, y, 12, G.dt, block_rows=(40, 80), direct="auto")
+    assert ch.identification.provenance.direct.estimated
+    assert ch.method.startswith("PLID")
+    assert prediction_ratio_db(ch.model, u, y, K=ch.K, skip=skip).overall >= ref - 1.0
+    np.testing.assert_allclose(np.asarray(ch.model.D), np.asarray(G.D), rtol=0.05)
