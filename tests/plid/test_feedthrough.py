@@ -10,6 +10,7 @@ demo's block rows 40 and 80, its predictor chosen on the record as the demo chos
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import control
@@ -139,3 +140,49 @@ def test_the_demo_s_model_needs_no_n4sid_with_d_candidate_on_a_feed_through_plan
     assert ch.method.startswith("PLID")
     assert prediction_ratio_db(ch.model, u, y, K=ch.K, skip=skip).overall >= ref - 1.0
     np.testing.assert_allclose(np.asarray(ch.model.D), np.asarray(G.D), rtol=0.05)
+
+
+def test_a_fit_from_the_prior_with_d_that_leaves_unstable_poles_is_refitted_from_the_strictly_proper_prior(
+        tmp_path, monkeypatch):
+    """Safeguard of :func:`trussid.plid.recipe.identify`: when PLID from the prior with ``D``
+    leaves a pole outside the unit circle (made so here: the first pass's model gets one), the
+    fit from the strictly proper prior (``B, D`` refitted) runs and, being stable, is kept;
+    ``provenance.direct.start`` says why. Its model keeps the plant's direct term."""
+    import dataclasses
+
+    import trussid.plid.recipe as recipe
+    G = _cantilever(tmp_path)
+    u, y = _record(G, 3000)
+    real, calls = recipe.multipass, []
+
+    def first_unstable(*a, **k):
+        res, hist = real(*a, **k)
+        calls.append(k["prior"])
+        if len(calls) == 1:
+            A = np.asarray(res.model.A).copy()
+            A[0, :] = 0.0
+            A[0, 0] = 1.05                  # a real pole at 1.05 (among others perhaps)
+            res = dataclasses.replace(res, model=control.ss(A, res.model.B, res.model.C,
+                                                            res.model.D, res.model.dt))
+        return res, hist
+
+    monkeypatch.setattr(recipe, "multipass", first_unstable)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = identify(u, y, 12, G.dt, block_rows=[40, 80], progress=False)
+    assert len(calls) == 2 and calls[0] is not calls[1]
+    assert fit.provenance.direct.estimated
+    assert "strictly proper" in fit.provenance.direct.start
+    assert re.search(r"left \d+ pole\(s\) outside the unit circle", fit.provenance.direct.start)
+    assert np.max(np.abs(np.linalg.eigvals(np.asarray(fit.model.A)))) < 1
+    np.testing.assert_allclose(np.asarray(fit.model.D), np.asarray(G.D), rtol=0.05)
+
+
+def test_a_stable_fit_from_the_prior_with_d_is_kept(tmp_path):
+    G = _cantilever(tmp_path)
+    u, y = _record(G, 3000)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = identify(u, y, 12, G.dt, block_rows=[40, 80], progress=False)
+    assert fit.provenance.direct.start.startswith("N4SID with D")
+    assert fit.provenance.stabilised.reflected_poles == 0
