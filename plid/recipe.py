@@ -169,7 +169,7 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     prov = Provenance()
     t0 = time.perf_counter()
     use_d, test, D0 = direct is True, None, None
-    y_fit, R_given, d_start = y, R, None
+    y_fit, d_start = y, None
     if start == "subspace":
         if direct is not True:
             prior, prov.subspace = subspace_prior(u, y, order, dt, block_rows=block_rows)
@@ -178,18 +178,16 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
             test = direct_term_test(prior, u, y)
             use_d = test["direct"]
         if use_d:
-            # N4SID's own model with D, B and D refitted (plid.feedthrough): the strictly
-            # proper prior's C is biased by the feed-through, and B, D refitted with it
-            # fixed stayed 1.4-4.2 dB below N4SID-with-D in one-step prediction.
+            # N4SID's own model with D (plid.feedthrough: the strictly proper prior's C is
+            # biased by the feed-through, 1.4-4.2 dB below it in one-step prediction)
             strictly_proper = prior if direct == "auto" else None
             with_d, prov.subspace = direct_prior(u, y, order, dt, block_rows=block_rows)
             prov.subspace_seconds = time.perf_counter() - t0
-            prior, D0, y_fit, basis, R = _start_with_d(with_d, u, y, order, radius, R_given)
+            prior, D0, y_fit, basis, R = _start_with_d(with_d, u, y, order, radius, kw["R"])
             d_start = "N4SID with D (plid.feedthrough.direct_prior)"
         else:
             basis = basis_for(order, p, fs, model_frequencies(prior, order // 2, fs), radius)
-            if R is None:
-                R = noise_estimate(prior, u, y_fit)
+            R = noise_estimate(prior, u, y_fit) if R is None else R
         sched = schedule or (Pass(Q, 0.0, prior_theta_var),)
     elif start == "scratch":
         prior = None
@@ -203,29 +201,9 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     res, hist = multipass(u, y_fit, order, dt, sched, basis=basis, prior=prior, R=R, form=form,
                           progress=progress)
     if d_start and count_unstable(res.model):
-        # PLID from the prior with D left poles outside the unit circle: the recipe then
-        # judges the fit from the strictly proper prior (A, C of N4SID's D = 0 model, B and D
-        # refitted) as identify_reduced judges its candidates, a model without reflected
-        # poles first. On the force grid's 3-output record at order 54 (two shakers, three
-        # accelerometers, benchmarks/results/plid_feedthrough_demo.md) the start with D left
-        # 2 unstable poles; reflected, the via-54 reduction lost 1.5 dB of one-step
-        # prediction against the strictly proper start's stable fit.
-        n_bad = count_unstable(res.model)
-        if strictly_proper is None:
-            strictly_proper, _ = subspace_prior(u, y, order, dt, block_rows=block_rows)
-        alt_d, _, _ = output_error_fit(strictly_proper, u, y, direct=True)
-        alt = _start_with_d(alt_d, u, y, order, radius, R_given)
-        try:
-            alt_res, alt_hist = multipass(u, alt[2], order, dt, sched, basis=alt[3],
-                                          prior=alt[0], R=alt[4], form=form, progress=progress)
-        except IdentificationError:  # the alternative diverged: the first fit stands
-            alt_res = None
-        if alt_res is not None and alt_res.finite and not count_unstable(alt_res.model):
-            prior, D0, y_fit, basis, R = alt
-            res, hist = alt_res, alt_hist
-            d_start = (f"the strictly proper N4SID prior, B and D refitted: PLID from N4SID "
-                       f"with D left {n_bad} pole(s) outside the unit circle, from this "
-                       f"prior none")
+        alt = _strictly_proper_restart(u, y, order, dt, res, strictly_proper, sched, kw)
+        if alt is not None:
+            (prior, D0, y_fit, basis, R), res, hist, d_start = alt
     prov.passes = hist
     # wall and CPU seconds of the PLID recursion alone (the CPU figure is the one that
     # stays meaningful on a shared, loaded machine)
@@ -243,8 +221,7 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         test = direct_term_test(model, u, y)
         use_d = test["direct"]
     model, use_d, D_std = with_direct_term(model, u, y, use_d, stable, D0)
-    prov.direct = _direct_info(direct, use_d, test, model, D_std)
-    prov.direct.start = d_start
+    prov.direct = _direct_info(direct, use_d, test, model, D_std, d_start)
     K, prov.predictor = _best_gain(model, u, y, R, {"estimator": res.K})
     if predictor == "pem":
         K, prov.predictor = pem_gain(model, u, y, K, prov.predictor)
@@ -264,6 +241,35 @@ def _check_predictor(predictor) -> None:
 
 
 
+def _strictly_proper_restart(u, y, order, dt, res, strictly_proper, sched, kw):
+    """PLID from the prior with D left poles outside the unit circle (``res``): the fit from
+    the strictly proper prior (A, C of N4SID's D = 0 model, B and D refitted), judged as
+    :func:`trussid.plid.reduced.identify_reduced` judges its candidates, a model without
+    reflected poles first. ``(start, result, passes, why)`` of that fit when it is stable,
+    else None (the first fit stands).
+
+    On the force grid's 3-output record at order 54 (two shakers, three accelerometers,
+    ``benchmarks/results/plid_feedthrough_demo.md``) the start with D left 2 unstable poles;
+    reflected, the via-54 reduction lost 1.5 dB of one-step prediction against the strictly
+    proper start's stable fit.
+    """
+    n_bad = count_unstable(res.model)
+    if strictly_proper is None:
+        strictly_proper, _ = subspace_prior(u, y, order, dt, block_rows=kw["block_rows"])
+    alt_d, _, _ = output_error_fit(strictly_proper, u, y, direct=True)
+    alt = _start_with_d(alt_d, u, y, order, kw["radius"], kw["R"])
+    try:
+        alt_res, alt_hist = multipass(u, alt[2], order, dt, sched, basis=alt[3], prior=alt[0],
+                                      R=alt[4], form=kw["form"], progress=kw["progress"])
+    except IdentificationError:  # the alternative diverged: the first fit stands
+        return None
+    if not alt_res.finite or count_unstable(alt_res.model):
+        return None
+    why = (f"the strictly proper N4SID prior, B and D refitted: PLID from N4SID with D left "
+           f"{n_bad} pole(s) outside the unit circle, from this prior none")
+    return alt, alt_res, alt_hist, why
+
+
 def _start_with_d(with_d, u, y, order, radius, R):
     """``(prior, D0, y_fit, basis, R)`` of a PLID pass from a prior with D: ``D0 u`` is taken
     off the outputs, so PLID sees strictly proper data from the prior's strictly proper
@@ -279,13 +285,14 @@ def _start_with_d(with_d, u, y, order, radius, R):
     return prior, D0, y_fit, basis, R
 
 
-def _direct_info(mode, used, test, model, D_std) -> DirectTerm:
+def _direct_info(mode, used, test, model, D_std, start=None) -> DirectTerm:
     return DirectTerm(mode=mode, estimated=bool(used),
                       test=None if test is None else DirectTermTest(
                           test["held_out_nmse"]["without"], test["held_out_nmse"]["with"],
                           test["margin"], test["folds"]),
                       D=np.asarray(model.D, float).tolist(),
-                      D_std=None if D_std is None else np.asarray(D_std).tolist())
+                      D_std=None if D_std is None else np.asarray(D_std).tolist(),
+                      start=start)
 
 
 def _best_gain(model, u, y, R, own):
