@@ -24,7 +24,7 @@ import numpy as np
 from trussid.plid._validate import as_2d
 from trussid.plid.errors import IdentificationError
 from trussid.plid.stability import stabilise
-from trussid.plid.subspace import SubspaceChoice, n4sid, output_error_fit
+from trussid.plid.subspace import SubspaceChoice, cached_n4sid, output_error_fit
 
 __all__ = ["direct_prior", "DEFAULT_BLOCK_ROWS"]
 
@@ -33,7 +33,8 @@ __all__ = ["direct_prior", "DEFAULT_BLOCK_ROWS"]
 DEFAULT_BLOCK_ROWS = (20, 30, 40, 60, 80)
 
 
-def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None = 1):
+def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None = 1,
+                 fits: dict | None = None):
     """An order-``n`` prior with a direct term: N4SID with ``D``, ``B, D`` refitted.
 
     Parameters
@@ -53,6 +54,9 @@ def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None 
         :func:`trussid.plid.subspace.subspace_prior` does).
     patience : int or None
         See ``block_rows`` (None: try them all). Given ``block_rows`` are all tried.
+    fits : dict, optional
+        N4SID runs on the same data by block rows, shared with
+        :func:`trussid.plid.subspace.subspace_prior` (its ``fits``).
 
     Returns
     -------
@@ -94,7 +98,7 @@ def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None 
     for i in np.atleast_1d(block_rows):
         if not given and patience is not None and worse >= patience:
             break
-        model = n4sid(u, y, n, int(i), dt).with_d
+        model = cached_n4sid(u, y, n, int(i), dt, fits).with_d
         if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
             model = stabilise(model).model
         model, ysim, _ = output_error_fit(model, u, y, direct=True)

@@ -169,10 +169,10 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     prov = Provenance()
     t0 = time.perf_counter()
     use_d, test, D0 = direct is True, None, None
-    y_fit, d_start = y, None
+    y_fit, d_start, fits = y, None, {}  # fits: N4SID runs shared by the two priors
     if start == "subspace":
         if direct is not True:
-            prior, prov.subspace = subspace_prior(u, y, order, dt, block_rows=block_rows)
+            prior, prov.subspace = subspace_prior(u, y, order, dt, block_rows, fits=fits)
             prov.subspace_seconds = time.perf_counter() - t0
         if direct == "auto":
             test = direct_term_test(prior, u, y)
@@ -180,8 +180,8 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         if use_d:
             # N4SID's own model with D (plid.feedthrough: the strictly proper prior's C is
             # biased by the feed-through, 1.4-4.2 dB below it in one-step prediction)
-            strictly_proper = prior if direct == "auto" else None
-            with_d, prov.subspace = direct_prior(u, y, order, dt, block_rows=block_rows)
+            proper = prior if direct == "auto" else None  # the strictly proper prior
+            with_d, prov.subspace = direct_prior(u, y, order, dt, block_rows, fits=fits)
             prov.subspace_seconds = time.perf_counter() - t0
             prior, D0, y_fit, basis, R = _start_with_d(with_d, u, y, order, radius, kw["R"])
             d_start = "N4SID with D (plid.feedthrough.direct_prior)"
@@ -201,7 +201,7 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     res, hist = multipass(u, y_fit, order, dt, sched, basis=basis, prior=prior, R=R, form=form,
                           progress=progress)
     if d_start and count_unstable(res.model):
-        alt = _strictly_proper_restart(u, y, order, dt, res, strictly_proper, sched, kw)
+        alt = _strictly_proper_restart(u, y, order, dt, res, proper, sched, dict(kw, fits=fits))
         if alt is not None:
             (prior, D0, y_fit, basis, R), res, hist, d_start = alt
     prov.passes = hist
@@ -255,7 +255,7 @@ def _strictly_proper_restart(u, y, order, dt, res, strictly_proper, sched, kw):
     """
     n_bad = count_unstable(res.model)
     if strictly_proper is None:
-        strictly_proper, _ = subspace_prior(u, y, order, dt, block_rows=kw["block_rows"])
+        strictly_proper, _ = subspace_prior(u, y, order, dt, kw["block_rows"], fits=kw["fits"])
     alt_d, _, _ = output_error_fit(strictly_proper, u, y, direct=True)
     alt = _start_with_d(alt_d, u, y, order, kw["radius"], kw["R"])
     try:
