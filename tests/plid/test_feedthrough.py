@@ -5,7 +5,11 @@ within 1 dB of N4SID's own model with ``D`` on the same record, and so is
 
 The comparator is :func:`trussid.plid.subspace.n4sid`'s least squares with ``D`` (the
 algorithm of the ``nfoursid`` package, tested against it in ``test_subspace.py``), at the
-demo's block rows 40 and 80, its predictor chosen on the record as the demo chose it.
+demo's block rows 40 and 80, its predictor chosen on the record as the demo chose it. Three
+plants: a cantilever of this file (fast tier) and the testbed's structure as SIMO and MIMO
+(slow). Where PLID from the prior with ``D`` leaves unstable poles, ``identify`` falls back on
+the strictly proper start and says so (the force grid's MIMO record,
+``benchmarks/results/plid_feedthrough_demo.md``).
 """
 
 from __future__ import annotations
