@@ -80,6 +80,10 @@ BENCHMARKS = {
     "study_scale": (["bench_study_scale.py", "--json", "{json}"],
                     ["bench_study_scale.py", "--quick", "--json", "{json}"]),
     "threads": (["bench_threads.py"], ["bench_threads.py", "--repeats", "1", "--out", "{out}/threads.md"]),
+    # the PLID prior with D against N4SID with D on three feed-through plants (issue 34)
+    "feedthrough": (["bench_feedthrough.py", "--json", "{json}", "--out",
+                     "benchmarks/results/plid_feedthrough.md"],
+                    ["bench_feedthrough.py", "--quick", "--json", "{json}"]),
     "uncertainty": (["bench_uncertainty.py"],
                     ["bench_uncertainty.py", "--records", "2", "--out", "{out}/uncertainty"]),
     # Not a measurement: the README's tables from the results; the quick run checks that the

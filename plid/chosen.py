@@ -1,21 +1,22 @@
 """The reduced-order recipe's winner made ready for a report: :func:`choose_model`.
 
 :func:`trussid.plid.reduced.identify_reduced` returns the candidate with the best one-step
-prediction on the identification record. A report (``trussid demo``) needs three things more,
+prediction on the identification record. A report (``trussid demo``) needs two things more,
 each an identification step and so done here, not by the report:
 
 - a model that can be simulated: when no candidate is stable (none was measured on the
   testbed), the poles outside the unit circle are reflected in
   (:func:`trussid.plid.stability.stabilise` keeps the magnitude response) and the predictor is
   chosen afresh;
-- with a direct term asked for, the subspace fit with D as one more candidate: the recipe's
-  N4SID prior is strictly proper (D = 0), so on a plant with a large feed-through
-  (accelerometers on a bare structure) PLID can stay far from the subspace fit with D; it is
-  judged as the recipe judges its own candidates, by the one-step prediction on the
-  identification record;
 - the parameter history of the winning PLID pass (for a convergence plot): when the recipe
   kept none, its last pass is run again with one (same basis, prior and settings, so the
   same estimate).
+
+A direct term needs nothing here: :func:`trussid.plid.recipe.identify` starts from N4SID's own
+model with ``D`` when the data show a feed-through (:mod:`trussid.plid.feedthrough`), so the
+"N4SID with D" candidate this module once set against PLID's winner is gone (issue 34: on
+three feed-through plants the prior with ``D`` predicts within 1 dB of N4SID-with-D,
+``tests/plid/test_feedthrough.py``).
 """
 
 from __future__ import annotations
@@ -28,50 +29,14 @@ import numpy as np
 
 from trussid.plid.estimator import PLID, PLIDWarning
 from trussid.plid.frontend import fit_model
-from trussid.plid.metrics import choose_predictor, prediction_ratio_db
+from trussid.plid.metrics import choose_predictor
 from trussid.plid.passes import PassRecord
 from trussid.plid.provenance import Identification, Stabilised
 from trussid.plid.reduced import default_via
 from trussid.plid.stability import stabilise
-from trussid.plid.subspace import n4sid
 from trussid.plid.uncertainty import mode_intervals
 
-__all__ = ["SubspaceWithD", "WithDirectTerm", "ChosenModel", "choose_model",
-           "subspace_with_d"]
-
-
-@dataclass(frozen=True)
-class SubspaceWithD:
-    """The best stable N4SID model with a direct term (:func:`subspace_with_d`).
-
-    Attributes
-    ----------
-    model : control.StateSpace
-        Discrete model with its D.
-    K : array (n, p)
-        Its chosen one-step predictor gain (:func:`trussid.plid.metrics.choose_predictor`).
-    ratio_db : float
-        One-step signal-to-prediction-error ratio on the record it was fitted to [dB].
-    skip : int
-        Samples left out of that ratio (the predictor's start-up).
-    block_rows : int
-        The N4SID block rows that gave it.
-    """
-
-    model: control.StateSpace
-    K: np.ndarray
-    ratio_db: float
-    skip: int
-    block_rows: int
-
-
-@dataclass(frozen=True)
-class WithDirectTerm:
-    """Why the subspace fit with D replaced PLID's winner: the one-step ratios on the
-    identification record [dB] of both."""
-
-    subspace_with_d_db: float
-    plid_db: float
+__all__ = ["ChosenModel", "choose_model"]
 
 
 @dataclass(frozen=True)
@@ -83,7 +48,7 @@ class ChosenModel:
     identification : Identification
         The recipe's result (its ``model`` may differ from ``model`` below).
     model : control.StateSpace
-        The model kept: stable, and with D when the subspace fit with D won.
+        The model kept: stable (poles reflected in here when the recipe's winner was not).
     K : array (n, p)
         Its one-step predictor gain.
     K_source : str
@@ -97,8 +62,6 @@ class ChosenModel:
     predictor : dict
         How the recipe's predictor was chosen (:func:`trussid.plid.metrics.choose_predictor`),
         or how it was chosen afresh after stabilising here.
-    with_direct_term : WithDirectTerm or None
-        Set when the subspace fit with D replaced PLID's winner.
     theta_history : array (k, q)
         Parameter history of the winning PLID pass.
     history_index : array (k,)
@@ -115,7 +78,6 @@ class ChosenModel:
     chosen: str
     stabilised: Stabilised
     predictor: dict
-    with_direct_term: WithDirectTerm | None
     theta_history: np.ndarray
     history_index: np.ndarray
     modes: list
@@ -135,8 +97,7 @@ def choose_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     dt : float
         Sample time [s].
     block_rows : sequence of int, optional
-        Block rows of the N4SID prior (and of the subspace fit with D; default 40 and 80
-        there).
+        Block rows of the N4SID prior (default chosen by the recipe).
     via : sequence of int, optional
         Higher orders reduced to ``order``; default
         :func:`trussid.plid.reduced.default_via`.
@@ -145,8 +106,8 @@ def choose_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     log : callable, optional
         Called with one line per candidate.
     direct : {False, True, "auto"}
-        Direct term of the recipe; anything but False also sets the subspace fit with D
-        against the winner.
+        Direct term of the recipe (:func:`trussid.plid.recipe.identify`: with one, its prior
+        is N4SID's model with D).
 
     Returns
     -------
@@ -173,59 +134,11 @@ def choose_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         K, kinfo = idn.K, prov.predictor or {}
         K_source = kinfo.get("chosen", "")
     method = f"PLID ({res.form} form, {idn.start} start; {chosen})"
-    with_d = None
-    if direct is not False:
-        alt = subspace_with_d(u, y, order, dt, block_rows or (40, 80))
-        if alt is not None:
-            ours = prediction_ratio_db(model, u, y, K=K, skip=alt.skip).overall
-            if alt.ratio_db > ours:
-                with_d = WithDirectTerm(alt.ratio_db, ours)
-                model, K = alt.model, alt.K
-                K_source = "kalman (N4SID with D, chosen on the identification record)"
-                method = (f"N4SID with D (block rows {alt.block_rows}): {alt.ratio_db:.1f} dB "
-                          f"one-step on the identification record against {ours:.1f} dB for "
-                          f"PLID's {chosen}")
-                chosen = f"subspace with D, {alt.block_rows} block rows"
     hist, hidx = res.theta_history, res.history_index
     if hist.shape[0] < 2 and idn.prior is not None:
         hist, hidx = _history_of_last_pass(idn, u, y, res.model.nstates, dt)
-    return ChosenModel(idn, model, K, K_source, method, chosen, stab, kinfo, with_d, hist, hidx,
+    return ChosenModel(idn, model, K, K_source, method, chosen, stab, kinfo, hist, hidx,
                        mode_intervals(model, res.model, res.theta_cov))
-
-
-def subspace_with_d(u, y, order: int, dt: float, block_rows) -> SubspaceWithD | None:
-    """The best stable N4SID model with a direct term over ``block_rows``, by one-step
-    prediction on ``(u, y)``, or None if none is stable.
-
-    Parameters
-    ----------
-    u, y : arrays (N, m), (N, p)
-        The record.
-    order : int
-        States.
-    dt : float
-        Sample time [s].
-    block_rows : sequence of int
-        N4SID block rows to try.
-
-    Returns
-    -------
-    SubspaceWithD or None
-    """
-    best = None
-    for br in block_rows:
-        try:
-            m = n4sid(u, y, order, int(br), dt).with_d
-        except (ValueError, np.linalg.LinAlgError):
-            continue
-        if np.max(np.abs(np.linalg.eigvals(np.asarray(m.A)))) >= 1:
-            continue
-        K, _, kinfo = choose_predictor(m, u, y)
-        skip = int(kinfo.get("skip", 0))
-        r = prediction_ratio_db(m, u, y, K=K, skip=skip).overall
-        if best is None or r > best.ratio_db:
-            best = SubspaceWithD(m, K, float(r), skip, int(br))
-    return best
 
 
 def _history_of_last_pass(idn: Identification, u, y, order, dt):

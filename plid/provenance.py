@@ -61,6 +61,9 @@ class DirectTerm:
         The held-out evidence, when the data decided.
     D, D_std : list of lists
         The direct term (p x m) and its standard errors (None when not estimated).
+    start : str or None
+        With D, the prior PLID started from (:func:`trussid.plid.recipe.identify`), and
+        why when it is not N4SID's model with D.
     """
 
     mode: object
@@ -68,6 +71,7 @@ class DirectTerm:
     test: DirectTermTest | None
     D: list
     D_std: list | None
+    start: str | None = None
 
 
 @dataclass

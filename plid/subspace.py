@@ -31,7 +31,7 @@ from trussid.plid.experiment import simulate
 from trussid.plid.stability import stabilise
 
 __all__ = ["SubspaceChoice", "SubspaceFit", "n4sid", "po_moesp", "block_hankel", "refit_input_matrix",
-           "output_error_fit", "direct_term_test", "subspace_prior"]
+           "output_error_fit", "direct_term_test", "subspace_prior", "cached_n4sid"]
 
 
 @dataclass
@@ -292,8 +292,35 @@ def direct_term_test(sys, u, y, folds: int = 2, margin: float = 0.05) -> dict:
     return {"direct": bool(direct), "held_out_nmse": score, "margin": margin, "folds": folds}
 
 
+def cached_n4sid(u, y, n: int, block_rows: int, dt: float,
+                 fits: dict | None) -> SubspaceFit:
+    """:func:`n4sid`, or its run at ``block_rows`` already in ``fits`` (filled when given).
+
+    Parameters
+    ----------
+    u, y : arrays (N, m), (N, p)
+    n : int
+        Order.
+    block_rows : int
+        Block rows.
+    dt : float
+        Sample time [s].
+    fits : dict or None
+        Runs of :func:`n4sid` on these ``u, y`` at order ``n``, by block rows.
+
+    Returns
+    -------
+    SubspaceFit
+    """
+    if fits is None:
+        return n4sid(u, y, n, block_rows, dt)
+    if block_rows not in fits:
+        fits[block_rows] = n4sid(u, y, n, block_rows, dt)
+    return fits[block_rows]
+
+
 def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
-                   patience: int | None = 1):
+                   patience: int | None = 1, fits: dict | None = None):
     """A strictly proper order-``n`` prior from the data alone.
 
     Runs :func:`n4sid` for each candidate block-row count (default 20, 30, 40, 60 and 80,
@@ -304,6 +331,25 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
     one that does not improve on the best so far (``patience``): the cost of a candidate
     grows with the square of its block rows (80 block rows cost 7x what 20 do on the
     8523-sample subframe record), and the score rarely recovers after a drop.
+
+    Parameters
+    ----------
+    u, y : arrays (N, m), (N, p)
+    n : int
+        Order.
+    dt : float
+        Sample time [s].
+    block_rows : int or sequence of int, optional
+        Block rows to try (default above).
+    refit : bool
+        Refit ``B`` by output error.
+    patience : int or None
+        Candidates without improvement before the default sweep stops (None: all).
+    fits : dict, optional
+        :func:`n4sid` runs by block rows, read and filled here: a caller that also needs
+        N4SID's model with D on the same data (:func:`trussid.plid.feedthrough.direct_prior`)
+        passes the same dict, so each block-row count is factorised once (the QR is most
+        of a run's cost).
 
     Returns
     -------
@@ -332,7 +378,7 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
     for i in np.atleast_1d(block_rows):
         if not given and patience is not None and worse >= patience:
             break
-        fit = n4sid(u, y, n, int(i), dt)
+        fit = cached_n4sid(u, y, n, int(i), dt, fits)
         model = fit.zero_d
         if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
             model = stabilise(model).model

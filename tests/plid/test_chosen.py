@@ -40,7 +40,6 @@ def test_an_unstable_winner_is_reflected_in_and_its_predictor_chosen_afresh(monk
     np.testing.assert_allclose(poles, [0.5, 0.8], rtol=1e-9)
     assert ch.stabilised == Stabilised(applied=True, reflected_poles=1)
     assert ch.K_source != "" and ch.predictor["chosen"] == ch.K_source
-    assert ch.with_direct_term is None          # no direct term asked for
     assert ch.theta_history.shape == (3, 2)     # the pass's own history is kept
 
 

@@ -37,15 +37,16 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
     """Identify an order-``order`` model from one record: the one switchable call.
 
     Runs the project's identification recipe for under-modelled structures,
-    :func:`trussid.plid.reduced.identify_reduced`: the PLID recipe :func:`trussid.plid.recipe.identify`
-    (an N4SID prior with D = 0 in a rotation observer basis, refined by PLID) at ``order``
-    and at the higher orders ``via``, the latter reduced to ``order`` by input-weighted
-    balanced truncation and refined by PLID; the candidate with the best one-step
-    prediction on the identification record wins, with its predictor gain
-    (:func:`trussid.plid.metrics.choose_predictor`). Measured in
+    :func:`trussid.plid.reduced.identify_reduced`: the PLID recipe
+    :func:`trussid.plid.recipe.identify` (an N4SID prior in a rotation observer basis, refined
+    by PLID; with ``direct``, when the data show a feed-through, N4SID's model with D:
+    :mod:`trussid.plid.feedthrough`) at ``order`` and at the higher orders ``via``, the latter
+    reduced to ``order`` by input-weighted balanced truncation and refined by PLID; the
+    candidate with the best one-step prediction on the identification record wins, with its
+    predictor gain (:func:`trussid.plid.metrics.choose_predictor`). Measured in
     ``benchmarks/results/plid_thesis.md``. :func:`trussid.plid.chosen.choose_model` makes the
-    winner simulable, sets the subspace fit with D against it when ``direct`` is asked for,
-    and keeps the parameter history of the winning PLID pass for the convergence plot.
+    winner simulable and keeps the parameter history of the winning PLID pass for the
+    convergence plot.
     """
     t0 = time.perf_counter()
     ch = choose_model(u, y, order, dt, block_rows=block_rows, via=via, progress=progress,
@@ -55,7 +56,7 @@ def identify_model(u, y, order: int, dt: float, *, block_rows=None, via=None,
         recipe="trussid.plid.multipass.identify_reduced", start=idn.start,
         basis=getattr(idn.basis, "name", ""), R=np.asarray(idn.R).tolist(),
         provenance=idn.provenance, stabilised=ch.stabilised, predictor=ch.predictor,
-        chosen=ch.chosen, candidate_with_d=ch.with_direct_term)
+        chosen=ch.chosen)
     return Identified(ch.model, ch.K, ch.K_source, time.perf_counter() - t0, ch.method,
                       idn.result.innovations, ch.theta_history, ch.history_index, info,
                       ch.modes)

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 from trussid._util.jsonio import json_safe
 from trussid.geometry.lab import LabSpec
 from trussid.lqg.grading import LoopSettings
-from trussid.plid.chosen import WithDirectTerm
 from trussid.plid.provenance import Provenance, Stabilised
 
 __all__ = ["ReportProvenance", "PlantSummary", "ExperimentRow", "AuditedTrueMode",
@@ -150,8 +149,6 @@ class ModelIdentification:
         How the kept model's predictor gain was chosen.
     chosen : str
         The kept candidate's label.
-    candidate_with_d : trussid.plid.chosen.WithDirectTerm or None
-        Set when the subspace fit with D replaced PLID's winner.
     order_scan : trussid.campaign.orders.OrderChoice or None
         The order chosen from the data, when the campaign scanned orders.
     """
@@ -164,7 +161,6 @@ class ModelIdentification:
     stabilised: Stabilised
     predictor: dict
     chosen: str
-    candidate_with_d: WithDirectTerm | None = None
     order_scan: object = None
 
     @property
@@ -174,8 +170,7 @@ class ModelIdentification:
 
     def to_dict(self) -> dict:
         """The JSON form (``summary.json``'s ``identification``): the provenance's fields that
-        are set, beside the others in one flat object; ``candidate_with_d`` and
-        ``order_scan`` only when set."""
+        are set, beside the others in one flat object; ``order_scan`` only when set."""
         out = {"recipe": self.recipe, "start": self.start, "stabilised": self.stabilised,
                "basis": self.basis, "R": self.R, "predictor": self.predictor}
         out.update((k, v) for k, v in self.provenance.as_dict().items()
@@ -183,8 +178,6 @@ class ModelIdentification:
         out["stabilised"] = self.stabilised
         out["passes"] = self.provenance.passes
         out["chosen"] = self.chosen
-        if self.candidate_with_d is not None:
-            out["candidate_with_d"] = self.candidate_with_d
         if self.order_scan is not None:
             out["order_scan"] = self.order_scan
         return json_safe(out)
