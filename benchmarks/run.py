@@ -80,6 +80,7 @@ BENCHMARKS = {
     "study_scale": (["bench_study_scale.py", "--json", "{json}"],
                     ["bench_study_scale.py", "--quick", "--json", "{json}"]),
     "threads": (["bench_threads.py"], ["bench_threads.py", "--repeats", "1", "--out", "{out}/threads.md"]),
+    "closedloop": (["bench_closedloop.py"], ["bench_closedloop.py", "--quick", "--out", "{out}"]),
     "uncertainty": (["bench_uncertainty.py"],
                     ["bench_uncertainty.py", "--records", "2", "--out", "{out}/uncertainty"]),
     # Not a measurement: the README's tables from the results; the quick run checks that the
