@@ -164,6 +164,8 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     >>> print(np.round(modes.frequencies_hz, 2), np.round(100 * modes.damping, 2))
     [ 50. 120.] [2. 2.]
     """
+    # Long: the recipe's steps in order (checks, closed-loop branch, prior, passes, direct
+    # term, stabilisation, predictor), each a few lines sharing the same arrays.
     u, y = check_data(u, y, dt)
     p = y.shape[1]
     fs = 1.0 / dt

@@ -55,6 +55,7 @@ def via_arg(text, order: int, p: int, start: str):
 
 
 def add_parser(subparsers):
+    # Long: one add_argument per option, each with its help text.
     p = subparsers.add_parser(
         "identify", help="identify a state-space model from input/output data with PLID",
         description="Identify a discrete state-space model of order N from a data file "
