@@ -21,12 +21,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-sys.path.insert(0, str(ROOT / "tests" / "plid"))
+sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-import closedloop_cases as cc  # noqa: E402
 from results_io import RESULTS, finish, stamp, write_json  # noqa: E402
+from tests.plid import closedloop_cases as cc  # noqa: E402
 
 
 def _errors(model, truth):

@@ -4,20 +4,16 @@ closed-loop recipe from the command line, said in the report; misuse named in on
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from trussid.cli import main
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "plid"))
-
 
 @pytest.fixture(scope="module")
 def record(tmp_path_factory):
-    from test_closedloop import _record
+    from tests.plid.test_closedloop import _record
 
     u, y, r = _record(gain=1.0, n=4000)
     path = tmp_path_factory.mktemp("cl") / "loop.npz"

@@ -21,9 +21,7 @@ regulator designed on the truth (``control.dlqr``/``control.dlqe``) in predictor
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
-from pathlib import Path
 
 import control
 import numpy as np
@@ -92,8 +90,7 @@ def testbed_truth() -> Truth:
 def grid_truth() -> Truth:
     from trussid import fem
 
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "campaign"))
-    import structures
+    from tests.campaign import structures
 
     model, _ = structures.force_grid()
     modes = fem.solve_modes(model, n_modes=3)

@@ -128,7 +128,7 @@ def _truth_errors(model, truth):
 
 
 def _closed_loop_case(case, seed=0):
-    import closedloop_cases as cc
+    from tests.plid import closedloop_cases as cc
 
     from trussid.plid import identify
 
