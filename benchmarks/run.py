@@ -84,6 +84,7 @@ BENCHMARKS = {
     "feedthrough": (["bench_feedthrough.py", "--json", "{json}", "--out",
                      "benchmarks/results/plid_feedthrough.md"],
                     ["bench_feedthrough.py", "--quick", "--json", "{json}"]),
+    "closedloop": (["bench_closedloop.py"], ["bench_closedloop.py", "--quick", "--out", "{out}"]),
     "uncertainty": (["bench_uncertainty.py"],
                     ["bench_uncertainty.py", "--records", "2", "--out", "{out}/uncertainty"]),
     # Not a measurement: the README's tables from the results; the quick run checks that the

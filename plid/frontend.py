@@ -26,7 +26,7 @@ RECIPES = ("plain", "subspace", "scratch")
 def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
               form: str | None = None, R=None, Q: float = 0.0, passes: int = 1,
               block_rows=None, direct=None, progress: bool | None = None,
-              log=None) -> Identification:
+              log=None, closed_loop: bool = False, reference=None) -> Identification:
     """The one front end over the identification recipes (``trussid identify``, the demo).
 
     Parameters
@@ -54,6 +54,12 @@ def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
         As :func:`trussid.plid.reduced.identify_reduced` (``block_rows``: the recipes' N4SID prior).
     direct : {None, "auto", True, False}
         Direct term (:func:`trussid.plid.recipe.identify`); None: ``"auto"``. Not for the plain fit.
+    closed_loop : bool
+        A closed-loop record: :func:`trussid.plid.recipe.identify`'s closed-loop recipe
+        (subspace start only, no ``via``).
+    reference : array (N, m) or (N, 1), optional
+        Reference (dither) channel(s): closed loop when they show feedback
+        (:func:`trussid.plid.recipe.identify`).
 
     Returns
     -------
@@ -70,6 +76,9 @@ def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
     if direct is not None and start == "plain":
         raise IdentificationError("a direct term works with the subspace or scratch start, "
                                   "not plain")
+    if (closed_loop or reference is not None) and (start != "subspace" or via is not None):
+        raise IdentificationError("a closed-loop record is identified by its own recipe: "
+                                  "use the subspace start and no via")
     form = form or ("sqrt" if start == "plain" else "direct")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PLIDWarning)
@@ -88,11 +97,12 @@ def fit_model(u, y, order: int, dt: float, *, start: str = "subspace", via=None,
             idn.provenance.K_source = (idn.provenance.predictor or {}).get("chosen")
         else:
             idn = identify(u, y, order, dt, start=start, R=R, form=form, block_rows=block_rows,
-                           direct="auto" if direct is None else direct, progress=progress)
+                           direct="auto" if direct is None else direct, progress=progress,
+                           closed_loop=closed_loop, reference=reference)
             idn.provenance.K_source = (idn.provenance.predictor or {}).get("chosen")
     idn.provenance.warnings = [str(w.message) for w in caught
                                if issubclass(w.category, PLIDWarning)]
-    if not idn.result.finite:
+    if idn.result is not None and not idn.result.finite:
         raise IdentificationError(
             f"PLID ({form} form) diverged on {len(u)} samples: the estimate is not finite; "
             "try the sqrt form, a larger Q or R, or another order")

@@ -13,6 +13,7 @@ import control
 import numpy as np
 
 from trussid.plid.canonical import ObserverBasis
+from trussid.plid.closedloop import ClosedLoopFit
 from trussid.plid.estimator import PLIDResult
 from trussid.plid.subspace import SubspaceChoice
 
@@ -102,6 +103,10 @@ class Provenance:
         :func:`identify_reduced`: every candidate's row, the winner's label, the via orders.
     K_source : str or None
         Where the returned predictor gain came from (:func:`fit_model`).
+    closed_loop : trussid.plid.closedloop.ClosedLoopFit or None
+        A closed-loop record (``identify(..., closed_loop=True)`` or a reference channel
+        showing feedback): the consistent prior and refinement that replaced N4SID and
+        PLID's passes, and why.
     warnings : list of str
         The estimator's warnings (:func:`fit_model`).
     """
@@ -120,6 +125,7 @@ class Provenance:
     chosen: str | None = None
     via: list | None = None
     K_source: str | None = None
+    closed_loop: ClosedLoopFit | None = None
     warnings: list = field(default_factory=list)
 
     def as_dict(self) -> dict:
@@ -131,13 +137,14 @@ class Provenance:
 
 @dataclass
 class Identification:
-    """What :func:`identify` produced."""
+    """What :func:`identify` produced (``result`` and ``basis`` are None for a closed-loop
+    record, where no PLID pass runs: ``provenance.closed_loop`` says why)."""
 
-    result: PLIDResult
+    result: PLIDResult | None
     model: control.StateSpace
     K: np.ndarray | None          # one-step predictor gain of ``model`` (original units)
     start: str
-    basis: ObserverBasis
+    basis: ObserverBasis | None
     R: np.ndarray
     prior: control.StateSpace | None
     provenance: Provenance = field(default_factory=Provenance)

@@ -32,10 +32,12 @@ from trussid.plid._steps import (count_unstable, noise_estimate, pem_gain, refle
                                  reflected_note, with_direct_term)
 from trussid.plid._validate import as_2d
 from trussid.plid.bases import basis_for, data_frequencies, model_frequencies
+from trussid.plid.closedloop import FEEDBACK_SHARE, feedback_share, identify_closed_loop
 from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.feedthrough import direct_prior
-from trussid.plid.metrics import best_predictor, default_noise_covariances, predictor_gain
+from trussid.plid.metrics import (best_predictor, default_noise_covariances, one_step_predict,
+                                  predictor_gain)
 from trussid.plid.passes import SCRATCH_SCHEDULE, Pass, multipass
 from trussid.plid.provenance import (DirectTerm, DirectTermTest, Identification, Provenance,
                                      Stabilised)
@@ -73,7 +75,8 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
              form: str = "direct", radius: float = 0.97, block_rows=None,
              schedule=None, prior_theta_var: float = 1e-4, Q: float = 0.0,
              direct="auto", stabilise: bool = True, predictor: str = "pem",
-             progress: bool | None = None) -> Identification:
+             progress: bool | None = None, closed_loop: bool = False,
+             reference=None) -> Identification:
     """Identify an order-``order`` model: the recipe that won the benchmarks.
 
     Parameters
@@ -126,6 +129,19 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
         fit are unchanged.
     progress : bool or None
         A tqdm bar over the PLID passes (None: shown when the record is long).
+    closed_loop : bool
+        The record was taken under feedback (the input depends on past outputs). Then
+        N4SID and PLID's output-error passes are biased, and the recipe is instead
+        :func:`trussid.plid.closedloop.identify_closed_loop`: a predictor-based subspace
+        prior (PBSID) refined by the prediction error of the innovations model (the direct
+        method, consistent under feedback), ``D = 0`` (``direct`` must not be True);
+        ``start``, ``R``, ``form``, ``radius``, ``block_rows``, ``schedule``, ``Q`` and
+        ``prior_theta_var`` do not apply, and ``result`` and ``basis`` are None.
+        ``provenance.closed_loop`` records the steps.
+    reference : array (N, m) or (N, 1), optional
+        The reference (dither) channel(s) of the record: a record whose inputs the
+        reference explains less than ``1 - FEEDBACK_SHARE`` of
+        (:func:`trussid.plid.closedloop.feedback_share`) is treated as closed loop.
 
     Returns
     -------
@@ -152,6 +168,8 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     >>> print(np.round(modes.frequencies_hz, 2), np.round(100 * modes.damping, 2))
     [ 50. 120.] [2. 2.]
     """
+    # Long: the recipe's steps in order (checks, closed-loop branch, prior, passes, direct
+    # term, stabilisation, predictor), each a few lines sharing the same arrays.
     u, y = check_data(u, y, dt)
     p = y.shape[1]
     fs = 1.0 / dt
@@ -160,6 +178,14 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     if int(order) != order or order < 1:
         raise IdentificationError(f"order must be a positive integer, got {order!r}")
     _check_predictor(predictor)
+    share, decided_by = None, "told"
+    if reference is not None:
+        share = feedback_share(u, reference)
+        if not closed_loop and np.any(share > FEEDBACK_SHARE):
+            closed_loop, decided_by = True, "reference channel"
+    if closed_loop:
+        return _identify_closed_loop(u, y, int(order), dt, direct, stabilise, decided_by,
+                                     share)
     kw = dict(start=start, R=R, form=form, radius=radius, block_rows=block_rows,
               schedule=schedule, prior_theta_var=prior_theta_var, Q=Q, direct=direct,
               stabilise=stabilise, predictor=predictor, progress=progress)
@@ -283,6 +309,32 @@ def _start_with_d(with_d, u, y, order, radius, R):
     if R is None:
         R = noise_estimate(prior, u, y_fit)
     return prior, D0, y_fit, basis, R
+
+
+def _identify_closed_loop(u, y, order, dt, direct, stabilise, decided_by, share):
+    """:func:`trussid.plid.closedloop.identify_closed_loop`, stabilised, with its provenance."""
+    if direct is True:
+        raise IdentificationError("closed_loop: the closed-loop recipe estimates no direct "
+                                  "term (D = 0); use direct='auto' or False")
+    t0 = time.perf_counter()
+    model, K, prior, info = identify_closed_loop(u, y, order, dt, decided_by=decided_by,
+                                                 share=share)
+    prov = Provenance(closed_loop=info)
+    n_unstable = count_unstable(model)
+    if stabilise and n_unstable:
+        model = reflect_unstable(model)
+        warnings.warn(PLIDWarning(reflected_note(n_unstable)), stacklevel=3)
+        # the refined gain belonged to the unreflected model: refit it for this one
+        K, prov.predictor = _best_gain(model, u, y, 1e-4, {})
+        K, prov.predictor = pem_gain(model, u, y, K, prov.predictor)
+    else:
+        prov.predictor = {"chosen": "prediction error (closed loop, with the model)"}
+    prov.stabilised = Stabilised(bool(stabilise and n_unstable), n_unstable if stabilise else 0)
+    prov.direct = _direct_info(direct, False, None, model, None)
+    prov.seconds = time.perf_counter() - t0
+    e = y - one_step_predict(model, u, y, K=K)
+    R = np.mean(e ** 2, axis=0) / np.mean(y ** 2, axis=0)
+    return Identification(None, model, K, "closed-loop", None, R, prior, prov)
 
 
 def _direct_info(mode, used, test, model, D_std, start=None) -> DirectTerm:

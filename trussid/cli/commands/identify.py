@@ -55,6 +55,7 @@ def via_arg(text, order: int, p: int, start: str):
 
 
 def add_parser(subparsers):
+    # Long: one add_argument per option, each with its help text.
     p = subparsers.add_parser(
         "identify", help="identify a state-space model from input/output data with PLID",
         description="Identify a discrete state-space model of order N from a data file "
@@ -126,6 +127,16 @@ def add_parser(subparsers):
                    "scratch) decides on the data by a held-out output-error test, and the "
                    "report says what it chose; yes / no force it (with --via: for every "
                    "candidate); --start plain has none")
+    p.add_argument("--closed-loop", action="store_true",
+                   help="the record was taken under feedback (the input depends on past "
+                   "outputs): identify with a predictor-based subspace prior (PBSID) refined "
+                   "by the innovations model's prediction error (the direct method), both "
+                   "consistent under feedback, instead of N4SID and PLID's output-error pass "
+                   "(which are biased there); D = 0; --start subspace, no --via")
+    p.add_argument("--reference", metavar="NAME", default=None,
+                   help="a reference (dither) channel of the data file: the record is "
+                   "treated as closed loop when the reference explains less than 90 %% of "
+                   "the inputs' power (plid.closedloop.feedback_share)")
     p.add_argument("--json", action="store_true",
                    help="print poles and the prediction ratio as JSON")
     p.set_defaults(func=run)
@@ -245,11 +256,25 @@ def run(args) -> int:
     check_enough_samples(data, n * (m + p), f"an order-{n} model with {m} inputs and "
                          f"{p} outputs")
     via = via_arg(getattr(args, "via", None), n, p, start)
+    closed_loop = bool(getattr(args, "closed_loop", False))
+    reference = None
+    if getattr(args, "reference", None) is not None:
+        reference = read_data(args.data, inputs=names_arg([args.reference]),
+                              outputs=names_arg(args.outputs), fs=args.fs).u
+    if (closed_loop or reference is not None) and (start != "subspace" or via is not None):
+        raise DataError("--closed-loop and --reference work with --start subspace and no "
+                        "--via")
     t0 = time.perf_counter()
     ident = fit_model(data.u, data.y, n, data.dt, start=start, via=via, form=args.form,
                       R=args.R, Q=args.Q, passes=args.passes, direct=direct,
                       progress=None if sys.stderr.isatty() else False,
-                      log=lambda msg: print(f"  {msg}", file=sys.stderr))
+                      log=lambda msg: print(f"  {msg}", file=sys.stderr),
+                      closed_loop=closed_loop, reference=reference)
+    form = ident.result.form if ident.result is not None else None
+    if ident.result is not None:
+        start_label = start
+    else:
+        start_label = "closed-loop (PBSID prior, prediction-error refinement)"
     seconds = time.perf_counter() - t0
     model, K = ident.model, ident.K
     skip = prediction_burn_in(model, K, data.n_samples)
@@ -265,12 +290,13 @@ def run(args) -> int:
     prov = ident.provenance
     # complex pairs with 95 % intervals (plid.uncertainty: first-order propagation of the
     # PLID pass's posterior parameter covariance)
-    modes = mode_intervals(model, ident.result.model, ident.result.theta_cov)
+    modes = mode_intervals(model, *((ident.result.model, ident.result.theta_cov)
+                                    if ident.result is not None else (None, None)))
     warned = prov.warnings + ([stability_note] if stability_note else [])
     summary = {
         "model": out, "data": str(args.data), "order": n, "inputs": data.input_names,
         "outputs": data.output_names, "samples": data.n_samples, "fs": data.fs,
-        "start": start, "form": ident.result.form,
+        "start": start_label, "form": form,
         "passes": len(prov.passes), "Q": [ps.Q for ps in prov.passes],
         "R": [float(r) for r in np.atleast_1d(ident.R)],
         "seconds": seconds, "K_source": prov.K_source,
@@ -286,11 +312,13 @@ def run(args) -> int:
     }
     if prov.direct is not None:
         summary["direct_term"] = prov.direct
+    if prov.closed_loop is not None:
+        summary["closed_loop"] = prov.closed_loop
     if prov.structure is not None:
         summary["structure"] = prov.structure
     if via is not None:
         summary.update(via=list(prov.via), chosen=prov.chosen, candidates=prov.candidates)
-    modal_lines = modal_outputs(args, data, model, start, ident.result.form, summary)
+    modal_lines = modal_outputs(args, data, model, start, form, summary)
     for note in warned:
         print(f"trussid identify: warning: {note}", file=sys.stderr)
     if args.json:
@@ -298,7 +326,7 @@ def run(args) -> int:
         return 0
     print(f"identified an order-{n} model ({m} input(s), {p} output(s)) from "
           f"{data.n_samples} samples at {data.fs:g} Hz in {seconds:.2f} s "
-          f"({ident.result.form} form, {start} start"
+          f"({form + ' form, ' if form else ''}{start_label} start"
           f"{'; kept ' + prov.chosen if via is not None else ''})")
     print(f"wrote {out}")
     _print_fit(prov, data.output_names, ratio, modes, zip(freq, damp))
@@ -319,6 +347,10 @@ def _print_fit(prov, outputs, ratio, modes, poles) -> None:
                f"{t.held_out_nmse_without:.3g} without)" if t else "")
         print(f"direct term D: {'estimated' if d.estimated else 'none (D = 0)'}"
               f"{' (' + str(d.mode) + ')' if d.mode != 'auto' else ''}{why}")
+    if prov.closed_loop is not None:
+        c = prov.closed_loop
+        print(f"closed loop ({c.decided_by}): PBSID prior ({c.prior.past} lags), refined by "
+              f"{c.refinement}; PLID pass: {c.plid_passes}")
     print(f"predictor gain K: {prov.K_source}")
     per = ", ".join(f"{name} {v:.2f}" for name, v in zip(outputs, ratio.per_output))
     print(f"one-step signal-to-prediction-error ratio on the identification data (in-sample): "
