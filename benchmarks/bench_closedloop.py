@@ -79,14 +79,15 @@ def run(quick: bool, out: Path) -> dict:
                 print(rows[-1], flush=True)
     cols = ["structure", "seed", "samples", "dither/u RMS", "method", "worst freq error %",
             "worst damping error %", "CPU s", "error"]
-    return {"tables": {"closedloop": {"columns": cols, "rows": rows,
+    # "results", not "tables": a results file's "tables" are README tables (benchmarks/readme_tables.py)
+    return {"results": {"closedloop": {"columns": cols, "rows": rows,
                                       "notes": "target: frequency within 1 %, damping within "
                                                "20 % of the truth (all of the truth's modes)"}}}
 
 
 def _markdown(payload: dict) -> str:
     st = payload["stamp"]
-    t = payload["tables"]["closedloop"]
+    t = payload["results"]["closedloop"]
     lines = ["# Closed-loop identification (issue 34, acceptance 3)", "",
              f"Commit {st['commit']}, {st['date_utc']}, {st['machine']['cpu']} "
              f"({st['machine']['nproc']} cores), load {st['loadavg_start']} -> "
