@@ -22,16 +22,10 @@ from __future__ import annotations
 import numpy as np
 
 from trussid.plid._validate import as_2d
-from trussid.plid.errors import IdentificationError
 from trussid.plid.stability import stabilise
-from trussid.plid.subspace import SubspaceChoice, cached_n4sid, output_error_fit
+from trussid.plid.subspace import SubspaceChoice, cached_n4sid, default_block_rows, output_error_fit
 
-__all__ = ["direct_prior", "DEFAULT_BLOCK_ROWS"]
-
-#: Block rows tried by :func:`direct_prior` by default (those of
-#: :func:`trussid.plid.subspace.subspace_prior`).
-DEFAULT_BLOCK_ROWS = (20, 30, 40, 60, 80)
-
+__all__ = ["direct_prior"]
 
 def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None = 1,
                  fits: dict | None = None):
@@ -48,10 +42,10 @@ def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None 
     dt : float
         Sample time [s].
     block_rows : int or sequence of int, optional
-        N4SID block rows to try (default :data:`DEFAULT_BLOCK_ROWS`, at least ``n / p + 1``,
-        those the record is long enough for, swept in increasing order and stopped after
-        ``patience`` candidates that do not improve, as
-        :func:`trussid.plid.subspace.subspace_prior` does).
+        N4SID block rows to try (default
+        :func:`trussid.plid.subspace.default_block_rows`), swept in increasing order and
+        stopped after ``patience`` candidates that do not improve, as
+        :func:`trussid.plid.subspace.subspace_prior` does.
     patience : int or None
         See ``block_rows`` (None: try them all). Given ``block_rows`` are all tried.
     fits : dict, optional
@@ -87,13 +81,7 @@ def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None 
     p, m = y.shape[1], u.shape[1]
     given = block_rows is not None
     if not given:
-        lo = -(-n // p) + 1
-        cand = {max(lo, i) for i in DEFAULT_BLOCK_ROWS}
-        block_rows = sorted(i for i in cand if u.shape[0] - 2 * i >= 2 * i * (m + p))
-        if not block_rows:
-            raise IdentificationError(
-                f"{u.shape[0]} samples are too few for a subspace estimate of order {n} "
-                f"(at least {2 * lo * (m + p + 1)} needed); identify from scratch instead")
+        block_rows = default_block_rows(u.shape[0], n, m, p)
     best, scores, worse = None, {}, 0
     for i in np.atleast_1d(block_rows):
         if not given and patience is not None and worse >= patience:

@@ -31,7 +31,8 @@ from trussid.plid.experiment import simulate
 from trussid.plid.stability import stabilise
 
 __all__ = ["SubspaceChoice", "SubspaceFit", "n4sid", "po_moesp", "block_hankel", "refit_input_matrix",
-           "output_error_fit", "direct_term_test", "subspace_prior", "cached_n4sid"]
+           "output_error_fit", "direct_term_test", "subspace_prior", "cached_n4sid",
+           "default_block_rows", "DEFAULT_BLOCK_ROWS"]
 
 
 @dataclass
@@ -292,6 +293,29 @@ def direct_term_test(sys, u, y, folds: int = 2, margin: float = 0.05) -> dict:
     return {"direct": bool(direct), "held_out_nmse": score, "margin": margin, "folds": folds}
 
 
+#: N4SID block rows the priors try by default (:func:`default_block_rows`).
+DEFAULT_BLOCK_ROWS = (20, 30, 40, 60, 80)
+
+
+def default_block_rows(n_samples: int, n: int, m: int, p: int) -> list[int]:
+    """Block rows a prior tries for an order-``n`` model of ``m`` inputs and ``p`` outputs
+    from ``n_samples`` samples: :data:`DEFAULT_BLOCK_ROWS`, at least ``n / p + 1``, those
+    whose Hankel matrices have more columns than rows; increasing.
+
+    N4SID accuracy on lightly damped plants depends strongly on the block rows (case (b) of
+    the benchmark: 2.7 dB at 30, 0.12 dB at 40, 0.018 dB at 80), so several are tried.
+    Raises IdentificationError when the record is too short for any.
+    """
+    lo = -(-n // p) + 1
+    cand = {max(lo, i) for i in DEFAULT_BLOCK_ROWS}
+    rows = sorted(i for i in cand if n_samples - 2 * i >= 2 * i * (m + p))
+    if not rows:
+        raise IdentificationError(
+            f"{n_samples} samples are too few for a subspace estimate of order {n} "
+            f"(at least {2 * lo * (m + p + 1)} needed); identify from scratch instead")
+    return rows
+
+
 def cached_n4sid(u, y, n: int, block_rows: int, dt: float,
                  fits: dict | None) -> SubspaceFit:
     """:func:`n4sid`, or its run at ``block_rows`` already in ``fits`` (filled when given).
@@ -364,16 +388,7 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
     m = u.shape[1]
     given = block_rows is not None
     if block_rows is None:
-        # N4SID accuracy on lightly damped plants depends strongly on the block rows (case
-        # (b) of the benchmark: 2.7 dB at 30, 0.12 dB at 40, 0.018 dB at 80), so several
-        # are tried; the Hankel matrices need more columns than rows.
-        lo = -(-n // p) + 1
-        cand = {max(lo, i) for i in (20, 30, 40, 60, 80)}
-        block_rows = sorted(i for i in cand if u.shape[0] - 2 * i >= 2 * i * (m + p))
-        if not block_rows:
-            raise IdentificationError(
-                f"{u.shape[0]} samples are too few for a subspace estimate of order {n} "
-                f"(at least {2 * lo * (m + p + 1)} needed); identify from scratch instead")
+        block_rows = default_block_rows(u.shape[0], n, m, p)
     best, scores, worse = None, {}, 0
     for i in np.atleast_1d(block_rows):
         if not given and patience is not None and worse >= patience:
