@@ -31,7 +31,7 @@ Usage::
 
     python benchmarks/bench_realdata.py                     # all sets, all methods
     python benchmarks/bench_realdata.py --sets robotarm --methods PLID,N4SID
-    python benchmarks/bench_realdata.py --profile OUT.txt   # cProfile of one subframe fit
+    python benchmarks/bench_realdata.py --profile OUT.txt [--profile-set flutter]  # cProfile of one fit
 
 SIPPY (``sippy-unipi``) is in the ``bench`` extra. Single-threaded BLAS.
 """
@@ -526,8 +526,15 @@ def cli_check(name, res, log=print):
     return out
 
 
-def profile_subframe(out, reference_recursion=False):
-    """cProfile of one PLID fit on the subframe set at order 30 (after a warm-up); with
+#: the order and nfoursid block rows each set is profiled at (PLID's and N4SID's chosen
+#: ones in ``benchmarks/results/realdata_lean.md``)
+PROFILE_AT = {"robotarm": (8, 20), "flutter": (8, 10), "cdplayer": (10, 10),
+              "subframe": (30, 40)}
+
+
+def profile_set(out, name="subframe", reference_recursion=False):
+    """cProfile of one PLID fit on set ``name`` at its order of :data:`PROFILE_AT` (after a
+    warm-up), beside nfoursid's CPU seconds in the same process; with
     ``reference_recursion`` the recursion runs the reference numpy steps instead of the
     compiled kernels (the "before" of issue 34's profile pair)."""
     import cProfile
@@ -539,36 +546,42 @@ def profile_subframe(out, reference_recursion=False):
     if reference_recursion:
         recursion_kernel.HAVE_NUMBA = False
 
-    u, y = load("subframe")
+    order, rows = PROFILE_AT[name]
+    dt = DATASETS[name]["dt"]
+    u, y = load(name)
     (ui, yi), _ = split(u, y)
-    identify(ui[:600], yi[:600], 6, 1 / 1024)
+    identify(ui[:600], yi[:600], 2 * yi.shape[1], dt)
+    reps = 2 if name == "subframe" else 5
     # N4SID's CPU seconds in the same process (the comparator of acceptance 1)
     n4 = []
-    for _ in range(2):
+    for _ in range(reps):
         c0 = time.process_time()
-        fit_n4sid(ui, yi, 30, 1 / 1024, 40)
+        fit_n4sid(ui, yi, order, dt, rows)
         n4.append(time.process_time() - c0)
     cpu_plain = []
-    for _ in range(2):
+    for _ in range(reps):
         c0 = time.process_time()
-        identify(ui, yi, 30, 1 / 1024)
+        identify(ui, yi, order, dt)
         cpu_plain.append(time.process_time() - c0)
     # CPU-time profile: on a shared machine wall time mostly measures waiting for a core
     pr = cProfile.Profile(time.process_time)
     t0, c0 = time.perf_counter(), time.process_time()
     pr.enable()
-    identify(ui, yi, 30, 1 / 1024)
+    identify(ui, yi, order, dt)
     pr.disable()
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     buf = io.StringIO()
     buf.write(f"recursion: {'reference numpy steps' if reference_recursion else 'compiled kernels'}\n")
-    buf.write(f"PLID identify, subframe set, order 30, {ui.shape[0]} samples: CPU {min(cpu_plain):.2f} s "
-              f"(min of 2, no profiler) against nfoursid N4SID (i = 40) {min(n4):.2f} s in the "
-              f"same process: {min(cpu_plain) / min(n4):.1f}x (target 3x)\n")
+    buf.write(f"PLID identify, {name} set, order {order}, {ui.shape[0]} samples: CPU "
+              f"{min(cpu_plain):.3f} s (min of {reps}, no profiler) against nfoursid N4SID "
+              f"(i = {rows}) {min(n4):.3f} s in the same process: "
+              f"{min(cpu_plain) / min(n4):.1f}x (target {CPU_RATIO_TARGET:g}x)\n")
     buf.write(f"Under cProfile (CPU-time timer): wall {wall:.2f} s, "
               f"CPU {cpu:.2f} s; load average {os.getloadavg()}; "
               f"environment {environment()}\n\n")
-    pstats.Stats(pr, stream=buf).sort_stats("cumulative").print_stats(40)
+    st = pstats.Stats(pr, stream=buf)
+    st.sort_stats("cumulative").print_stats(45)
+    st.sort_stats("tottime").print_stats(25)
     with open(out, "w") as fh:
         fh.write(buf.getvalue())
     print(buf.getvalue()[:3000])
@@ -578,7 +591,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sets", default=",".join(DATASETS))
     ap.add_argument("--methods", default=",".join(METHODS))
-    ap.add_argument("--profile", metavar="OUT.txt", help="only profile one subframe PLID fit")
+    ap.add_argument("--profile", metavar="OUT.txt", help="only profile one PLID fit "
+                    "(the set of --profile-set)")
+    ap.add_argument("--profile-set", default="subframe", choices=sorted(PROFILE_AT),
+                    help="with --profile: the set (default subframe)")
     ap.add_argument("--reference-recursion", action="store_true",
                     help="with --profile: run the recursion in the reference numpy steps")
     ap.add_argument("--out", default=os.path.join(RESULTS, "realdata"),
@@ -592,7 +608,7 @@ def main(argv=None):
                     "(the comparators do not depend on trussid's commit); the report says so")
     a = ap.parse_args(argv)
     if a.profile:
-        profile_subframe(a.profile, a.reference_recursion)
+        profile_set(a.profile, a.profile_set, a.reference_recursion)
         return 0
     if a.from_json:
         with open(a.from_json) as fh:

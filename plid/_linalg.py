@@ -8,7 +8,7 @@ import scipy.linalg
 import scipy.linalg.lapack
 import scipy.signal
 
-__all__ = ["mode_filter", "modal_regressors", "lstsq"]
+__all__ = ["mode_filter", "modal_regressors", "real_modal_regressors", "lstsq"]
 
 
 def mode_filter(lam: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -66,6 +66,83 @@ def modal_regressors(A, C, u, x0=True, direct=False):
             Dr[:, l, l, :] = u
         cols.append(Dr.reshape(N, p, p * m))
     return np.concatenate(cols, axis=2)
+
+
+def real_modal_regressors(A, C, u, x0=True, direct=False):
+    """Regressors (N, p, k) of the same output model as :func:`modal_regressors`, in real
+    modal parameters, and the map ``P`` (n, n) back to state coordinates.
+
+    Columns: per input ``j`` the ``n`` real modal coordinates ``b_j`` of ``B[:, j] = P b_j``,
+    then those of ``x0 = P x0_m`` (n), then ``vec(D)`` (row-major) as in
+    :func:`modal_regressors`. ``P`` holds ``Re v`` of each real eigenvector and
+    ``[Re v, -Im v]`` of one of each complex-conjugate pair, so that the pair's response
+    ``2 Re(C v f (a + i c) / 2)`` is ``a Re(C v f) - c Im(C v f)``: a regressor is one mode's
+    filtered signal times its output shape, ``O(N p n)`` per input where
+    :func:`modal_regressors` multiplies back by ``V^-1`` at ``O(N p n^2)``. The column spaces
+    are the same (``P`` is invertible), so a least-squares fit in these parameters gives the
+    same fitted output; on the subframe record's 30-state model the regressors took 1.5 ms
+    against 25 ms (issue 34's front-end profile).
+
+    Returns
+    -------
+    R : ndarray (N, p, k)
+    P : ndarray (n, n)
+        ``theta_state = P theta_modal`` block by block (``B`` columns and ``x0``).
+    """
+    lam, V = np.linalg.eig(A)
+    keep, _ = _one_of_each_pair(lam)
+    lam_k = lam[keep]
+    cplx = lam_k.imag > 0
+    N, m = u.shape
+    p, n = C.shape
+    # real coordinate t of mode src[t]: its real part, or (second[t]) minus its imaginary
+    # part, pairs adjacent, so that P and the regressors share one column order
+    src = np.repeat(np.arange(keep.size), np.where(cplx, 2, 1))
+    second = np.zeros(n, bool)
+    second[1:] = src[1:] == src[:-1]
+    Vk = V[:, keep][:, src]
+    P = np.where(second[None, :], -Vk.imag, Vk.real)
+    # -Im(z) = Re(i z): the output shape of a minus-imaginary coordinate times i, so that
+    # every regressor is the real part of (modal signal x shape)
+    CV = (C @ V)[:, keep][:, src] * np.where(second, 1j, 1.0)   # (p, n)
+    CVr, CVi = CV.real, CV.imag
+    k = (m + (1 if x0 else 0)) * n + (p * m if direct else 0)
+    R = np.empty((N, p, k))
+
+    def put(f, col):                                # f (N, n_kept) modal signals
+        fr, fi = f.real[:, src], f.imag[:, src]     # (N, n), contiguous
+        for r in range(p):                          # per output: 2-D, contiguous operands
+            R[:, r, col:col + n] = fr * CVr[r] - fi * CVi[r]
+
+    uc = u.astype(complex)
+    F = np.empty((m, N, keep.size), complex)
+    for s, ls in enumerate(lam_k):                  # one filter per mode, all inputs at once
+        F[:, :, s] = scipy.signal.lfilter([0.0, 1.0], [1.0, -ls], uc, axis=0).T
+    for j in range(m):
+        put(F[j], j * n)
+    col = m * n
+    if x0:
+        put(_powers(lam_k, N).T, col)
+        col += n
+    if direct:
+        R[:, :, col:] = 0.0
+        for l in range(p):
+            R[:, l, col + l * m:col + (l + 1) * m] = u
+    return R, P
+
+
+def _powers(lam: np.ndarray, N: int) -> np.ndarray:
+    """``lam[:, None] ** arange(N)`` (complex) as an outer product of two short power
+    tables (64 steps by blocks of 64): one complex product per entry instead of a complex
+    ``exp`` and ``log`` each (3x faster on 17 modes x 5114 samples)."""
+    step = 64
+    blocks = -(-N // step)
+    with np.errstate(divide="ignore", invalid="ignore", under="ignore"):
+        loglam = np.log(lam.astype(complex))
+        inner = np.exp(loglam[:, None] * np.arange(step)[None, :])
+        outer = np.exp(loglam[:, None] * (step * np.arange(blocks))[None, :])
+    out = (outer[:, :, None] * inner[:, None, :]).reshape(lam.size, -1)
+    return out[:, :N]
 
 
 def lstsq(M, b):

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-from trussid.plid._linalg import lstsq, modal_regressors
+from trussid.plid._linalg import lstsq, real_modal_regressors
 from trussid.plid._validate import as_2d
 from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.experiment import simulate
@@ -196,21 +196,24 @@ def output_error_fit(sys, u, y, direct: bool = False):
     if not _stable(A):
         # Output error over a long record is meaningless for an unstable A.
         raise IdentificationError("an output-error refit needs a stable model")
-    R = modal_regressors(A, C, u, x0=True, direct=direct)
+    # real modal parameters (B = P b, x0 = P x0_m): the same column space as state
+    # coordinates at a fraction of the regressors' cost (plid._linalg.real_modal_regressors)
+    R, P = real_modal_regressors(A, C, u, x0=True, direct=direct)
     w = 1.0 / np.sqrt(np.mean(y ** 2, axis=0))
     Rm = (R * w[None, :, None]).reshape(-1, R.shape[2])
     theta = lstsq(Rm, (y * w).ravel())
-    B = theta[: n * m].reshape(m, n).T
-    keep = np.ones(theta.size, bool)
-    keep[n * m:n * m + n] = False                  # x0 columns
-    y_sim = R[:, :, keep] @ theta[keep]
+    B = P @ theta[: n * m].reshape(m, n).T
+    y_sim = R[:, :, :n * m] @ theta[:n * m]
     D = np.zeros((p, m))
     D_std = None
     if direct:
         D = theta[n * m + n:].reshape(p, m)
+        y_sim = y_sim + R[:, :, n * m + n:] @ theta[n * m + n:]
         res = Rm @ theta - (y * w).ravel()
         dof = max(Rm.shape[0] - Rm.shape[1], 1)
         s2 = float(res @ res) / dof
+        # D's block of the covariance does not depend on the (invertible) change of the
+        # other parameters' coordinates
         cov = s2 * np.linalg.pinv(Rm.T @ Rm)
         D_std = np.sqrt(np.clip(np.diag(cov)[n * m + n:], 0, None)).reshape(p, m) / w[:, None]
     model = control.ss(A, B, C, D, sys.dt)
@@ -264,7 +267,10 @@ def direct_term_test(sys, u, y, folds: int = 2, margin: float = 0.05) -> dict:
     n, m, p = A.shape[0], u.shape[1], y.shape[1]
     edges = np.linspace(0, u.shape[0], folds + 1).astype(int)
     w = 1.0 / np.sqrt(np.mean(y ** 2, axis=0))
-    regs = [modal_regressors(A, C, u[a:b], x0=True, direct=True) for a, b in zip(edges[:-1], edges[1:])]
+    # real modal parameters: only the held-out predictions are used, which do not depend on
+    # the parameters' coordinates
+    regs = [real_modal_regressors(A, C, u[a:b], x0=True, direct=True)[0]
+            for a, b in zip(edges[:-1], edges[1:])]
     nb, nd = n * m, p * m
     score = {"without": 0.0, "with": 0.0}
     for k in range(folds):

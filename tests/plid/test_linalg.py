@@ -1,9 +1,10 @@
-"""The private least-squares solver of the identification front end (``plid._linalg``)."""
+"""The private linear algebra of the identification front end (``plid._linalg``): its
+least-squares solver and output regressors."""
 
 import numpy as np
 import scipy.linalg
 
-from trussid.plid._linalg import lstsq
+from trussid.plid._linalg import lstsq, modal_regressors, real_modal_regressors
 
 
 def test_lstsq_equals_a_qr_solution_on_a_well_conditioned_tall_system():
@@ -36,3 +37,46 @@ def test_lstsq_solves_several_right_hand_sides():
     M = rng.standard_normal((300, 8))
     X = rng.standard_normal((8, 3))
     assert np.allclose(lstsq(M, M @ X), X, rtol=1e-10)
+
+
+def _state_space_response(A, B, C, D, x0, u):
+    """y[k] = C x[k] + D u[k], x[k+1] = A x[k] + B u[k]: the plain recursion."""
+    x, out = x0.copy(), []
+    for uk in u:
+        out.append(C @ x + D @ uk)
+        x = A @ x + B @ uk
+    return np.array(out)
+
+
+def test_real_modal_regressors_reproduce_the_state_space_response():
+    # a real A with real and complex-pair poles; B, x0, D mapped into the regressors'
+    # real modal coordinates (theta_state = P theta_modal) give the recursion's output
+    rng = np.random.default_rng(6)
+    n, m, p, N = 7, 2, 3, 300
+    A = rng.standard_normal((n, n))
+    A *= 0.95 / np.max(np.abs(np.linalg.eigvals(A)))
+    lam = np.linalg.eigvals(A)
+    assert np.any(lam.imag > 0) and np.any(lam.imag == 0)
+    B, C = rng.standard_normal((n, m)), rng.standard_normal((p, n))
+    D, x0, u = rng.standard_normal((p, m)), rng.standard_normal(n), rng.standard_normal((N, m))
+    R, P = real_modal_regressors(A, C, u, x0=True, direct=True)
+    assert R.shape == (N, p, m * n + n + p * m)
+    theta = np.concatenate([np.linalg.solve(P, B).T.ravel(), np.linalg.solve(P, x0),
+                            D.ravel()])
+    y = _state_space_response(A, B, C, D, x0, u)
+    assert np.allclose(R @ theta, y, rtol=0, atol=1e-10 * np.max(np.abs(y)))
+
+
+def test_real_modal_regressors_span_the_state_coordinates_regressors():
+    # the same least-squares fit as in state coordinates (same column space)
+    rng = np.random.default_rng(7)
+    n, m, p, N = 6, 1, 2, 400
+    A = rng.standard_normal((n, n))
+    A *= 0.9 / np.max(np.abs(np.linalg.eigvals(A)))
+    C, u = rng.standard_normal((p, n)), rng.standard_normal((N, m))
+    y = rng.standard_normal((N, p))
+    Rs = modal_regressors(A, C, u, x0=True).reshape(N * p, -1)
+    Rm = real_modal_regressors(A, C, u, x0=True)[0].reshape(N * p, -1)
+    fit_s = Rs @ np.linalg.lstsq(Rs, y.ravel(), rcond=None)[0]
+    fit_m = Rm @ np.linalg.lstsq(Rm, y.ravel(), rcond=None)[0]
+    assert np.allclose(fit_m, fit_s, atol=1e-10)
