@@ -68,7 +68,7 @@ def modal_regressors(A, C, u, x0=True, direct=False):
     return np.concatenate(cols, axis=2)
 
 
-def real_modal_regressors(A, C, u, x0=True, direct=False):
+def real_modal_regressors(A, C, u, x0=True, direct=False, weights=None):
     """Regressors (N, p, k) of the same output model as :func:`modal_regressors`, in real
     modal parameters, and the map ``P`` (n, n) back to state coordinates.
 
@@ -83,6 +83,18 @@ def real_modal_regressors(A, C, u, x0=True, direct=False):
     same fitted output; on the subframe record's 30-state model the regressors took 1.5 ms
     against 25 ms (issue 34's front-end profile).
 
+    Parameters
+    ----------
+    A : (n, n), C : (p, n)
+        The fixed dynamics and output matrix.
+    u : (N, m)
+        Inputs.
+    x0, direct : bool
+        Include the initial-state and the direct-term columns.
+    weights : (p,), optional
+        Every row of output ``l`` multiplied by ``weights[l]`` (a weighted least squares
+        without a copy of the regressors).
+
     Returns
     -------
     R : ndarray (N, p, k)
@@ -93,6 +105,8 @@ def real_modal_regressors(A, C, u, x0=True, direct=False):
     keep, _ = _one_of_each_pair(lam)
     lam_k = lam[keep]
     cplx = lam_k.imag > 0
+    wts = np.ones(C.shape[0]) if weights is None else np.asarray(weights, float)
+    C = C * wts[:, None]
     N, m = u.shape
     p, n = C.shape
     # real coordinate t of mode src[t]: its real part, or (second[t]) minus its imaginary
@@ -127,7 +141,7 @@ def real_modal_regressors(A, C, u, x0=True, direct=False):
     if direct:
         R[:, :, col:] = 0.0
         for l in range(p):
-            R[:, l, col + l * m:col + (l + 1) * m] = u
+            R[:, l, col + l * m:col + (l + 1) * m] = u * wts[l]
     return R, P
 
 
@@ -163,14 +177,19 @@ def lstsq(M, b):
     M = np.asarray(M, float)
     b = np.asarray(b, float)
     if M.ndim == 2 and M.shape[0] >= M.shape[1] > 0 and np.all(np.isfinite(M)):
-        scale = np.sqrt(np.einsum("ij,ij->j", M, M))
+        # the Gram of M equilibrated afterwards (D^-1 M^T M D^-1 is the equilibrated
+        # matrix's Gram): no scaled copy of M, whose product and copy were half of the
+        # front end's least-squares time on the subframe record
+        G = M.T @ M
+        scale = np.sqrt(np.diag(G).copy())
         scale[scale == 0] = 1.0
-        Ms = M / scale
-        G = Ms.T @ Ms
-        c, info = scipy.linalg.lapack.dpotrf(G, lower=0, clean=1)
+        G /= scale[:, None]
+        G /= scale[None, :]
+        c, info = scipy.linalg.lapack.dpotrf(G, lower=0, clean=1, overwrite_a=1)
         if info == 0:
             rcond, info2 = scipy.linalg.lapack.dtrcon(c, norm="1", uplo="U", diag="N")
             if info2 == 0 and rcond > 1e-6:
-                x = scipy.linalg.cho_solve((c, False), Ms.T @ b, check_finite=False)
-                return x / (scale if x.ndim == 1 else scale[:, None])
+                sc = scale if b.ndim == 1 else scale[:, None]
+                x = scipy.linalg.cho_solve((c, False), (M.T @ b) / sc, check_finite=False)
+                return x / sc
     return scipy.linalg.lstsq(M, b, lapack_driver="gelsy", check_finite=False)[0]

@@ -19,11 +19,8 @@ caller) asks for ``D``; PLID then runs on ``y - D u`` from this prior.
 
 from __future__ import annotations
 
-import numpy as np
-
 from trussid.plid._validate import as_2d
-from trussid.plid.stability import stabilise
-from trussid.plid.subspace import SubspaceChoice, cached_n4sid, default_block_rows, output_error_fit
+from trussid.plid.subspace import sweep_block_rows
 
 __all__ = ["direct_prior"]
 
@@ -78,23 +75,5 @@ def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None 
     """
     u = as_2d(u, "u", finite=True)
     y = as_2d(y, "y", finite=True)
-    p, m = y.shape[1], u.shape[1]
-    given = block_rows is not None
-    if not given:
-        block_rows = default_block_rows(u.shape[0], n, m, p)
-    best, scores, worse = None, {}, 0
-    for i in np.atleast_1d(block_rows):
-        if not given and patience is not None and worse >= patience:
-            break
-        model = cached_n4sid(u, y, n, int(i), dt, fits).with_d
-        if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
-            model = stabilise(model).model
-        model, ysim, _ = output_error_fit(model, u, y, direct=True)
-        e = y - ysim
-        score = float(-10 * np.log10(np.mean(np.mean(e ** 2, 0) / np.mean(y ** 2, 0))))
-        scores[int(i)] = score
-        if best is None or score > best[0]:
-            best, worse = (score, model, int(i)), 0
-        else:
-            worse += 1
-    return best[1], SubspaceChoice(block_rows=best[2], candidates=scores)
+    return sweep_block_rows(u, y, n, dt, block_rows, direct=True, patience=patience,
+                            fits=fits)

@@ -42,7 +42,8 @@ from trussid.plid.passes import SCRATCH_SCHEDULE, Pass, multipass
 from trussid.plid.provenance import (DirectTerm, DirectTermTest, Identification, Provenance,
                                      Stabilised)
 from trussid.plid.reduce import balanced_truncation
-from trussid.plid.subspace import direct_term_test, output_error_fit, subspace_prior
+from trussid.plid.subspace import (default_block_rows, direct_term_test, output_error_fit,
+                                   subspace_prior)
 
 __all__ = ["identify", "check_data", "PREDICTORS"]
 
@@ -197,21 +198,27 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     use_d, test, D0 = direct is True, None, None
     y_fit, d_start, fits = y, None, {}  # fits: N4SID runs shared by the two priors
     if start == "subspace":
-        if direct is not True:
-            prior, prov.subspace = subspace_prior(u, y, order, dt, block_rows, fits=fits)
-            prov.subspace_seconds = time.perf_counter() - t0
         if direct == "auto":
-            test = direct_term_test(prior, u, y)
+            # decided before the block-row sweep, on the strictly proper prior of the first
+            # block-row count, so that only the prior that is used is swept (one N4SID run
+            # and one output-error refit fewer per identify; the test's decision was the
+            # same on every block-row count of the four measured sets)
+            first = _first_block_rows(u, y, order, block_rows)
+            test = direct_term_test(subspace_prior(u, y, order, dt, [first], fits=fits)[0],
+                                    u, y)
+            test["block_rows"] = first
             use_d = test["direct"]
         if use_d:
             # N4SID's own model with D (plid.feedthrough: the strictly proper prior's C is
             # biased by the feed-through, 1.4-4.2 dB below it in one-step prediction)
-            proper = prior if direct == "auto" else None  # the strictly proper prior
+            proper = None    # the strictly proper prior, swept only if a restart needs it
             with_d, prov.subspace = direct_prior(u, y, order, dt, block_rows, fits=fits)
             prov.subspace_seconds = time.perf_counter() - t0
             prior, D0, y_fit, basis, R = _start_with_d(with_d, u, y, order, radius, kw["R"])
             d_start = "N4SID with D (plid.feedthrough.direct_prior)"
         else:
+            prior, prov.subspace = subspace_prior(u, y, order, dt, block_rows, fits=fits)
+            prov.subspace_seconds = time.perf_counter() - t0
             basis = basis_for(order, p, fs, model_frequencies(prior, order // 2, fs), radius)
             R = noise_estimate(prior, u, y_fit) if R is None else R
         sched = schedule or (Pass(Q, 0.0, prior_theta_var),)
@@ -296,6 +303,13 @@ def _strictly_proper_restart(u, y, order, dt, res, strictly_proper, sched, kw):
     return alt, alt_res, alt_hist, why
 
 
+def _first_block_rows(u, y, order, block_rows) -> int:
+    """The first block-row count a prior's sweep tries (given or default)."""
+    if block_rows is None:
+        return default_block_rows(u.shape[0], order, u.shape[1], y.shape[1])[0]
+    return int(np.atleast_1d(block_rows)[0])
+
+
 def _start_with_d(with_d, u, y, order, radius, R):
     """``(prior, D0, y_fit, basis, R)`` of a PLID pass from a prior with D: ``D0 u`` is taken
     off the outputs, so PLID sees strictly proper data from the prior's strictly proper
@@ -341,7 +355,7 @@ def _direct_info(mode, used, test, model, D_std, start=None) -> DirectTerm:
     return DirectTerm(mode=mode, estimated=bool(used),
                       test=None if test is None else DirectTermTest(
                           test["held_out_nmse"]["without"], test["held_out_nmse"]["with"],
-                          test["margin"], test["folds"]),
+                          test["margin"], test["folds"], test.get("block_rows")),
                       D=np.asarray(model.D, float).tolist(),
                       D_std=None if D_std is None else np.asarray(D_std).tolist(),
                       start=start)

@@ -19,7 +19,8 @@ every regressor is a one-pole filter of an input (``scipy.signal.lfilter``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import control
 import numpy as np
@@ -32,7 +33,7 @@ from trussid.plid.stability import stabilise
 
 __all__ = ["SubspaceChoice", "SubspaceFit", "n4sid", "po_moesp", "block_hankel", "refit_input_matrix",
            "output_error_fit", "direct_term_test", "subspace_prior", "cached_n4sid",
-           "default_block_rows", "DEFAULT_BLOCK_ROWS"]
+           "default_block_rows", "DEFAULT_BLOCK_ROWS", "sweep_block_rows"]
 
 
 @dataclass
@@ -52,12 +53,35 @@ class SubspaceChoice:
 
 @dataclass
 class SubspaceFit:
-    """Models from one subspace run (discrete, sample time ``dt``)."""
+    """Matrices of one subspace run (discrete, sample time ``dt``) and its two models.
 
-    with_d: control.StateSpace       # the least squares with a direct term (nfoursid's model)
-    zero_d: control.StateSpace       # same state sequence, least squares with D = 0
+    ``with_d`` (the least squares on ``[x; u]`` with a direct term: nfoursid's model) and
+    ``zero_d`` (same ``A, B``, ``C0`` from the least squares on ``x`` alone, ``D = 0``) are
+    built on first use: a ``control.StateSpace`` costs about 0.1 ms, and ``identify`` uses
+    one of the two per run. ``scored`` holds the priors' scored candidates built from this
+    run (:func:`subspace_prior`, :func:`trussid.plid.feedthrough.direct_prior`), so that a
+    candidate is refitted and scored once however many sweeps read it.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray                    # with D
+    D: np.ndarray
+    C0: np.ndarray                   # of the least squares with D = 0
+    dt: float
     block_rows: int
     singular_values: np.ndarray      # of the observability estimate (order selection)
+    scored: dict = field(default_factory=dict, repr=False)
+
+    @cached_property
+    def with_d(self) -> control.StateSpace:
+        """The least squares with a direct term (nfoursid's model)."""
+        return control.ss(self.A, self.B, self.C, self.D, self.dt)
+
+    @cached_property
+    def zero_d(self) -> control.StateSpace:
+        """Same state sequence, least squares with ``D = 0``."""
+        return control.ss(self.A, self.B, self.C0, np.zeros_like(self.D), self.dt)
 
 
 def block_hankel(a: np.ndarray, rows: int) -> np.ndarray:
@@ -131,11 +155,7 @@ def n4sid(u, y, n: int, block_rows: int, dt: float) -> SubspaceFit:
     AB = np.linalg.lstsq(XU.T, xk1.T, rcond=None)[0].T
     CD = np.linalg.lstsq(XU.T, yl.T, rcond=None)[0].T
     C0 = np.linalg.lstsq(xk.T, yl.T, rcond=None)[0].T
-    A, B = AB[:, :n], AB[:, n:]
-    m = u.shape[1]
-    with_d = control.ss(A, B, CD[:, :n], CD[:, n:], dt)
-    zero_d = control.ss(A, B, C0, np.zeros((p, m)), dt)
-    return SubspaceFit(with_d, zero_d, block_rows, sv)
+    return SubspaceFit(AB[:, :n], AB[:, n:], CD[:, :n], CD[:, n:], C0, dt, block_rows, sv)
 
 
 def _leading_state(W, uy, obs, n):
@@ -162,7 +182,7 @@ def _stable(A) -> bool:
     return bool(np.max(np.abs(np.linalg.eigvals(np.asarray(A, float))), initial=0) < 1)
 
 
-def output_error_fit(sys, u, y, direct: bool = False):
+def output_error_fit(sys, u, y, direct: bool = False, d_std: bool = True):
     """``B`` (and ``D``) and x0 by output-error least squares with ``A, C`` of ``sys`` fixed.
 
     Linear in the unknowns: in modal coordinates every regressor is a one-pole filter of an
@@ -178,6 +198,9 @@ def output_error_fit(sys, u, y, direct: bool = False):
     y : array (N, p)
     direct : bool
         Estimate ``D`` too (else ``D = 0``).
+    d_std : bool
+        With ``direct``, also the standard errors of ``D`` (else None: a prior's sweep
+        does not use them, and they cost one more Gram matrix).
 
     Returns
     -------
@@ -187,7 +210,7 @@ def output_error_fit(sys, u, y, direct: bool = False):
         Its response to ``u`` from x0 = 0 (without the fitted initial state).
     D_std : ndarray (p, m) or None
         Standard errors of ``D`` from the least-squares residual (white-residual
-        assumption), when ``direct``.
+        assumption), when ``direct`` and ``d_std``.
     """
     u = as_2d(u, "u")
     y = as_2d(y, "y")
@@ -197,10 +220,11 @@ def output_error_fit(sys, u, y, direct: bool = False):
         # Output error over a long record is meaningless for an unstable A.
         raise IdentificationError("an output-error refit needs a stable model")
     # real modal parameters (B = P b, x0 = P x0_m): the same column space as state
-    # coordinates at a fraction of the regressors' cost (plid._linalg.real_modal_regressors)
-    R, P = real_modal_regressors(A, C, u, x0=True, direct=direct)
+    # coordinates at a fraction of the regressors' cost (plid._linalg.real_modal_regressors);
+    # rows weighted per channel as they are built
     w = 1.0 / np.sqrt(np.mean(y ** 2, axis=0))
-    Rm = (R * w[None, :, None]).reshape(-1, R.shape[2])
+    R, P = real_modal_regressors(A, C, u, x0=True, direct=direct, weights=w)
+    Rm = R.reshape(-1, R.shape[2])
     theta = lstsq(Rm, (y * w).ravel())
     B = P @ theta[: n * m].reshape(m, n).T
     y_sim = R[:, :, :n * m] @ theta[:n * m]
@@ -208,7 +232,8 @@ def output_error_fit(sys, u, y, direct: bool = False):
     D_std = None
     if direct:
         D = theta[n * m + n:].reshape(p, m)
-        y_sim = y_sim + R[:, :, n * m + n:] @ theta[n * m + n:]
+        y_sim += R[:, :, n * m + n:] @ theta[n * m + n:]
+    if direct and d_std:
         res = Rm @ theta - (y * w).ravel()
         dof = max(Rm.shape[0] - Rm.shape[1], 1)
         s2 = float(res @ res) / dof
@@ -216,6 +241,7 @@ def output_error_fit(sys, u, y, direct: bool = False):
         # other parameters' coordinates
         cov = s2 * np.linalg.pinv(Rm.T @ Rm)
         D_std = np.sqrt(np.clip(np.diag(cov)[n * m + n:], 0, None)).reshape(p, m) / w[:, None]
+    y_sim /= w
     model = control.ss(A, B, C, D, sys.dt)
     return model, y_sim, D_std
 
@@ -237,11 +263,6 @@ def refit_input_matrix(sys, u, y) -> control.StateSpace:
         ``(A, B_new, C, 0)``.
     """
     return output_error_fit(sys, u, y, direct=False)[0]
-
-
-def _nmse(y, yhat):
-    """Mean over channels of the error power normalised by the channel's power."""
-    return float(np.mean(np.mean((y - yhat) ** 2, 0) / np.mean(y ** 2, 0)))
 
 
 def direct_term_test(sys, u, y, folds: int = 2, margin: float = 0.05) -> dict:
@@ -268,33 +289,39 @@ def direct_term_test(sys, u, y, folds: int = 2, margin: float = 0.05) -> dict:
     edges = np.linspace(0, u.shape[0], folds + 1).astype(int)
     w = 1.0 / np.sqrt(np.mean(y ** 2, axis=0))
     # real modal parameters: only the held-out predictions are used, which do not depend on
-    # the parameters' coordinates
-    regs = [real_modal_regressors(A, C, u[a:b], x0=True, direct=True)[0]
+    # the parameters' coordinates; rows weighted per channel as they are built
+    regs = [real_modal_regressors(A, C, u[a:b], x0=True, direct=True, weights=w)[0]
             for a, b in zip(edges[:-1], edges[1:])]
+    yw = [(y[a:b] * w).ravel() for a, b in zip(edges[:-1], edges[1:])]
     nb, nd = n * m, p * m
     score = {"without": 0.0, "with": 0.0}
     for k in range(folds):
         train = [j for j in range(folds) if j != k]
         for label, use_d in (("without", False), ("with", True)):
             # B (and D) shared by the training segments, one x0 per segment
-            rows, rhs = [], []
-            for t_i, j in enumerate(train):
-                Rj = regs[j]
-                x0 = np.zeros((Rj.shape[0], p, n * len(train)))
-                x0[:, :, t_i * n:(t_i + 1) * n] = Rj[:, :, nb:nb + n]
-                parts = [Rj[:, :, :nb], x0] + ([Rj[:, :, nb + n:]] if use_d else [])
-                rows.append((np.concatenate(parts, axis=2) * w[None, :, None]).reshape(-1, nb + n * len(train) + (nd if use_d else 0)))
-                rhs.append((y[edges[j]:edges[j + 1]] * w).ravel())
-            th = lstsq(np.vstack(rows), np.concatenate(rhs))
+            cols = nb + n * len(train) + (nd if use_d else 0)
+            if len(train) == 1:     # the segment's own columns are [B, x0, D] already
+                M = regs[train[0]][:, :, :cols].reshape(-1, cols)
+            else:
+                rows = []
+                for t_i, j in enumerate(train):
+                    Rj = regs[j]
+                    x0 = np.zeros((Rj.shape[0], p, n * len(train)))
+                    x0[:, :, t_i * n:(t_i + 1) * n] = Rj[:, :, nb:nb + n]
+                    parts = [Rj[:, :, :nb], x0] + ([Rj[:, :, nb + n:]] if use_d else [])
+                    rows.append(np.concatenate(parts, axis=2).reshape(-1, cols))
+                M = np.vstack(rows)
+            th = lstsq(M, np.concatenate([yw[j] for j in train]))
             b = th[:nb]
             d = th[nb + n * len(train):] if use_d else np.zeros(nd)
             Rk = regs[k]
-            yk = y[edges[k]:edges[k + 1]]
-            pred = Rk[:, :, :nb] @ b + Rk[:, :, nb + n:] @ d
+            pred = Rk[:, :, :nb] @ b + Rk[:, :, nb + n:] @ d        # weighted units
             # the held-out segment's own initial state
-            X0 = (Rk[:, :, nb:nb + n] * w[None, :, None]).reshape(-1, n)
-            x0k = lstsq(X0, ((yk - pred) * w).ravel())
-            score[label] += _nmse(yk, pred + Rk[:, :, nb:nb + n] @ x0k) / folds
+            X0 = Rk[:, :, nb:nb + n].reshape(-1, n)
+            r = yw[k] - pred.ravel()
+            r = (r - X0 @ lstsq(X0, r)).reshape(-1, p) / w
+            yk = y[edges[k]:edges[k + 1]]
+            score[label] += float(np.mean(np.mean(r ** 2, 0) / np.mean(yk ** 2, 0))) / folds
     direct = score["with"] < (1.0 - margin) * score["without"]
     return {"direct": bool(direct), "held_out_nmse": score, "margin": margin, "folds": folds}
 
@@ -388,6 +415,43 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
         The block rows kept and every candidate's output-error ratio [dB].
     """
 
+    return sweep_block_rows(u, y, n, dt, block_rows, direct=False, refit=refit,
+                            patience=patience, fits=fits)
+
+
+def sweep_block_rows(u, y, n: int, dt: float, block_rows=None, *, direct: bool = False,
+                     refit: bool = True, patience: int | None = 1, fits: dict | None = None):
+    """The block-row sweep of :func:`subspace_prior` (``direct=False``: N4SID's model with
+    ``D = 0``, ``B`` refitted) and of :func:`trussid.plid.feedthrough.direct_prior`
+    (``direct=True``: N4SID's model with ``D``, ``B, D`` refitted): each candidate's
+    unstable poles reflected in, scored by its output-error ratio [dB] on the data, the best
+    kept; default block rows swept in increasing order and stopped after ``patience``
+    candidates without improvement. A candidate already scored on the same run (in
+    ``fits``) is not refitted.
+
+    Parameters
+    ----------
+    u, y : arrays (N, m), (N, p)
+    n : int
+        Order.
+    dt : float
+        Sample time [s].
+    block_rows : int or sequence of int, optional
+        Block rows to try, all of them (default :func:`default_block_rows`, swept).
+    direct : bool
+        Candidates with a direct term.
+    refit : bool
+        Refit ``B`` (and ``D``) by output error (else each candidate is scored as it is).
+    patience : int or None
+        Candidates without improvement before the default sweep stops (None: all).
+    fits : dict, optional
+        :func:`n4sid` runs on these data by block rows, read and filled here.
+
+    Returns
+    -------
+    model : control.StateSpace
+    choice : SubspaceChoice
+    """
     u = as_2d(u, "u")
     y = as_2d(y, "y")
     p = y.shape[1]
@@ -400,18 +464,26 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
         if not given and patience is not None and worse >= patience:
             break
         fit = cached_n4sid(u, y, n, int(i), dt, fits)
-        model = fit.zero_d
-        if np.max(np.abs(np.linalg.eigvals(np.asarray(model.A)))) >= 1:
-            model = stabilise(model).model
-        if refit:
-            model, ysim, _ = output_error_fit(model, u, y)
-        else:
-            ysim = simulate(model, u)
-        e = y - ysim
-        score = float(-10 * np.log10(np.mean(np.mean(e ** 2, 0) / np.mean(y ** 2, 0))))
+        if (direct, refit) not in fit.scored:
+            fit.scored[direct, refit] = _scored_candidate(fit, u, y, direct, refit)
+        score, model = fit.scored[direct, refit]
         scores[int(i)] = score
         if best is None or score > best[0]:
             best, worse = (score, model, int(i)), 0
         else:
             worse += 1
     return best[1], SubspaceChoice(block_rows=best[2], candidates=scores)
+
+
+def _scored_candidate(fit: SubspaceFit, u, y, direct: bool, refit: bool):
+    """``(output-error ratio [dB], model)`` of one run's candidate (see
+    :func:`sweep_block_rows`)."""
+    model = fit.with_d if direct else fit.zero_d
+    if not _stable(model.A):
+        model = stabilise(model).model
+    if refit:
+        model, ysim, _ = output_error_fit(model, u, y, direct=direct, d_std=False)
+    else:
+        ysim = simulate(model, u)
+    e = y - ysim
+    return float(-10 * np.log10(np.mean(np.mean(e ** 2, 0) / np.mean(y ** 2, 0)))), model
