@@ -9,7 +9,8 @@ from nfoursid.nfoursid import NFourSID
 from nfoursid.utils import Utils
 
 from trussid.plid.errors import DataError, IdentificationError
-from trussid.plid.subspace import block_hankel, direct_term_test, n4sid, output_error_fit, po_moesp
+from trussid.plid.subspace import (MIN_GAIN_DB, block_hankel, direct_term_test, n4sid,
+                                   output_error_fit, po_moesp, sweep_block_rows)
 from tests.plid.plants import accelerometer_plant, record as plant_record
 
 
@@ -104,3 +105,53 @@ def test_output_error_fit_refuses_an_unstable_model():
     u = np.ones((50, 1))
     with pytest.raises(IdentificationError, match="stable"):
         output_error_fit(unstable, u, u)
+
+
+# ---- the block-row sweep of the priors (issue 34: the lean front end) -------------------
+
+
+def _expected_prefix(scores: dict, patience: int, min_gain_db: float) -> list:
+    """The block rows a default sweep tries, from every candidate's score: in increasing
+    order, stopping after ``patience`` candidates without improvement or after one that
+    improved on the best by less than ``min_gain_db``."""
+    tried, best, worse = [], None, 0
+    for i, s in sorted(scores.items()):
+        if worse >= patience:
+            break
+        tried.append(i)
+        if best is None or s > best:
+            gain = None if best is None else s - best
+            best, worse = s, 0
+            if gain is not None and gain < min_gain_db:
+                break
+        else:
+            worse += 1
+    return tried
+
+
+@pytest.mark.parametrize("direct", [False, True])
+def test_the_default_sweep_stops_where_the_rule_says_on_the_full_sweeps_scores(direct):
+    acc = accelerometer_plant(m=1, p=1)
+    u, y = plant_record(acc, 1500, 40, seed=4)
+    full = sweep_block_rows(u, y, 6, acc.dt, direct=direct, patience=None)[1]
+    assert sorted(full.candidates) == [20, 30, 40, 60, 80]
+    for min_gain in (MIN_GAIN_DB, np.inf):
+        fits = {}
+        model, choice = sweep_block_rows(u, y, 6, acc.dt, direct=direct, fits=fits,
+                                         min_gain_db=min_gain)
+        tried = _expected_prefix(full.candidates, 1, min_gain)
+        assert list(choice.candidates) == tried
+        assert sorted(fits) == tried           # no N4SID run beyond the stop
+        np.testing.assert_allclose([choice.candidates[i] for i in tried],
+                                   [full.candidates[i] for i in tried], rtol=1e-12)
+        assert choice.block_rows == max(tried, key=full.candidates.get)
+        assert choice.stopped
+    # an infinite threshold stops after the second candidate, whatever it scored
+    assert len(tried) == 2
+
+
+def test_given_block_rows_are_all_tried():
+    acc = accelerometer_plant(m=1, p=1)
+    u, y = plant_record(acc, 1500, 40, seed=4)
+    _, choice = sweep_block_rows(u, y, 6, acc.dt, [20, 30, 40], min_gain_db=np.inf)
+    assert list(choice.candidates) == [20, 30, 40] and choice.stopped is None
