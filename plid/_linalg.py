@@ -155,8 +155,11 @@ def _powers(lam: np.ndarray, N: int) -> np.ndarray:
         loglam = np.log(lam.astype(complex))
         inner = np.exp(loglam[:, None] * np.arange(step)[None, :])
         outer = np.exp(loglam[:, None] * (step * np.arange(blocks))[None, :])
-    out = (outer[:, :, None] * inner[:, None, :]).reshape(lam.size, -1)
-    return out[:, :N]
+    out = (outer[:, :, None] * inner[:, None, :]).reshape(lam.size, -1)[:, :N]
+    zero = lam == 0                                 # log 0: 0 ** k by hand (1, 0, 0, ...)
+    out[zero] = 0.0
+    out[zero, :1] = 1.0
+    return out
 
 
 def lstsq(M, b):

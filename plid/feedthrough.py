@@ -41,8 +41,10 @@ def direct_prior(u, y, n: int, dt: float, block_rows=None, patience: int | None 
     block_rows : int or sequence of int, optional
         N4SID block rows to try (default
         :func:`trussid.plid.subspace.default_block_rows`), swept in increasing order and
-        stopped after ``patience`` candidates that do not improve, as
-        :func:`trussid.plid.subspace.subspace_prior` does.
+        stopped after ``patience`` candidates that do not improve or one that gains under
+        :data:`trussid.plid.subspace.MIN_GAIN_DB`, as
+        :func:`trussid.plid.subspace.subspace_prior` does (one sweep for both:
+        :func:`trussid.plid.subspace.sweep_block_rows`).
     patience : int or None
         See ``block_rows`` (None: try them all). Given ``block_rows`` are all tried.
     fits : dict, optional

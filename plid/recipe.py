@@ -110,7 +110,9 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
     direct : {"auto", True, False}
         Estimate a direct term ``D``. ``"auto"`` (default) decides on the identification
         data (:func:`trussid.plid.subspace.direct_term_test`: held-out output error with
-        and without ``D``, ``A, C`` of the subspace prior fixed); a strictly proper plant
+        and without ``D``, ``A, C`` fixed to the strictly proper N4SID prior of the first
+        block-row count, before the block-row sweep, so that only the prior that is used
+        is swept; ``provenance.direct.test.block_rows``); a strictly proper plant
         (e.g. seen through anti-aliasing filters) gets ``D = 0``, an accelerometer
         driven by a force input typically not. With ``D``, the prior is N4SID's model
         with D (:func:`trussid.plid.feedthrough.direct_prior`), PLID runs on ``y - D0 u``

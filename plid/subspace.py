@@ -391,7 +391,8 @@ def subspace_prior(u, y, n: int, dt: float, block_rows=None, refit: bool = True,
     The default candidates are tried in increasing order and the sweep stops at the first
     one that does not improve on the best so far (``patience``): the cost of a candidate
     grows with the square of its block rows (80 block rows cost 7x what 20 do on the
-    8523-sample subframe record), and the score rarely recovers after a drop.
+    8523-sample subframe record), and the score rarely recovers after a drop; it also stops
+    after a candidate that gained under :data:`MIN_GAIN_DB` (:func:`sweep_block_rows`).
 
     Parameters
     ----------

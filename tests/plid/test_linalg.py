@@ -80,3 +80,14 @@ def test_real_modal_regressors_span_the_state_coordinates_regressors():
     fit_s = Rs @ np.linalg.lstsq(Rs, y.ravel(), rcond=None)[0]
     fit_m = Rm @ np.linalg.lstsq(Rm, y.ravel(), rcond=None)[0]
     assert np.allclose(fit_m, fit_s, atol=1e-10)
+
+
+def test_real_modal_regressors_with_a_pole_at_the_origin():
+    # a pure delay state (eigenvalue 0): its initial state shows at sample 0 only
+    A = np.array([[0.0, 0.0], [0.0, 0.5]])
+    C = np.array([[1.0, 1.0]])
+    u = np.random.default_rng(8).standard_normal((50, 1))
+    R, P = real_modal_regressors(A, C, u, x0=True)
+    B, x0, D = np.array([[1.0], [2.0]]), np.array([3.0, -1.0]), np.zeros((1, 1))
+    theta = np.concatenate([np.linalg.solve(P, B).ravel(), np.linalg.solve(P, x0)])
+    assert np.allclose(R @ theta, _state_space_response(A, B, C, D, x0, u), atol=1e-12)
