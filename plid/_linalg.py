@@ -85,8 +85,10 @@ def real_modal_regressors(A, C, u, x0=True, direct=False, weights=None):
 
     Parameters
     ----------
-    A : (n, n), C : (p, n)
-        The fixed dynamics and output matrix.
+    A : ndarray (n, n)
+        The fixed dynamics.
+    C : ndarray (p, n)
+        The fixed output matrix.
     u : (N, m)
         Inputs.
     x0, direct : bool
