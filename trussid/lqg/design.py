@@ -243,15 +243,24 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
     return sorted(sel, key=lambda b: rows[b].frequency_hz), rows
 
 
-def _mode_damping(Acl, T_blocks, n_modes, dt):
+def _mode_damping(Acl, T_blocks, n_modes, dt, open_hz=None):
     """Damping of each design-model mode in a closed loop on the design model: each
-    closed-loop pole (upper half plane) goes to the block holding most of its eigenvector."""
+    closed-loop pole (upper half plane) goes to the block holding most of its eigenvector.
+
+    With ``open_hz`` (each block's open-loop frequency [Hz]), a block only gets a pole
+    within 30 % of that frequency: the loop of a frequency-shaped design has the weight's
+    poles too, and one far above the band can hold a large share of a target block's
+    coordinates (the plant responds there) without being that mode."""
     lam, V = np.linalg.eig(Acl)
     # real poles count too: a block whose pair the feedback split into two real (overdamped)
     # poles gets one of them, damping 1 (leaving it out left the block's damping NaN)
     up = lam.imag >= 0
     lam, V = lam[up], V[:, up]
     share = np.array([[np.linalg.norm(V[idx, j]) for j in range(lam.size)] for idx in T_blocks])
+    if open_hz is not None:
+        f_cl = np.abs(np.angle(lam)) / (2 * np.pi * dt)
+        f0 = np.asarray(open_hz, dtype=float)[:, None]
+        share = np.where(np.abs(f_cl[None, :] - f0) <= 0.3 * f0, share, 0.0)
     pole = assign_pairs(-share)
     r = np.flatnonzero(pole >= 0)
     c = pole[r]
@@ -397,7 +406,12 @@ def lqr_for_damping(A, B, blocks, target, dt: float, max_iter: int = 200,
     q0 = 1e-3 * np.min(np.diag(R)) / max(np.linalg.norm(B, 2) ** 2, 1e-300)
     N = None
     if weight is not None:
+        # each block's open-loop frequency, to tell its closed-loop pole from the weight's
+        open_hz = [float(np.abs(np.angle(np.linalg.eigvals(A[np.ix_(idx, idx)]))).max())
+                   / (2 * np.pi * dt) for idx in blocks]
         A, B, Qw, N, R = _augment(A, B, R, weight)
+    else:
+        open_hz = None
     n = A.shape[0]
     q = np.full(len(blocks), q0)
     F = np.zeros((m, n))
@@ -416,7 +430,7 @@ def lqr_for_damping(A, B, blocks, target, dt: float, max_iter: int = 200,
             reason = "solver failed"
             break
         F = np.asarray(F_new)
-        zeta = _mode_damping(A - B @ F, blocks, len(blocks), dt)
+        zeta = _mode_damping(A - B @ F, blocks, len(blocks), dt, open_hz)
         zeta = np.where(np.isfinite(zeta), zeta, 0.0)  # unassigned: treat as undamped
         # a mode already above the target with a vanishing weight needs no feedback
         done = (np.abs(zeta / target - 1) < tol) | ((zeta > target) & (q < 1e-12 * q.max()))
