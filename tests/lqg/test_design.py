@@ -5,10 +5,11 @@ import numpy as np
 import pytest
 
 from trussid.lqg import ControlError, closed_loop, design_lqg, modal_truncation, select_modes
-from trussid.lqg.design import InputWeight, controller_matrices
+from trussid.lqg.design import controller_matrices
 from trussid.lqg.modal import freq_damping
+from trussid.lqg.shaping import InputWeight
 
-from .conftest import FS, modal_structure
+from .conftest import modal_structure
 
 
 def _sorted(z):
@@ -131,19 +132,6 @@ def _controller_response(ctrl, f_hz):
     return np.stack([np.asarray(ctrl(zi)) for zi in z])
 
 
-def test_input_weight_gain_is_one_at_low_frequency_and_its_peak_at_the_band():
-    """|W| from its sections: 1 at DC; at f0, with poles at radius rp and zeros at rz on the
-    ray e^{j theta}, |W| is close to (1 - rz) / (1 - rp), about the asked ``gain``."""
-    w = InputWeight(((300.0, 10.0, 5.0),), 1 / FS)
-    rp, rz = np.exp(-2 * np.pi * 10.0 / FS), np.exp(-2 * np.pi * 50.0 / FS)
-    assert w.gain([0.0])[0] == pytest.approx(1.0, rel=1e-12)
-    assert w.gain([300.0])[0] == pytest.approx((1 - rz) / (1 - rp), rel=0.15)
-    assert 4.0 < w.gain([300.0])[0] < 5.5
-    assert w.gain([100.0])[0] < 1.1  # away from the band the weight is 1
-    with pytest.raises(ControlError, match="input weight peak"):
-        InputWeight(((900.0, 10.0, 5.0),), 1 / FS).siso()  # above Nyquist
-
-
 def test_input_weight_of_gain_one_leaves_the_controller_unchanged(structure, record):
     """W = 1 (zeros on the poles): the cost is u' R u again, so the controller's response
     is the unweighted design's (the weight's states unobservable from its output)."""
@@ -203,13 +191,13 @@ def test_a_weight_pole_does_not_pass_for_a_target_mode(structure, record):
     and the tuning stalled). The damping the tuning reports per target is that of the
     closed-loop pole next to the target (eig of the augmented loop, picked by frequency
     here), and the tuning reaches the target."""
-    from trussid.lqg.design import _augment
+    from trussid.lqg.shaping import augment
 
     w = InputWeight(((180.0, 3.0, 2.0), (207.0, 3.0, 2.0), (700.0, 60.0, 10.0)), structure.dt)
     des = design_lqg(structure, *record, target_damping=0.05, input_weight=w, verify=False)
     dm = des.design_model
     R = np.diag(1.0 / np.asarray(des.info["input_rms"]) ** 2)
-    Aa, Ba, *_ = _augment(np.asarray(dm.A), np.asarray(dm.B), R, w)
+    Aa, Ba, *_ = augment(np.asarray(dm.A), np.asarray(dm.B), R, w)
     f, z = freq_damping(np.linalg.eigvals(Aa - Ba @ des.F), structure.dt)
     for t in des.target_modes:
         near = np.abs(f - t.frequency_hz) < 0.05 * t.frequency_hz

@@ -47,8 +47,9 @@ from trussid.plid.modal import assign_pairs
 from .errors import ControlError
 from .evaluate import damping_table
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
+from .shaping import InputWeight, augment, weighted_controller
 
-__all__ = ["FORMS", "ESTIMATORS", "InputWeight", "TargetMode", "DesignCheck", "LQGDesign", "check_model",
+__all__ = ["FORMS", "ESTIMATORS", "TargetMode", "DesignCheck", "LQGDesign", "check_model",
            "excited_band", "ModelMode", "mode_rows", "LQRTuning", "select_modes",
            "lqr_for_damping", "design_lqg", "verify_design",
            "controller_matrices"]
@@ -302,77 +303,6 @@ class LQRTuning:
     short: np.ndarray
 
 
-@dataclass(frozen=True)
-class InputWeight:
-    """A frequency-shaped weight on the control signal (Gupta 1980, "Frequency-shaped cost
-    functionals"): the LQR penalises ``|W(e^{jw}) u|^2`` instead of ``|u|^2``, so the
-    feedback spends little control where ``|W|`` is large (the bands where the identified
-    model is unreliable: clusters it smears, modes near Nyquist).
-
-    ``W`` is the same on every input: ``W(1) = 1`` (no change at low frequency) times one
-    second-order section per ``peaks`` entry ``(f0, half_width, gain)``: poles at
-    ``exp(-2 pi half_width / fs) e^{+-j 2 pi f0 / fs}`` and zeros at radius ``exp(-2 pi
-    gain half_width / fs)``, so ``|W|`` rises to about ``gain`` over ``f0 +- half_width``
-    [Hz] and returns to 1 a few ``gain * half_width`` away.
-
-    Attributes
-    ----------
-    peaks : tuple of (float, float, float)
-        ``(f0 [Hz], half_width [Hz], gain [-])`` per section, ``0 < f0 <= fs / 2``.
-    dt : float
-        Sample time [s].
-    """
-
-    peaks: tuple
-    dt: float
-
-    def siso(self):
-        """``(num, den)`` polynomials in ``z`` (highest power first) of ``W``."""
-        fs = 1.0 / self.dt
-        num, den = np.ones(1), np.ones(1)
-        for f0, hw, g in self.peaks:
-            if not (0 < f0 <= fs / 2 and hw > 0 and g >= 1):
-                raise ControlError(f"input weight peak ({f0:g} Hz, {hw:g} Hz, x{g:g}): need "
-                                   f"0 < f0 <= {fs / 2:g} Hz, half width > 0, gain >= 1")
-            th = 2 * np.pi * f0 / fs
-            rp = np.exp(-2 * np.pi * hw / fs)
-            rz = np.exp(-2 * np.pi * g * hw / fs)
-            num = np.polymul(num, [1.0, -2 * rz * np.cos(th), rz**2])
-            den = np.polymul(den, [1.0, -2 * rp * np.cos(th), rp**2])
-        return num / (np.polyval(num, 1.0) / np.polyval(den, 1.0)), den
-
-    def gain(self, f_hz):
-        """``|W|`` at the frequencies ``f_hz`` [Hz]."""
-        num, den = self.siso()
-        z = np.exp(2j * np.pi * np.asarray(f_hz, dtype=float) * self.dt)
-        return np.abs(np.polyval(num, z) / np.polyval(den, z))
-
-    def matrices(self, m: int):
-        """``(Aw, Bw, Cw, Dw)`` of ``W`` on each of ``m`` inputs (block diagonal)."""
-        from scipy.signal import tf2ss
-
-        a, b, c, d = tf2ss(*self.siso())
-        eye = np.eye(m)
-        return np.kron(eye, a), np.kron(eye, b), np.kron(eye, c), np.kron(eye, d)
-
-
-def _augment(A, B, R, weight: InputWeight):
-    """``(Aa, Ba, Qw, N, Ra)``: the plant ``(A, B)`` with the states of ``weight`` on its
-    input appended, and the cost ``|Cw w + Dw S u|^2`` (``R = S' S``) as state, cross and
-    input weights: at ``|W| = 1`` it is ``u' R u``."""
-    n, m = B.shape
-    Aw, Bw, Cw, Dw = weight.matrices(m)
-    S = np.linalg.cholesky(R).T
-    Bw, Dw = Bw @ S, Dw @ S
-    nw = Aw.shape[0]
-    Aa = np.block([[A, np.zeros((n, nw))], [np.zeros((nw, n)), Aw]])
-    Ba = np.vstack([B, Bw])
-    Qw = np.zeros((n + nw, n + nw))
-    Qw[n:, n:] = Cw.T @ Cw
-    N = np.zeros((n + nw, m))
-    N[n:] = Cw.T @ Dw
-    return Aa, Ba, Qw, N, Dw.T @ Dw
-
 #: Largest ratio of a block's weight to the starting weight: beyond 1e12 a mode that is
 #: still short of the target is one the actuators do not reach (and the weights, growing
 #: x10 a step, would overflow to inf and turn ``Q`` into NaN: "Q must be a symmetric
@@ -409,7 +339,7 @@ def lqr_for_damping(A, B, blocks, target, dt: float, max_iter: int = 200,
         # each block's open-loop frequency, to tell its closed-loop pole from the weight's
         open_hz = [float(np.abs(np.angle(np.linalg.eigvals(A[np.ix_(idx, idx)]))).max())
                    / (2 * np.pi * dt) for idx in blocks]
-        A, B, Qw, N, R = _augment(A, B, R, weight)
+        A, B, Qw, N, R = augment(A, B, R, weight)
     else:
         open_hz = None
     n = A.shape[0]
@@ -607,7 +537,7 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     if input_weight is None:
         ctrl = controller_matrices(A, B, C, F, Kd, form, D=D)
     else:
-        ctrl = _weighted_controller(A, B, C, D, F, Kd, _augment(A, B, R, input_weight)[:2])
+        ctrl = weighted_controller(A, B, C, D, F, Kd, augment(A, B, R, input_weight)[:2])
     names_in, names_out = list(model.output_labels), list(model.input_labels)
     controller = control.ss(*ctrl, model.dt, inputs=names_in, outputs=names_out,
                             name=f"lqg_{form}")
@@ -689,22 +619,6 @@ def verify_design(model, design: LQGDesign, min_fraction: float = 0.5) -> Design
                         for x, z in zip(design.target_modes, reached) if x is not t)
             + "); try another --band or --target-damping")
     return DesignCheck(tab.spectral_radius, reached)
-
-
-def _weighted_controller(A, B, C, D, F, K, augmented):
-    """``(Ac, Bc, Cc, Dc)`` of the predictor-form LQG whose state feedback ``F`` acts on the
-    design model's states and those of an input weight (``augmented``: ``(Aa, Ba)`` of
-    :func:`_augment`); the controller runs the weight's filter on its own command."""
-    Aa, Ba = augmented
-    n, m, p = A.shape[0], B.shape[1], C.shape[0]
-    nw = Aa.shape[0] - n
-    Aw, Bw = Aa[n:, n:], Ba[n:]
-    Fx, Fw = F[:, :n], F[:, n:]
-    BKD = B - K @ D
-    # xhat+ = A xhat + B u + K (y - C xhat - D u), w+ = Aw w + Bw u, u = -Fx xhat - Fw w
-    Ac = np.block([[A - K @ C - BKD @ Fx, -BKD @ Fw], [-Bw @ Fx, Aw - Bw @ Fw]])
-    Bc = np.vstack([K, np.zeros((nw, p))])
-    return Ac, Bc, -F, np.zeros((m, p))
 
 
 def controller_matrices(A, B, C, F, K, form: str = "predictor", D=None):
