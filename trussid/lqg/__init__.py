@@ -22,7 +22,7 @@ _LAZY = {
     "Robustness": "grading", "robustness": "grading",
     "decentralised": "baselines", "tune_baseline": "baselines",
     "modal_data": "modal", "modal_truncation": "modal",
-    "ControlError": "errors",
+    "ControlError": "errors", "InputWeight": "shaping",
 }
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY)
 

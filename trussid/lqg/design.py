@@ -47,6 +47,7 @@ from trussid.plid.modal import assign_pairs
 from .errors import ControlError
 from .evaluate import damping_table
 from .modal import freq_damping, modal_data, modal_truncation, real_modal_basis
+from .shaping import InputWeight, augment, weighted_controller
 
 __all__ = ["FORMS", "ESTIMATORS", "TargetMode", "DesignCheck", "LQGDesign", "check_model",
            "excited_band", "ModelMode", "mode_rows", "LQRTuning", "select_modes",
@@ -243,15 +244,24 @@ def select_modes(model, band=None, dominant_fraction: float = 0.25, max_damping:
     return sorted(sel, key=lambda b: rows[b].frequency_hz), rows
 
 
-def _mode_damping(Acl, T_blocks, n_modes, dt):
+def _mode_damping(Acl, T_blocks, n_modes, dt, open_hz=None):
     """Damping of each design-model mode in a closed loop on the design model: each
-    closed-loop pole (upper half plane) goes to the block holding most of its eigenvector."""
+    closed-loop pole (upper half plane) goes to the block holding most of its eigenvector.
+
+    With ``open_hz`` (each block's open-loop frequency [Hz]), a block only gets a pole
+    within 30 % of that frequency: the loop of a frequency-shaped design has the weight's
+    poles too, and one far above the band can hold a large share of a target block's
+    coordinates (the plant responds there) without being that mode."""
     lam, V = np.linalg.eig(Acl)
     # real poles count too: a block whose pair the feedback split into two real (overdamped)
     # poles gets one of them, damping 1 (leaving it out left the block's damping NaN)
     up = lam.imag >= 0
     lam, V = lam[up], V[:, up]
     share = np.array([[np.linalg.norm(V[idx, j]) for j in range(lam.size)] for idx in T_blocks])
+    if open_hz is not None:
+        f_cl = np.abs(np.angle(lam)) / (2 * np.pi * dt)
+        f0 = np.asarray(open_hz, dtype=float)[:, None]
+        share = np.where(np.abs(f_cl[None, :] - f0) <= 0.3 * f0, share, 0.0)
     pole = assign_pairs(-share)
     r = np.flatnonzero(pole >= 0)
     c = pole[r]
@@ -302,8 +312,8 @@ WEIGHT_RANGE = 1e12
 STALL_ITERATIONS = 12
 
 
-def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
-                    tol: float = 0.02, R=None) -> LQRTuning:
+def lqr_for_damping(A, B, blocks, target, dt: float, max_iter: int = 200,
+                    tol: float = 0.02, R=None, weight=None) -> LQRTuning:
     """State feedback ``u = -F x`` from :func:`control.dlqr` with a weight on each modal
     block, iterated so that every block's mode reaches damping ``target`` (relative ``tol``).
 
@@ -313,28 +323,44 @@ def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
     (:class:`LQRTuning`), when every mode is at the target, when a short mode's weight
     reaches :data:`WEIGHT_RANGE` times the starting one, when the short modes gain nothing
     for :data:`STALL_ITERATIONS` iterations, or after ``max_iter``.
+
+    ``target`` may be one damping per block. ``weight``, a frequency-shaped input weight
+    (:class:`InputWeight`), replaces ``u' R u`` by the energy of ``W(z) u`` (Gupta 1980):
+    the filter's states are appended to ``A`` (so ``F`` has ``n + nw`` columns) and the
+    feedback spends little control where ``|W|`` is large.
     """
-    n, m = B.shape
+    n_plant, m = B.shape
     R = np.eye(m) if R is None else np.asarray(R, dtype=float)
+    target = np.broadcast_to(np.asarray(target, dtype=float), (len(blocks),))
     # a starting weight of the size of the input matrix's effect
     q0 = 1e-3 * np.min(np.diag(R)) / max(np.linalg.norm(B, 2) ** 2, 1e-300)
+    N = None
+    if weight is not None:
+        # each block's open-loop frequency, to tell its closed-loop pole from the weight's
+        open_hz = [float(np.abs(np.angle(np.linalg.eigvals(A[np.ix_(idx, idx)]))).max())
+                   / (2 * np.pi * dt) for idx in blocks]
+        A, B, Qw, N, R = augment(A, B, R, weight)
+    else:
+        open_hz = None
+    n = A.shape[0]
     q = np.full(len(blocks), q0)
     F = np.zeros((m, n))
     zeta = np.zeros(len(blocks))
     best, since, reason = -np.inf, 0, "iteration limit"
     for it in range(max_iter):
-        Q = np.zeros((n, n))
+        Q = np.zeros((n, n)) if N is None else Qw.copy()
         for w, idx in zip(q, blocks):
             Q[np.ix_(idx, idx)] = w * np.eye(idx.size)
         # scipy's solver: slycot's sg02ad (python-control's default once slycot is installed)
         # fails on the weakly weighted, 0.25 %-damped design models ("roundoff changed ...").
         try:
-            F_new, _, _ = control.dlqr(A, B, Q, R, method="scipy")
+            F_new, _, _ = (control.dlqr(A, B, Q, R, method="scipy") if N is None else
+                           control.dlqr(A, B, Q, R, N, method="scipy"))
         except (ValueError, np.linalg.LinAlgError, control.ControlArgument):
             reason = "solver failed"
             break
         F = np.asarray(F_new)
-        zeta = _mode_damping(A - B @ F, blocks, len(blocks), dt)
+        zeta = _mode_damping(A - B @ F, blocks, len(blocks), dt, open_hz)
         zeta = np.where(np.isfinite(zeta), zeta, 0.0)  # unassigned: treat as undamped
         # a mode already above the target with a vanishing weight needs no feedback
         done = (np.abs(zeta / target - 1) < tol) | ((zeta > target) & (q < 1e-12 * q.max()))
@@ -345,7 +371,7 @@ def lqr_for_damping(A, B, blocks, target: float, dt: float, max_iter: int = 200,
         if np.any(low & (q >= WEIGHT_RANGE * q0)):
             reason = "weight limit"
             break
-        worst = float(np.min(zeta[low])) if low.any() else target
+        worst = float(np.min((zeta / target)[low])) if low.any() else 1.0
         if worst > best * (1 + 1e-3):
             best, since = worst, 0
         else:
@@ -363,7 +389,8 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
                form: str = "predictor", estimator: str = "record",
                dominant_fraction: float = 0.25, K=None, verify: bool = True,
                min_fraction: float = 0.5, n_modes: int | None = None,
-               blocks=None) -> LQGDesign:
+               blocks=None, input_weight: InputWeight | None = None,
+               estimator_damping=None) -> LQGDesign:
     """Design a discrete LQG damping controller from an identified model and its record.
 
     Parameters
@@ -395,6 +422,15 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
         Target exactly these blocks of :func:`modal.real_modal_basis` (complex ones; the
         rows of :func:`mode_rows`), instead of selecting by ``band``, ``n_modes`` and
         ``dominant_fraction``.
+    input_weight : InputWeight, optional
+        Frequency-shaped weight on the control signal (predictor form only): the state
+        feedback is tuned on the design model with the weight's states appended, and the
+        controller carries them (``u = -F_x xhat - F_w w``, still strictly proper).
+    estimator_damping : float or (k,) float, optional
+        Tune the estimator as the dual of the damping tuning to this predictor-pole damping
+        on each target mode [-] (``estimator="record"`` only) instead of the record's best
+        one-step predictor: a broader estimator tolerates the frequency error of modes the
+        model smears.
 
     Returns
     -------
@@ -425,7 +461,9 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     """
     # Long: the four steps of the recipe (module docstring) in order, with the input checks
     # before them and the check on the whole model after; each step calls a helper.
-    if not (isinstance(target_damping, (int, float)) and 0 < target_damping < 1):
+    zt = np.asarray(target_damping, dtype=float) if np.ndim(target_damping) else None
+    if zt is None and not (isinstance(target_damping, (int, float)) and 0 < target_damping < 1) \
+            or zt is not None and not np.all((zt > 0) & (zt < 1)):
         raise ControlError(f"target damping must lie in (0, 1), got {target_damping!r}")
     if form not in FORMS:
         raise ControlError(f"form must be one of {', '.join(FORMS)}, got {form!r}")
@@ -463,7 +501,10 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     dm, kept = modal_truncation(model, sel)
     A, B, C = (np.asarray(M, dtype=float) for M in (dm.A, dm.B, dm.C))
     blocks = [np.array([2 * k, 2 * k + 1]) for k in range(len(kept))]
-    tuning = lqr_for_damping(A, B, blocks, target_damping, model.dt, R=np.diag(1.0 / u_rms**2))
+    if input_weight is not None and form != "predictor":
+        raise ControlError("an input weight needs the predictor form")
+    R = np.diag(1.0 / u_rms**2)
+    tuning = lqr_for_damping(A, B, blocks, target_damping, model.dt, R=R, weight=input_weight)
     F, q, zeta_sf, iters = tuning.F, tuning.weights, tuning.damping, tuning.iterations
     if estimator == "model":
         if K is None:
@@ -476,12 +517,13 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
         Kd, _, kinfo = choose_predictor(dm, u, y)
         zeta_k = _mode_damping(A - Kd @ C, blocks, len(blocks), model.dt)
         # a NaN (a target mode with no estimator pole assigned) counts as a failure
-        if not np.all(zeta_k >= 0.5 * target_damping):
+        if estimator_damping is not None or not np.all(zeta_k >= 0.5 * np.min(target_damping)):
             # An estimator pole left lightly damped on a target mode rings in the closed loop
             # as the mode did (the best one-step predictor of a clean record can be slow).
             # Use the dual of the state-feedback tuning instead: a steady-state Kalman gain
             # whose predictor poles reach the target damping on every target mode.
-            Fd = lqr_for_damping(A.T, C.T, blocks, target_damping, model.dt,
+            ez = target_damping if estimator_damping is None else estimator_damping
+            Fd = lqr_for_damping(A.T, C.T, blocks, ez, model.dt,
                                  R=np.diag(y_rms**2)).F
             finite = zeta_k[np.isfinite(zeta_k)]
             kinfo = dict(kinfo, rejected=kinfo.get("chosen"),
@@ -492,7 +534,10 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     rho = np.max(np.abs(np.linalg.eigvals(A - Kd @ C)))
     if not rho < 1:
         raise ControlError(f"the estimator is unstable on the design model (pole magnitude {rho:.4f})")
-    ctrl = controller_matrices(A, B, C, F, Kd, form, D=D)
+    if input_weight is None:
+        ctrl = controller_matrices(A, B, C, F, Kd, form, D=D)
+    else:
+        ctrl = weighted_controller(A, B, C, D, F, Kd, augment(A, B, R, input_weight)[:2])
     names_in, names_out = list(model.output_labels), list(model.input_labels)
     controller = control.ss(*ctrl, model.dt, inputs=names_in, outputs=names_out,
                             name=f"lqg_{form}")
@@ -500,7 +545,7 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
     targets = tuple(TargetMode(**asdict(rows[b]), state_feedback_damping=float(z), weight=float(w))
                     for b, z, w in zip(sel, zeta_sf, q))
     info = {"form": form, "estimator": estimator, "estimator_choice": kinfo,
-            "target_damping": target_damping, "band": None if band is None else list(band),
+            "target_damping": target_damping if zt is None else zt.tolist(), "band": None if band is None else list(band),
             "dominant_fraction": dominant_fraction, "n_modes": n_modes,
             "lqr_iterations": iters, "lqr_stop": tuning.reason,
             "lqr_short_hz": [rows[b].frequency_hz for b, s in zip(sel, tuning.short) if s],
@@ -508,6 +553,7 @@ def design_lqg(model, u, y, *, target_damping: float = 0.07, band=None,
             "design_states": int(A.shape[0]), "model_states": int(model.nstates),
             "estimator_min_damping": float(np.min(zeta_est)) if zeta_est.size else None,
             "input_rms": u_rms.tolist(), "output_rms": y_rms.tolist(),
+            "input_weight": None if input_weight is None else list(input_weight.peaks),
             "model_modes": rows}
     des = LQGDesign(controller, dm, F, Kd, form, targets, info)
     if verify:
@@ -559,9 +605,11 @@ def verify_design(model, design: LQGDesign, min_fraction: float = 0.5) -> Design
     for t in design.target_modes:
         r = min(tab.rows, key=lambda r: abs(r.frequency_hz - t.frequency_hz))
         reached.append(float(r.damping_worst_visible))
-    worst = int(np.argmin(reached)) if reached else None
-    if worst is not None and reached[worst] < min_fraction * target:
+    asked = np.broadcast_to(np.asarray(target, dtype=float), (len(reached),))
+    worst = int(np.argmin(np.asarray(reached) / asked)) if reached else None
+    if worst is not None and reached[worst] < min_fraction * asked[worst]:
         t = design.target_modes[worst]
+        target = asked[worst]
         raise ControlError(
             f"the design falls short on the model it was designed from: the "
             f"{t.frequency_hz:.1f} Hz target mode reaches {100 * reached[worst]:.2f} % "
