@@ -249,7 +249,11 @@ def predictor_gains(sys: control.StateSpace, Qs, R) -> list:
     :func:`best_predictor` took 14 such solves, about 85 % of its time on the flutter set
     (``benchmarks/results/plid_predictor_profile_before.txt``). An equation that the
     doubling does not settle (no stabilising solution, or too slow a convergence) is
-    handed to :func:`predictor_gain`, so the result is that function's in every case.
+    handed to :func:`predictor_gain`. Accuracy: a relative Riccati residual of at most
+    1.5e-10 on a 0.25 %-damped plant with tiny ``Q`` (scipy's QZ: 1e-15), i.e. gains
+    equal to scipy's to 7e-5 relative there and to 1e-8 on better-conditioned equations
+    (``tests/plid/test_metrics.py``); they are candidates and starts for the
+    prediction-error refinement, which does not depend on such differences.
 
     Parameters
     ----------
