@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 from trussid.plid.experiment import simulate
 from trussid.plid.metrics import predictor_gain
@@ -77,3 +78,48 @@ def test_refine_gain_from_refines_a_repeated_start_once(coloured):
     assert list(got.race_logdet) == ["a"]
     alone = refine_gain(plant, u, y, starts["kalman"], iterations=4)
     np.testing.assert_array_equal(got.fit.K, alone.K)
+
+
+def test_normal_equations_in_modal_coordinates_equal_those_of_a_finite_difference_jacobian():
+    # J by central differences of the predictor's residual in vec K (column-major) and
+    # x0, with no modal algebra; the Gram matrix and gradient the Levenberg-Marquardt step
+    # uses must be J^T W^T W J and J^T W^T W e of it. A well-scaled 2 x 2 system with two
+    # resonances and a real pole (differences need comparable parameter scales).
+    from trussid.plid.pem import _normal_equations
+
+    rng = np.random.default_rng(3)
+    blocks = [0.95 * np.array([[np.cos(w), -np.sin(w)], [np.sin(w), np.cos(w)]])
+              for w in (0.3, 1.1)]
+    A = scipy.linalg.block_diag(*blocks, [[0.6]])
+    n, p, m = 5, 2, 2
+    B, C, D = rng.standard_normal((n, m)), rng.standard_normal((p, n)), np.zeros((p, m))
+    K = 0.02 * rng.standard_normal((n, p))
+    assert np.max(np.abs(np.linalg.eigvals(A - K @ C))) < 1
+    x0 = rng.standard_normal(n)
+    W = np.linalg.cholesky(np.array([[2.0, 0.3], [0.3, 1.0]])).T
+    uu = rng.standard_normal((400, m))
+    yy = rng.standard_normal((400, p))
+
+    def residual(theta):
+        Kt = theta[:n * p].reshape(p, n).T
+        xt = np.array(theta[n * p:])
+        E = np.empty_like(yy)
+        for k in range(len(yy)):
+            E[k] = yy[k] - C @ xt - D @ uu[k]
+            xt = A @ xt + B @ uu[k] + Kt @ E[k]
+        return E
+
+    theta = np.concatenate([K.T.ravel(), x0])
+    E = residual(theta)
+    h = 1e-6
+    J = np.empty((len(yy), p, theta.size))
+    for i in range(theta.size):
+        d = np.zeros_like(theta)
+        d[i] = h
+        # yhat = y - e: d yhat / d theta = -d e / d theta
+        J[:, :, i] = -(residual(theta + d) - residual(theta - d)) / (2 * h)
+    JW = np.matmul(W, J).reshape(-1, theta.size)
+    H_fd, g_fd = JW.T @ JW, JW.T @ (E @ W.T).ravel()
+    H, g = _normal_equations(A - K @ C, C, E, W)
+    np.testing.assert_allclose(H, H_fd, rtol=0, atol=1e-7 * np.abs(H_fd).max())
+    np.testing.assert_allclose(g, g_fd, rtol=0, atol=1e-7 * np.abs(g_fd).max())
