@@ -85,6 +85,8 @@ BENCHMARKS = {
                      "benchmarks/results/plid_feedthrough.md"],
                     ["bench_feedthrough.py", "--quick", "--json", "{json}"]),
     "closedloop": (["bench_closedloop.py"], ["bench_closedloop.py", "--quick", "--out", "{out}"]),
+    "predictor": (["bench_predictor.py", "--json", "{json}"],
+                  ["bench_predictor.py", "--quick", "--json", "{json}"]),
     "uncertainty": (["bench_uncertainty.py"],
                     ["bench_uncertainty.py", "--records", "2", "--out", "{out}/uncertainty"]),
     # Not a measurement: the README's tables from the results; the quick run checks that the
