@@ -405,7 +405,9 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
     from the best candidate. Every distinct start is refined for ``race`` iterations; the
     one with the lowest criterion then continues for the rest of the iteration limit
     (successive halving: the losers cost ``race`` iterations each, not a whole refinement).
-    The choice reads the identification record only.
+    The choice reads the identification record only; a start within ``tol`` of the lowest
+    criterion after the race (in log det: a relative change of the determinant) counts as
+    tied, and ties go to the earlier start.
 
     Parameters
     ----------
@@ -461,6 +463,10 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
     if not runs:
         raise DataError(f"no start gain could be refined ({error})")
     heats = {lab: _logdet(run.E) for lab, run in runs.items()}
-    label = min(heats, key=heats.get)
+    # ties go to the earlier start (the chosen candidate comes first): two starts that
+    # reach the same point differ at rounding level, and a rounding-level winner would make
+    # the kept start depend on BLAS summation order
+    best = min(heats.values())
+    label = next(lab for lab, h in heats.items() if h <= best + tol)
     _iterate(runs[label], iterations - runs[label].iterations, tol)
     return GainRace(label, _result(runs[label], time.process_time() - c0), heats)
