@@ -156,7 +156,9 @@ def run_sqrt(pb: Problem, st: SqrtState, us: np.ndarray, ys: np.ndarray, E: np.n
     Fp, Fi, Fx = csr(pb.F)
     Cp, Ci, Cx = csr(pb.C)
     N, _ = _null(pb)
-    Wn = np.ascontiguousarray(psd_factor(N))
+    # an upper-triangular factor of N (the factor of the reversed N, reversed): the
+    # kernel's k-th combination of the b-blocks then reaches only blocks 0..k
+    Wn = np.ascontiguousarray(psd_factor(N[::-1, ::-1])[::-1, ::-1])
     out = np.full(2, -1, dtype=np.int64)
     if not st.L.flags.f_contiguous:
         st.L = np.asfortranarray(st.L)
