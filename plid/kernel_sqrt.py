@@ -13,7 +13,7 @@ __all__ = ["sqrt_kernel"]
 
 
 @njit
-def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r):
+def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, col):
     """All p whitened Carlson updates on their generators, then ``L[:, :J] <- L T``."""
     # Long: the p scalar updates share their generators (f, a, w, V) and the product with
     # L uses them all; split, the same work arrays would only be passed around.
@@ -78,26 +78,71 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r):
             z[i] += L[i, j] * c
     # L T column by column from the right: (L T)[:, j] = D_j L[:, j] + M_j V_j with
     # M_j = sum_{i > j} L[:, i] U_i^T (p x d, stored transposed), accumulated as j decreases.
-    M = np.zeros((p, d))
-    col = np.empty(d)
+    for r in range(p):
+        for i in range(d):
+            M[r, i] = 0.0
     for j in range(J - 1, -1, -1):
-        # one-dimensional contiguous views and one store per loop: what lets LLVM vectorise
-        Lj = L[j:, j]
+        _lt_column(L, col, M, j, D[j], U[j], V[j], p)
+
+
+@njit
+def _lt_column(L, col, M, j, dj, Uj, Vj, p):
+    """Column j of ``L T``: ``L[j:, j] <- dj L[j:, j] + M[:, j:]^T Vj`` and
+    ``M[:, j:] += Uj L[j:, j]^T`` (the old column).
+
+    Up to three outputs (every case PLID's benchmarks run) in one sweep down the column:
+    the column and the running sums are read and written once instead of once per output.
+    The views are taken here as ``M[r, j:]``, ``L[j:, j]``: numba types those as
+    contiguous (a view of a view, ``M[:, j:][r]``, is not), which is what lets LLVM
+    vectorise the sweep.
+    """
+    Lj = L[j:, j]
+    nn = Lj.size
+    if p == 3:
+        M0 = M[0, j:]
+        M1 = M[1, j:]
+        M2 = M[2, j:]
+        v0, v1, v2 = Vj[0], Vj[1], Vj[2]
+        u0, u1, u2 = Uj[0], Uj[1], Uj[2]
+        for i in range(nn):
+            li = Lj[i]
+            Lj[i] = dj * li + M0[i] * v0 + M1[i] * v1 + M2[i] * v2
+            M0[i] += li * u0
+            M1[i] += li * u1
+            M2[i] += li * u2
+    elif p == 2:
+        M0 = M[0, j:]
+        M1 = M[1, j:]
+        v0, v1 = Vj[0], Vj[1]
+        u0, u1 = Uj[0], Uj[1]
+        for i in range(nn):
+            li = Lj[i]
+            Lj[i] = dj * li + M0[i] * v0 + M1[i] * v1
+            M0[i] += li * u0
+            M1[i] += li * u1
+    elif p == 1:
+        M0 = M[0, j:]
+        v0 = Vj[0]
+        u0 = Uj[0]
+        for i in range(nn):
+            li = Lj[i]
+            Lj[i] = dj * li + M0[i] * v0
+            M0[i] += li * u0
+    else:
         cj = col[j:]
-        dj = D[j]
-        for i in range(cj.size):
+        for i in range(nn):
             cj[i] = dj * Lj[i]
         for r in range(p):
             Mr = M[r, j:]
-            v = V[j, r]
-            for i in range(cj.size):
+            v = Vj[r]
+            for i in range(nn):
                 cj[i] += Mr[i] * v
         for r in range(p):
             Mr = M[r, j:]
-            u = U[j, r]
-            for i in range(cj.size):
+            u = Uj[r]
+            for i in range(nn):
                 Mr[i] += Lj[i] * u
-        for i in range(cj.size):
+        for i in range(nn):
             Lj[i] = cj[i]
 
 
@@ -174,13 +219,16 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, Ab
         for b2 in range(n):
             W[a, b2] = Q[a, b2]
     _add_block_gram(L, Ws, 0, np_, n, Gt, W)
-    for a in range(n):
-        for b2 in range(n):
-            acc = 0.0
-            for j in range(p):
-                for l in range(p):
-                    acc += c3[l, j * n + a] * c3[j, l * n + b2]
-            W[a, b2] += acc
+    # sum_jl c_jl c_lj^T as p^2 contiguous rank-one updates
+    for j in range(p):
+        for l in range(p):
+            cjl = c3[l, j * n:(j + 1) * n]
+            clj = c3[j, l * n:(l + 1) * n]
+            for a in range(n):
+                Wa = W[a]
+                f = cjl[a]
+                for b2 in range(n):
+                    Wa[b2] += f * clj[b2]
     if has_N:
         # input noise sum_jl N[j, l] (L_bj L_bl^T + b_j b_l^T), with N = Wn Wn^T
         _add_block_gram(L, Wn, np_, q, n, Gt, W)
@@ -422,6 +470,8 @@ def sqrt_kernel(z, L, Fp, Fi, Fx, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
     av = np.empty(J + 1)
     wv = np.empty(J)
     acc_r = np.empty(p)
+    Mrun = np.empty((p, d))             # running sums of the Carlson product
+    colm = np.empty(d)
     yw = np.empty(p)
     Abar = np.empty((n, p))
     Bm = np.empty((n, m))
@@ -451,7 +501,7 @@ def sqrt_kernel(z, L, Fp, Fi, Fx, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
             for l in range(p):
                 acc += Rw[r, l] * ys[k, l]
             yw[r] = acc
-        _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r)
+        _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r, Mrun, colm)
         if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT,
                           Bm, coef, xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
             # a non-finite moment: where the reference raises and PLID._one marks the
