@@ -19,12 +19,31 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
     # L uses them all; split, the same work arrays would only be passed around.
     p, n = Hw.shape
     d = L.shape[0]
-    for k in range(p):
-        for j in range(J):
-            acc = 0.0
+    # rows g_k = L^T h_k: each column of L's x rows read once for all outputs (p <= 3)
+    for j in range(J):
+        Lx = L[q:, j]
+        if p == 3:
+            h0 = Hw[0]
+            h1 = Hw[1]
+            h2 = Hw[2]
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
             for i in range(n):
-                acc += Hw[k, i] * L[q + i, j]
-            Gm[k, j] = acc
+                li = Lx[i]
+                a0 += h0[i] * li
+                a1 += h1[i] * li
+                a2 += h2[i] * li
+            Gm[0, j] = a0
+            Gm[1, j] = a1
+            Gm[2, j] = a2
+        else:
+            for k in range(p):
+                hk = Hw[k]
+                acc = 0.0
+                for i in range(n):
+                    acc += hk[i] * Lx[i]
+                Gm[k, j] = acc
     for j in range(J):
         D[j] = 1.0
         wsum[j] = 0.0
@@ -72,23 +91,20 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
         for j in range(J):
             wsum[j] += w[j] * sc
             U[j, k] = w[j]
-    for j in range(J):
-        c = wsum[j]
-        for i in range(j, d):
-            z[i] += L[i, j] * c
     # L T column by column from the right: (L T)[:, j] = D_j L[:, j] + M_j V_j with
-    # M_j = sum_{i > j} L[:, i] U_i^T (p x d, stored transposed), accumulated as j decreases.
+    # M_j = sum_{i > j} L[:, i] U_i^T (p x d, stored transposed), accumulated as j decreases;
+    # the state correction z += L[:, :J] wsum (old L) rides along in the same sweep.
     for r in range(p):
         for i in range(d):
             M[r, i] = 0.0
     for j in range(J - 1, -1, -1):
-        _lt_column(L, col, M, j, D[j], U[j], V[j], p)
+        _lt_column(L, col, M, z, j, D[j], wsum[j], U[j], V[j], p)
 
 
 @njit
-def _lt_column(L, col, M, j, dj, Uj, Vj, p):
-    """Column j of ``L T``: ``L[j:, j] <- dj L[j:, j] + M[:, j:]^T Vj`` and
-    ``M[:, j:] += Uj L[j:, j]^T`` (the old column).
+def _lt_column(L, col, M, z, j, dj, wj, Uj, Vj, p):
+    """Column j of ``L T``: ``L[j:, j] <- dj L[j:, j] + M[:, j:]^T Vj``,
+    ``M[:, j:] += Uj L[j:, j]^T`` and ``z[j:] += wj L[j:, j]`` (the old column).
 
     Up to three outputs (every case PLID's benchmarks run) in one sweep down the column:
     the column and the running sums are read and written once instead of once per output.
@@ -97,6 +113,7 @@ def _lt_column(L, col, M, j, dj, Uj, Vj, p):
     vectorise the sweep.
     """
     Lj = L[j:, j]
+    zj = z[j:]
     nn = Lj.size
     if p == 3:
         M0 = M[0, j:]
@@ -110,6 +127,7 @@ def _lt_column(L, col, M, j, dj, Uj, Vj, p):
             M0[i] += li * u0
             M1[i] += li * u1
             M2[i] += li * u2
+            zj[i] += li * wj
     elif p == 2:
         M0 = M[0, j:]
         M1 = M[1, j:]
@@ -120,6 +138,7 @@ def _lt_column(L, col, M, j, dj, Uj, Vj, p):
             Lj[i] = dj * li + M0[i] * v0 + M1[i] * v1
             M0[i] += li * u0
             M1[i] += li * u1
+            zj[i] += li * wj
     elif p == 1:
         M0 = M[0, j:]
         v0 = Vj[0]
@@ -128,10 +147,12 @@ def _lt_column(L, col, M, j, dj, Uj, Vj, p):
             li = Lj[i]
             Lj[i] = dj * li + M0[i] * v0
             M0[i] += li * u0
+            zj[i] += li * wj
     else:
         cj = col[j:]
         for i in range(nn):
             cj[i] = dj * Lj[i]
+            zj[i] += Lj[i] * wj
         for r in range(p):
             Mr = M[r, j:]
             v = Vj[r]
