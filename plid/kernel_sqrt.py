@@ -97,8 +97,59 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
     for r in range(p):
         for i in range(d):
             M[r, i] = 0.0
-    for j in range(J - 1, -1, -1):
+    j = J - 1
+    if p == 3:
+        while j >= 1:
+            _lt_pair3(L, M, z, j, D, wsum, U, V)
+            j -= 2
+    while j >= 0:
         _lt_column(L, col, M, z, j, D[j], wsum[j], U[j], V[j], p)
+        j -= 1
+
+
+@njit
+def _lt_pair3(L, M, z, j, D, wsum, U, V):
+    """Columns j and j - 1 of ``L T`` (three outputs) in one sweep: as two calls of
+    :func:`_lt_column`, but the running sums ``M`` and ``z`` are read and written once per
+    two columns (the sweep is bound by memory traffic, not arithmetic).
+
+    Row j - 1 has only column j - 1 (L is lower triangular) and M is still zero there.
+    """
+    a = j
+    b = j - 1
+    lb = L[b, b]
+    L[b, b] = D[b] * lb
+    M[0, b] += lb * U[b, 0]
+    M[1, b] += lb * U[b, 1]
+    M[2, b] += lb * U[b, 2]
+    z[b] += lb * wsum[b]
+    La = L[a:, a]
+    Lb = L[a:, b]
+    M0 = M[0, a:]
+    M1 = M[1, a:]
+    M2 = M[2, a:]
+    za = z[a:]
+    da, db = D[a], D[b]
+    wa, wb = wsum[a], wsum[b]
+    va0, va1, va2 = V[a, 0], V[a, 1], V[a, 2]
+    ua0, ua1, ua2 = U[a, 0], U[a, 1], U[a, 2]
+    vb0, vb1, vb2 = V[b, 0], V[b, 1], V[b, 2]
+    ub0, ub1, ub2 = U[b, 0], U[b, 1], U[b, 2]
+    for i in range(La.size):
+        la = La[i]
+        lb = Lb[i]
+        m0 = M0[i]
+        m1 = M1[i]
+        m2 = M2[i]
+        La[i] = da * la + m0 * va0 + m1 * va1 + m2 * va2
+        m0 += la * ua0
+        m1 += la * ua1
+        m2 += la * ua2
+        Lb[i] = db * lb + m0 * vb0 + m1 * vb1 + m2 * vb2
+        M0[i] = m0 + lb * ub0
+        M1[i] = m1 + lb * ub1
+        M2[i] = m2 + lb * ub2
+        za[i] += la * wa + lb * wb
 
 
 @njit
