@@ -219,7 +219,7 @@ def _lt_column(L, col, M, z, j, dj, wj, Uj, Vj, p):
 
 
 @njit
-def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
+def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
                xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
     """The square-root time update of one sample (as sqrt_step's); False at a non-finite
     moment, where the reference raises.
@@ -325,23 +325,44 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, Ab
     # new x rows, column by column: L_x <- Phi L_t + A_hat L_x with A_hat = F + Abar C
     for i in range(d):
         Lx = L[q:, i]
-        for a in range(n):
-            acc = 0.0
-            for t in range(Fp[a], Fp[a + 1]):
-                acc += Fx[t] * Lx[Fi[t]]
-            col[a] = acc
-        for c in range(p):
-            v = CL[c, i]
-            Ac = AbarT[c]
+        if p == 3:
+            A0 = AbarT[0]
+            A1 = AbarT[1]
+            A2 = AbarT[2]
+            v0, v1, v2 = CL[0, i], CL[1, i], CL[2, i]
             for a in range(n):
-                col[a] += Ac[a] * v
+                col[a] = A0[a] * v0 + A1[a] * v1 + A2[a] * v2
+        else:
+            for a in range(n):
+                col[a] = 0.0
+            for c in range(p):
+                v = CL[c, i]
+                Ac = AbarT[c]
+                for a in range(n):
+                    col[a] += Ac[a] * v
+        # F by its diagonals: contiguous, where the sparse rows would gather
+        for k in range(Fo.size):
+            o = Fo[k]
+            Fk = Fd[k]
+            for a in range(max(0, -o), min(n, n - o)):
+                col[a] += Fk[a] * Lx[a + o]
         if i < q:
             # L[block b, i] is zero for blocks above row i (lower triangular)
-            for b in range(i // n, nb):
-                f = coef[b]
-                Lb = L[b * n:(b + 1) * n, i]
+            # (two blocks per sweep of col)
+            b = i // n
+            while b + 1 < nb:
+                f0 = coef[b]
+                f1 = coef[b + 1]
+                Lb0 = L[b * n:(b + 1) * n, i]
+                Lb1 = L[(b + 1) * n:(b + 2) * n, i]
                 for a in range(n):
-                    col[a] += f * Lb[a]
+                    col[a] += f0 * Lb0[a] + f1 * Lb1[a]
+                b += 2
+            if b < nb:
+                f0 = coef[b]
+                Lb0 = L[b * n:(b + 1) * n, i]
+                for a in range(n):
+                    col[a] += f0 * Lb0[a]
             for a in range(n):
                 Lx[a] = col[a]
         else:
@@ -525,7 +546,7 @@ def _add_block_gram(L, Wk, r0, r1, n, Gt, W):
 
 
 @njit
-def sqrt_kernel(z, L, Fp, Fi, Fx, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
+def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
                  us, ys, E, hist, hist_every, k_done, n, p, m, out):
     # Long: one compiled loop over the samples is the point of this module; its stages
     # follow sqrt_step's (measurement, moments, new x rows, LQ of the x block).
@@ -574,7 +595,7 @@ def sqrt_kernel(z, L, Fp, Fi, Fx, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
                 acc += Rw[r, l] * ys[k, l]
             yw[r] = acc
         _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r, Mrun, colm)
-        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT,
+        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT,
                           Bm, coef, xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
             # a non-finite moment: where the reference raises and PLID._one marks the
             # estimate NaN (the rest of this sample's time update is skipped, as there)

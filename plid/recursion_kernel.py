@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trussid.plid.kernel_common import HAVE_NUMBA, csr
+from trussid.plid.kernel_common import HAVE_NUMBA, csr, diagonals
 from trussid.plid.kernel_direct import direct_kernel
 from trussid.plid.kernel_sqrt import sqrt_kernel
 from trussid.plid.recursion_common import Problem, psd_factor
@@ -162,7 +162,8 @@ def run_sqrt(pb: Problem, st: SqrtState, us: np.ndarray, ys: np.ndarray, E: np.n
     out = np.full(2, -1, dtype=np.int64)
     if not st.L.flags.f_contiguous:
         st.L = np.asfortranarray(st.L)
-    sqrt_kernel(st.z, st.L, Fp, Fi, Fx, Cp, Ci, Cx, np.ascontiguousarray(st.Rw),
+    Fo, Fd = diagonals(pb.F)
+    sqrt_kernel(st.z, st.L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, np.ascontiguousarray(st.Rw),
                  np.ascontiguousarray(st.Hw), int(st.J), np.ascontiguousarray(pb.Q), Wn,
                  pb.N is not None, np.ascontiguousarray(us), np.ascontiguousarray(ys), E, hist,
                  int(hist_every), int(k_done), pb.n, pb.p, pb.m, out)
