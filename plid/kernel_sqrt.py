@@ -1,7 +1,22 @@
 """The square-root-form PLID recursion compiled (the loop of
 :func:`trussid.plid.recursion_kernel.run_sqrt`; its reference is
 :func:`trussid.plid.recursion_sqrt.sqrt_step`, see :mod:`trussid.plid.recursion_kernel`
-for what the compiled form changes and why)."""
+for what the compiled form changes and why).
+
+Algorithms: the measurement update is Carlson's triangular square-root update (N. A.
+Carlson, "Fast triangular formulation of the square root filter", AIAA J. 11(9), 1973),
+one whitened output at a time, its p factors multiplied on their semiseparable generators;
+the time update is the array (pre-array / LQ) form of the square-root covariance filter
+(M. Verhaegen and P. Van Dooren, "Numerical aspects of different Kalman filter
+implementations", IEEE Trans. Autom. Control 31(10), 1986), triangularised by Householder
+reflections that keep the pre-array's triangular half.
+
+Where the time goes (``benchmarks/results/plid_speed_sqrt.md``, 30 states 1 -> 3): per
+sample about 20 us measurement update (of which 8 us the Carlson product, a sweep over the
+lower triangle of L), 60 us time update (x rows 25, second-order Gram 12, LQ 8, the rest
+moments); every pass over L is bound by memory traffic more than by arithmetic, which is
+why the loops are fused (two factor columns per sweep, three outputs per sweep).
+"""
 
 from __future__ import annotations
 
@@ -219,7 +234,7 @@ def _lt_column(L, col, M, z, j, dj, wj, Uj, Vj, p):
 
 
 @njit
-def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
+def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
                xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
     """The square-root time update of one sample (as sqrt_step's); False at a non-finite
     moment, where the reference raises.
@@ -248,13 +263,33 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, 
         coef[r] = acc
     for j in range(m):
         coef[p + j] = uk[j]
-    # CL = C L[x, :] (factor rows of C x, i.e. of -v)
-    for i in range(d):
-        for r in range(p):
-            acc = 0.0
-            for t in range(Cp[r], Cp[r + 1]):
-                acc += Cx[t] * L[q + Ci[t], i]
-            CL[r, i] = acc
+    # CL = C L[x, :] (factor rows of C x, i.e. of -v): a selector (shift basis) by its
+    # non-zeros; a C with many (rotation basis: a sum of block components) as three dense
+    # dot products per read of a column, which vectorise where the gather does not
+    if p == 3 and Ci.size > 2 * p:
+        C0 = Cd[0]
+        C1 = Cd[1]
+        C2 = Cd[2]
+        for i in range(d):
+            Lx = L[q:, i]
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            for a in range(n):
+                li = Lx[a]
+                a0 += C0[a] * li
+                a1 += C1[a] * li
+                a2 += C2[a] * li
+            CL[0, i] = a0
+            CL[1, i] = a1
+            CL[2, i] = a2
+    else:
+        for i in range(d):
+            for r in range(p):
+                acc = 0.0
+                for t in range(Cp[r], Cp[r + 1]):
+                    acc += Cx[t] * L[q + Ci[t], i]
+                CL[r, i] = acc
     for r in range(p):
         for l in range(p):
             acc = 0.0
@@ -546,7 +581,7 @@ def _add_block_gram(L, Wk, r0, r1, n, Gt, W):
 
 
 @njit
-def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
+def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Rw, Hw, J, Q, Wn, has_N,
                  us, ys, E, hist, hist_every, k_done, n, p, m, out):
     # Long: one compiled loop over the samples is the point of this module; its stages
     # follow sqrt_step's (measurement, moments, new x rows, LQ of the x block).
@@ -595,7 +630,7 @@ def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
                 acc += Rw[r, l] * ys[k, l]
             yw[r] = acc
         _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r, Mrun, colm)
-        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT,
+        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT,
                           Bm, coef, xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
             # a non-finite moment: where the reference raises and PLID._one marks the
             # estimate NaN (the rest of this sample's time update is skipped, as there)
