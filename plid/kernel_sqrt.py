@@ -299,14 +299,29 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
     # c3[l, j n + a] = (L_A CL_A^T)[j n + a, l] (the reference's c3[j, a, l]); L_A =
     # L[:np, :np] is lower triangular
     for l in range(p):
-        c3l = c3[l]
         for ra in range(np_):
-            c3l[ra] = 0.0
+            c3[l, ra] = 0.0
+    if p == 3:
+        # the three outputs in one pass over L_A's triangle (bound by its memory traffic)
         for i in range(np_):
-            f = CL[l, i]
+            f0, f1, f2 = CL[0, i], CL[1, i], CL[2, i]
             Li = L[i:np_, i]
+            c0 = c3[0, i:]
+            c1 = c3[1, i:]
+            c2 = c3[2, i:]
             for t in range(Li.size):
-                c3l[i + t] += Li[t] * f
+                li = Li[t]
+                c0[t] += li * f0
+                c1[t] += li * f1
+                c2[t] += li * f2
+    else:
+        for l in range(p):
+            c3l = c3[l]
+            for i in range(np_):
+                f = CL[l, i]
+                Li = L[i:np_, i]
+                for t in range(Li.size):
+                    c3l[i + t] += Li[t] * f
     for a in range(n):
         acc = 0.0
         for t in range(Fp[a], Fp[a + 1]):
