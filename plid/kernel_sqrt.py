@@ -391,11 +391,17 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
                 for a in range(n):
                     col[a] += Ac[a] * v
         # F by its diagonals: contiguous, where the sparse rows would gather
+        # (aligned views indexed from 0: an index ``a + o`` numba cannot prove non-negative
+        # gets a wrap-around branch that stops LLVM vectorising)
         for k in range(Fo.size):
             o = Fo[k]
-            Fk = Fd[k]
-            for a in range(max(0, -o), min(n, n - o)):
-                col[a] += Fk[a] * Lx[a + o]
+            lo = max(0, -o)
+            cnt = min(n, n - o) - lo
+            Fk = Fd[k, lo:lo + cnt]
+            Lo = Lx[lo + o:lo + o + cnt]
+            cs = col[lo:lo + cnt]
+            for a in range(cnt):
+                cs[a] += Fk[a] * Lo[a]
         if i < q:
             # L[block b, i] is zero for blocks above row i (lower triangular)
             # (two blocks per sweep of col)
