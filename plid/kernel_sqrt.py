@@ -11,10 +11,11 @@ the time update is the array (pre-array / LQ) form of the square-root covariance
 implementations", IEEE Trans. Autom. Control 31(10), 1986), triangularised by Householder
 reflections that keep the pre-array's triangular half.
 
-Where the time goes (``benchmarks/results/plid_speed_sqrt.md``, 30 states 1 -> 3): per
-sample about 20 us measurement update (of which 8 us the Carlson product, a sweep over the
-lower triangle of L), 60 us time update (x rows 25, second-order Gram 12, LQ 8, the rest
-moments); every pass over L is bound by memory traffic more than by arithmetic, which is
+Where the time goes (``benchmarks/results/plid_speed_sqrt.md``, 30 / 36 states, rotation
+basis, load 1-2): per sample about 20 / 32 us measurement update (8 / 20 us the Carlson
+product, a sweep over the lower triangle of L) and 44 / 64 us time update (new x rows 10 / 15,
+second-order Gram 12 / 19, LQ 8 / 10, the rest moments); every pass over L is bound by
+memory traffic more than by arithmetic, which is
 why the loops are fused (two factor columns per sweep, three outputs per sweep).
 """
 
