@@ -64,6 +64,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from bench_plid_thesis import measure  # noqa: E402
 from plid_cases import Case, record  # noqa: E402
+from results_io import git_commit  # noqa: E402
 from trussid.study.plants import _freqs, _modes, _unit_rms_outputs  # noqa: E402 - the plants' private builders
 from trussid.plid.metrics import frf_error  # noqa: E402
 from trussid.plid.multipass import identify  # noqa: E402
@@ -225,7 +226,7 @@ SPEED_TARGETS = {(30, 1, 3): 12000.0, (36, 3, 3): 8000.0}
 
 
 def speed(n_samples=3000, repeats=3, log=print, shapes=((12, 1, 3), (30, 1, 3), (36, 3, 3)),
-          engines=("compiled", "reference")):
+          engines=("compiled", "reference"), forms=("direct", "sqrt")):
     """Samples per second of one PLID pass: the compiled kernels beside the reference numpy
     steps (``compiled=False``) in the same run, and how far their estimates differ."""
     # Long: one table row per (shape, basis, form, engine), each timed and compared in place.
@@ -241,7 +242,7 @@ def speed(n_samples=3000, repeats=3, log=print, shapes=((12, 1, 3), (30, 1, 3), 
         bases = {"shift": None,
                  "rotation": basis_for(n, p, FS, model_frequencies(case.plant, n // 2, FS))}
         for bname, basis in bases.items():
-            for form in ("direct", "sqrt"):
+            for form in forms:
                 theta = {}
                 for engine in engines:
                     if engine == "compiled" and not HAVE_NUMBA:
@@ -359,6 +360,13 @@ def main(argv=None):
     ap.add_argument("which", nargs="*", default=["accuracy", "speed"])
     ap.add_argument("--seeds", type=int, nargs="+", default=[11])
     ap.add_argument("--json", help="write the raw results here")
+    ap.add_argument("--md", help="write the speed table, the acceptance lines and the machine "
+                                 "here (Markdown)")
+    ap.add_argument("--shapes", nargs="+", metavar="N,M,P",
+                    help="speed: only these (states,inputs,outputs), e.g. 30,1,3 36,3,3")
+    ap.add_argument("--forms", nargs="+", choices=("direct", "sqrt"),
+                    help="speed: only these forms (default both)")
+    ap.add_argument("--repeats", type=int, default=3, help="speed: repetitions per row")
     ap.add_argument("--quick", action="store_true",
                     help="CI form: case (a) on 3000 samples at 2 block rows, the default start; speed "
                          "on 1000 samples, (12,1,3), 1 repeat")
@@ -381,7 +389,13 @@ def main(argv=None):
         report["accuracy"] = results
         print(accuracy_tables(results))
     if "speed" in args.which:
-        report["speed"] = speed(1000, 1, shapes=((12, 1, 3),)) if args.quick else speed()
+        kw = {}
+        if args.shapes:
+            kw["shapes"] = tuple(tuple(int(v) for v in sh.split(",")) for sh in args.shapes)
+        if args.forms:
+            kw["forms"] = tuple(args.forms)
+        report["speed"] = (speed(1000, 1, shapes=((12, 1, 3),)) if args.quick
+                           else speed(repeats=args.repeats, **kw))
         print(speed_table(report["speed"]))
         print(speed_acceptance(report["speed"]))
         if not args.quick:
@@ -389,9 +403,16 @@ def main(argv=None):
     report["machine_end"] = machine()
     report["wall_seconds"] = time.perf_counter() - t_start
     print(f"total {report['wall_seconds']:.0f} s, load at end {report['machine_end']['load_avg']}")
+    report["commit"] = git_commit()
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(report, fh, indent=1, default=float)
+    if args.md and "speed" in report:
+        with open(args.md, "w") as fh:
+            fh.write(f"# PLID streaming speed (bench_plid.py {' '.join(argv or sys.argv[1:])})\n\n"
+                     f"commit {report['commit']}; machine at start {report['machine_start']}, "
+                     f"at end {report['machine_end']}\n\n{speed_table(report['speed'])}\n\n"
+                     f"```\n{speed_acceptance(report['speed'])}\n```\n")
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ except ImportError:  # the pure-numpy path of recursion_kernel gives the same re
     numba = None
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "njit", "csr", "state_sequence"]
+__all__ = ["HAVE_NUMBA", "njit", "csr", "diagonals", "state_sequence"]
 
 # fastmath without the finite-math flags: the recursion must carry NaN/inf through (the
 # estimator reports a broken run instead of raising), which "nnan"/"ninf" would break.
@@ -39,6 +39,26 @@ def csr(M: np.ndarray):
     ptr = np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int64)
     rows, cols = np.nonzero(nz)
     return ptr, cols.astype(np.int64), M[rows, cols].astype(float)
+
+
+def diagonals(M: np.ndarray):
+    """The non-zero diagonals of a square matrix: offsets ``o`` (column - row) and values
+    ``V[k, a] = M[a, a + o_k]`` (zero where ``a + o_k`` is outside), so that
+    ``(M x)[a] = sum_k V[k, a] x[a + o_k]``.
+
+    PLID's bases (shifts, 2 x 2 rotation blocks) have one to three diagonals: applied this
+    way a product is a few contiguous multiply-adds per row, which vectorise, where the
+    row-wise sparse form gathers through an index array.
+    """
+    M = np.asarray(M, dtype=float)
+    n = M.shape[0]
+    rows, cols = np.nonzero(M)
+    offs = np.unique(cols - rows).astype(np.int64)
+    V = np.zeros((offs.size, n))
+    for k, o in enumerate(offs):
+        a = np.arange(max(0, -o), min(n, n - o))
+        V[k, a] = M[a, a + o]
+    return offs, V
 
 
 @njit

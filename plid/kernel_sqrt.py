@@ -1,7 +1,23 @@
 """The square-root-form PLID recursion compiled (the loop of
 :func:`trussid.plid.recursion_kernel.run_sqrt`; its reference is
 :func:`trussid.plid.recursion_sqrt.sqrt_step`, see :mod:`trussid.plid.recursion_kernel`
-for what the compiled form changes and why)."""
+for what the compiled form changes and why).
+
+Algorithms: the measurement update is Carlson's triangular square-root update (N. A.
+Carlson, "Fast triangular formulation of the square root filter", AIAA J. 11(9), 1973),
+one whitened output at a time, its p factors multiplied on their semiseparable generators;
+the time update is the array (pre-array / LQ) form of the square-root covariance filter
+(M. Verhaegen and P. Van Dooren, "Numerical aspects of different Kalman filter
+implementations", IEEE Trans. Autom. Control 31(10), 1986), triangularised by Householder
+reflections that keep the pre-array's triangular half.
+
+Where the time goes (``benchmarks/results/plid_speed_sqrt.md``, 30 / 36 states, rotation
+basis, load 1-2): per sample about 20 / 32 us measurement update (8 / 20 us the Carlson
+product, a sweep over the lower triangle of L) and 44 / 64 us time update (new x rows 10 / 15,
+second-order Gram 12 / 19, LQ 8 / 10, the rest moments); every pass over L is bound by
+memory traffic more than by arithmetic, which is
+why the loops are fused (two factor columns per sweep, three outputs per sweep).
+"""
 
 from __future__ import annotations
 
@@ -13,18 +29,37 @@ __all__ = ["sqrt_kernel"]
 
 
 @njit
-def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r):
+def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, col):
     """All p whitened Carlson updates on their generators, then ``L[:, :J] <- L T``."""
     # Long: the p scalar updates share their generators (f, a, w, V) and the product with
     # L uses them all; split, the same work arrays would only be passed around.
     p, n = Hw.shape
     d = L.shape[0]
-    for k in range(p):
-        for j in range(J):
-            acc = 0.0
+    # rows g_k = L^T h_k: each column of L's x rows read once for all outputs (p <= 3)
+    for j in range(J):
+        Lx = L[q:, j]
+        if p == 3:
+            h0 = Hw[0]
+            h1 = Hw[1]
+            h2 = Hw[2]
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
             for i in range(n):
-                acc += Hw[k, i] * L[q + i, j]
-            Gm[k, j] = acc
+                li = Lx[i]
+                a0 += h0[i] * li
+                a1 += h1[i] * li
+                a2 += h2[i] * li
+            Gm[0, j] = a0
+            Gm[1, j] = a1
+            Gm[2, j] = a2
+        else:
+            for k in range(p):
+                hk = Hw[k]
+                acc = 0.0
+                for i in range(n):
+                    acc += hk[i] * Lx[i]
+                Gm[k, j] = acc
     for j in range(J):
         D[j] = 1.0
         wsum[j] = 0.0
@@ -72,37 +107,135 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r):
         for j in range(J):
             wsum[j] += w[j] * sc
             U[j, k] = w[j]
-    for j in range(J):
-        c = wsum[j]
-        for i in range(j, d):
-            z[i] += L[i, j] * c
     # L T column by column from the right: (L T)[:, j] = D_j L[:, j] + M_j V_j with
-    # M_j = sum_{i > j} L[:, i] U_i^T (p x d, stored transposed), accumulated as j decreases.
-    M = np.zeros((p, d))
-    col = np.empty(d)
-    for j in range(J - 1, -1, -1):
-        # one-dimensional contiguous views and one store per loop: what lets LLVM vectorise
-        Lj = L[j:, j]
+    # M_j = sum_{i > j} L[:, i] U_i^T (p x d, stored transposed), accumulated as j decreases;
+    # the state correction z += L[:, :J] wsum (old L) rides along in the same sweep.
+    for r in range(p):
+        for i in range(d):
+            M[r, i] = 0.0
+    j = J - 1
+    if p == 3:
+        while j >= 1:
+            _lt_pair3(L, M, z, j, D, wsum, U, V)
+            j -= 2
+    while j >= 0:
+        _lt_column(L, col, M, z, j, D[j], wsum[j], U[j], V[j], p)
+        j -= 1
+
+
+@njit
+def _lt_pair3(L, M, z, j, D, wsum, U, V):
+    """Columns j and j - 1 of ``L T`` (three outputs) in one sweep: as two calls of
+    :func:`_lt_column`, but the running sums ``M`` and ``z`` are read and written once per
+    two columns (the sweep is bound by memory traffic, not arithmetic).
+
+    Row j - 1 has only column j - 1 (L is lower triangular) and M is still zero there.
+    """
+    a = j
+    b = j - 1
+    lb = L[b, b]
+    L[b, b] = D[b] * lb
+    M[0, b] += lb * U[b, 0]
+    M[1, b] += lb * U[b, 1]
+    M[2, b] += lb * U[b, 2]
+    z[b] += lb * wsum[b]
+    La = L[a:, a]
+    Lb = L[a:, b]
+    M0 = M[0, a:]
+    M1 = M[1, a:]
+    M2 = M[2, a:]
+    za = z[a:]
+    da, db = D[a], D[b]
+    wa, wb = wsum[a], wsum[b]
+    va0, va1, va2 = V[a, 0], V[a, 1], V[a, 2]
+    ua0, ua1, ua2 = U[a, 0], U[a, 1], U[a, 2]
+    vb0, vb1, vb2 = V[b, 0], V[b, 1], V[b, 2]
+    ub0, ub1, ub2 = U[b, 0], U[b, 1], U[b, 2]
+    for i in range(La.size):
+        la = La[i]
+        lb = Lb[i]
+        m0 = M0[i]
+        m1 = M1[i]
+        m2 = M2[i]
+        La[i] = da * la + m0 * va0 + m1 * va1 + m2 * va2
+        m0 += la * ua0
+        m1 += la * ua1
+        m2 += la * ua2
+        Lb[i] = db * lb + m0 * vb0 + m1 * vb1 + m2 * vb2
+        M0[i] = m0 + lb * ub0
+        M1[i] = m1 + lb * ub1
+        M2[i] = m2 + lb * ub2
+        za[i] += la * wa + lb * wb
+
+
+@njit
+def _lt_column(L, col, M, z, j, dj, wj, Uj, Vj, p):
+    """Column j of ``L T``: ``L[j:, j] <- dj L[j:, j] + M[:, j:]^T Vj``,
+    ``M[:, j:] += Uj L[j:, j]^T`` and ``z[j:] += wj L[j:, j]`` (the old column).
+
+    Up to three outputs (every case PLID's benchmarks run) in one sweep down the column:
+    the column and the running sums are read and written once instead of once per output.
+    The views are taken here as ``M[r, j:]``, ``L[j:, j]``: numba types those as
+    contiguous (a view of a view, ``M[:, j:][r]``, is not), which is what lets LLVM
+    vectorise the sweep.
+    """
+    Lj = L[j:, j]
+    zj = z[j:]
+    nn = Lj.size
+    if p == 3:
+        M0 = M[0, j:]
+        M1 = M[1, j:]
+        M2 = M[2, j:]
+        v0, v1, v2 = Vj[0], Vj[1], Vj[2]
+        u0, u1, u2 = Uj[0], Uj[1], Uj[2]
+        for i in range(nn):
+            li = Lj[i]
+            Lj[i] = dj * li + M0[i] * v0 + M1[i] * v1 + M2[i] * v2
+            M0[i] += li * u0
+            M1[i] += li * u1
+            M2[i] += li * u2
+            zj[i] += li * wj
+    elif p == 2:
+        M0 = M[0, j:]
+        M1 = M[1, j:]
+        v0, v1 = Vj[0], Vj[1]
+        u0, u1 = Uj[0], Uj[1]
+        for i in range(nn):
+            li = Lj[i]
+            Lj[i] = dj * li + M0[i] * v0 + M1[i] * v1
+            M0[i] += li * u0
+            M1[i] += li * u1
+            zj[i] += li * wj
+    elif p == 1:
+        M0 = M[0, j:]
+        v0 = Vj[0]
+        u0 = Uj[0]
+        for i in range(nn):
+            li = Lj[i]
+            Lj[i] = dj * li + M0[i] * v0
+            M0[i] += li * u0
+            zj[i] += li * wj
+    else:
         cj = col[j:]
-        dj = D[j]
-        for i in range(cj.size):
+        for i in range(nn):
             cj[i] = dj * Lj[i]
+            zj[i] += Lj[i] * wj
         for r in range(p):
             Mr = M[r, j:]
-            v = V[j, r]
-            for i in range(cj.size):
+            v = Vj[r]
+            for i in range(nn):
                 cj[i] += Mr[i] * v
         for r in range(p):
             Mr = M[r, j:]
-            u = U[j, r]
-            for i in range(cj.size):
+            u = Uj[r]
+            for i in range(nn):
                 Mr[i] += Lj[i] * u
-        for i in range(cj.size):
+        for i in range(nn):
             Lj[i] = cj[i]
 
 
 @njit
-def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
+def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
                xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
     """The square-root time update of one sample (as sqrt_step's); False at a non-finite
     moment, where the reference raises.
@@ -131,13 +264,33 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, Ab
         coef[r] = acc
     for j in range(m):
         coef[p + j] = uk[j]
-    # CL = C L[x, :] (factor rows of C x, i.e. of -v)
-    for i in range(d):
-        for r in range(p):
-            acc = 0.0
-            for t in range(Cp[r], Cp[r + 1]):
-                acc += Cx[t] * L[q + Ci[t], i]
-            CL[r, i] = acc
+    # CL = C L[x, :] (factor rows of C x, i.e. of -v): a selector (shift basis) by its
+    # non-zeros; a C with many (rotation basis: a sum of block components) as three dense
+    # dot products per read of a column, which vectorise where the gather does not
+    if p == 3 and Ci.size > 2 * p:
+        C0 = Cd[0]
+        C1 = Cd[1]
+        C2 = Cd[2]
+        for i in range(d):
+            Lx = L[q:, i]
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            for a in range(n):
+                li = Lx[a]
+                a0 += C0[a] * li
+                a1 += C1[a] * li
+                a2 += C2[a] * li
+            CL[0, i] = a0
+            CL[1, i] = a1
+            CL[2, i] = a2
+    else:
+        for i in range(d):
+            for r in range(p):
+                acc = 0.0
+                for t in range(Cp[r], Cp[r + 1]):
+                    acc += Cx[t] * L[q + Ci[t], i]
+                CL[r, i] = acc
     for r in range(p):
         for l in range(p):
             acc = 0.0
@@ -147,14 +300,29 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, Ab
     # c3[l, j n + a] = (L_A CL_A^T)[j n + a, l] (the reference's c3[j, a, l]); L_A =
     # L[:np, :np] is lower triangular
     for l in range(p):
-        c3l = c3[l]
         for ra in range(np_):
-            c3l[ra] = 0.0
+            c3[l, ra] = 0.0
+    if p == 3:
+        # the three outputs in one pass over L_A's triangle (bound by its memory traffic)
         for i in range(np_):
-            f = CL[l, i]
+            f0, f1, f2 = CL[0, i], CL[1, i], CL[2, i]
             Li = L[i:np_, i]
+            c0 = c3[0, i:]
+            c1 = c3[1, i:]
+            c2 = c3[2, i:]
             for t in range(Li.size):
-                c3l[i + t] += Li[t] * f
+                li = Li[t]
+                c0[t] += li * f0
+                c1[t] += li * f1
+                c2[t] += li * f2
+    else:
+        for l in range(p):
+            c3l = c3[l]
+            for i in range(np_):
+                f = CL[l, i]
+                Li = L[i:np_, i]
+                for t in range(Li.size):
+                    c3l[i + t] += Li[t] * f
     for a in range(n):
         acc = 0.0
         for t in range(Fp[a], Fp[a + 1]):
@@ -166,20 +334,24 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, Ab
         for j in range(p):
             acc += c3[j, j * n + a]
         xn[a] = acc
-    # second-order moments: sum_k G_k G_k^T with G_k = sum_j Ws[j, k] L_aj (Sv = Ws Ws^T)
-    if not _psd_factor(Sv, Ws):
+    # second-order moments: sum_k G_k G_k^T with G_k = sum_j Ws[j, k] L_aj (Sv = Ws Ws^T,
+    # Ws upper triangular: G_k = sum_{j <= k} Ws[j, k] L_aj has only (k + 1) n columns)
+    if not _upper_factor(Sv, Ws):
         return False
     for a in range(n):
         for b2 in range(n):
             W[a, b2] = Q[a, b2]
     _add_block_gram(L, Ws, 0, np_, n, Gt, W)
-    for a in range(n):
-        for b2 in range(n):
-            acc = 0.0
-            for j in range(p):
-                for l in range(p):
-                    acc += c3[l, j * n + a] * c3[j, l * n + b2]
-            W[a, b2] += acc
+    # sum_jl c_jl c_lj^T as p^2 contiguous rank-one updates
+    for j in range(p):
+        for l in range(p):
+            cjl = c3[l, j * n:(j + 1) * n]
+            clj = c3[j, l * n:(l + 1) * n]
+            for a in range(n):
+                Wa = W[a]
+                f = cjl[a]
+                for b2 in range(n):
+                    Wa[b2] += f * clj[b2]
     if has_N:
         # input noise sum_jl N[j, l] (L_bj L_bl^T + b_j b_l^T), with N = Wn Wn^T
         _add_block_gram(L, Wn, np_, q, n, Gt, W)
@@ -204,22 +376,50 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, Ab
     # new x rows, column by column: L_x <- Phi L_t + A_hat L_x with A_hat = F + Abar C
     for i in range(d):
         Lx = L[q:, i]
-        for a in range(n):
-            acc = 0.0
-            for t in range(Fp[a], Fp[a + 1]):
-                acc += Fx[t] * Lx[Fi[t]]
-            col[a] = acc
-        for c in range(p):
-            v = CL[c, i]
-            Ac = AbarT[c]
+        if p == 3:
+            A0 = AbarT[0]
+            A1 = AbarT[1]
+            A2 = AbarT[2]
+            v0, v1, v2 = CL[0, i], CL[1, i], CL[2, i]
             for a in range(n):
-                col[a] += Ac[a] * v
-        if i < q:
-            for b in range(nb):
-                f = coef[b]
-                Lb = L[b * n:(b + 1) * n, i]
+                col[a] = A0[a] * v0 + A1[a] * v1 + A2[a] * v2
+        else:
+            for a in range(n):
+                col[a] = 0.0
+            for c in range(p):
+                v = CL[c, i]
+                Ac = AbarT[c]
                 for a in range(n):
-                    col[a] += f * Lb[a]
+                    col[a] += Ac[a] * v
+        # F by its diagonals: contiguous, where the sparse rows would gather
+        # (aligned views indexed from 0: an index ``a + o`` numba cannot prove non-negative
+        # gets a wrap-around branch that stops LLVM vectorising)
+        for k in range(Fo.size):
+            o = Fo[k]
+            lo = max(0, -o)
+            cnt = min(n, n - o) - lo
+            Fk = Fd[k, lo:lo + cnt]
+            Lo = Lx[lo + o:lo + o + cnt]
+            cs = col[lo:lo + cnt]
+            for a in range(cnt):
+                cs[a] += Fk[a] * Lo[a]
+        if i < q:
+            # L[block b, i] is zero for blocks above row i (lower triangular)
+            # (two blocks per sweep of col)
+            b = i // n
+            while b + 1 < nb:
+                f0 = coef[b]
+                f1 = coef[b + 1]
+                Lb0 = L[b * n:(b + 1) * n, i]
+                Lb1 = L[(b + 1) * n:(b + 2) * n, i]
+                for a in range(n):
+                    col[a] += f0 * Lb0[a] + f1 * Lb1[a]
+                b += 2
+            if b < nb:
+                f0 = coef[b]
+                Lb0 = L[b * n:(b + 1) * n, i]
+                for a in range(n):
+                    col[a] += f0 * Lb0[a]
             for a in range(n):
                 Lx[a] = col[a]
         else:
@@ -229,11 +429,18 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, Ab
     for a in range(n):
         for i in range(n):
             pre[a, n + i] = Wf[a, i]
+    tri = True
     for a in range(n):
         for i in range(2 * n):
             if not np.isfinite(pre[a, i]):
                 return False
-    _lq_rows(pre)
+        for i in range(a + 1, n):
+            if Wf[a, i] != 0.0:
+                tri = False
+    if tri:
+        _lq_tri(pre, n)
+    else:
+        _lq_rows(pre)               # Wf is the symmetric root of a singular W: no structure
     for a in range(n):
         for i in range(n):
             L[q + a, q + i] = pre[a, i] if i <= a else 0.0
@@ -281,19 +488,107 @@ def _lq_rows(M):
 
 
 @njit
+def _lq_tri(M, n):
+    """As :func:`_lq_rows` for ``M = [A, T]`` (n x 2n) with ``T`` lower triangular.
+
+    Householder reflections from the right keep the structure: row k is non-zero only in
+    columns ``k .. n + k`` (A's columns from k on and T's first k + 1, where the previous
+    reflections filled nothing new since T's row k already reaches column ``n + k``), which
+    is one contiguous range of n + 1 entries. The reflection of row k thus costs
+    ``2 (n - k - 1) (n + 1)`` instead of ``2 (n - k - 1) (2 n - k)`` multiply-adds: n^3 in all
+    instead of 5 n^3 / 3. Same sign convention as :func:`_lq_rows`.
+    """
+    v = np.empty(n + 1)
+    s = np.empty(n)
+    for k in range(n):
+        hi = n + k + 1
+        Mk = M[k, k:hi]
+        alpha = Mk[0]
+        xn2 = 0.0
+        for j in range(1, n + 1):
+            xn2 += Mk[j] * Mk[j]
+        if xn2 == 0.0:
+            continue
+        nrm = np.sqrt(alpha * alpha + xn2)
+        beta = -nrm if alpha >= 0.0 else nrm
+        tau = (beta - alpha) / beta
+        scale = 1.0 / (alpha - beta)
+        v[0] = 1.0
+        for j in range(1, n + 1):
+            v[j] = Mk[j] * scale
+        Mk[0] = beta
+        for j in range(1, n + 1):
+            Mk[j] = 0.0
+        for i in range(k + 1, n):
+            Mi = M[i, k:hi]
+            acc = 0.0
+            for j in range(n + 1):
+                acc += Mi[j] * v[j]
+            s[i] = acc * tau
+        for i in range(k + 1, n):
+            Mi = M[i, k:hi]
+            f = s[i]
+            for j in range(n + 1):
+                Mi[j] -= f * v[j]
+
+
+@njit
+def _upper_factor(M, out):
+    """``out out^T = M`` with ``out`` upper triangular (Cholesky from the last row up),
+    else the clipped symmetric root of :func:`_psd_factor`; False when M is not finite.
+
+    Any factor gives the same second-order moment; the upper one makes the k-th
+    combination of the factor's blocks reach only blocks 0..k (see :func:`_add_block_gram`).
+    """
+    k = M.shape[0]
+    for i in range(k):
+        for j in range(k):
+            if not np.isfinite(M[i, j]):
+                return False
+            out[i, j] = 0.0
+    for j in range(k - 1, -1, -1):
+        s = M[j, j]
+        for t in range(j + 1, k):
+            s -= out[j, t] * out[j, t]
+        if not s > 0.0:
+            return _psd_factor(M, out)
+        dj = np.sqrt(s)
+        out[j, j] = dj
+        for i in range(j):
+            s = M[i, j]
+            for t in range(j + 1, k):
+                s -= out[i, t] * out[j, t]
+            out[i, j] = s / dj
+    return True
+
+
+@njit
 def _add_block_gram(L, Wk, r0, r1, n, Gt, W):
     """``W += sum_k G_k G_k^T`` with ``G_k = sum_j Wk[j, k] L[r0 + j n:, :r1]`` over the n-row
     blocks of ``L[r0:r1, :r1]`` (lower triangular: block j is zero beyond column
-    ``r0 + (j + 1) n``). The G_k are stacked transposed in ``Gt`` and the Gram is one BLAS
-    product: it carries most of the time update's flops, which scalar loops do 5x slower."""
+    ``r0 + (j + 1) n``, so G_k is zero beyond the last block column k of ``Wk`` reaches).
+    The non-zero columns of the G_k are stacked transposed in ``Gt`` and the Gram is one
+    BLAS product: it carries most of the time update's flops, which scalar loops do 5x
+    slower."""
     nbk = (r1 - r0) // n
     nk = Wk.shape[1]
+    off = 0
     for kk in range(nk):
-        G = Gt[kk * r1:(kk + 1) * r1]
-        for i in range(r1):
+        jmax = -1
+        for j in range(nbk):
+            if Wk[j, kk] != 0.0:
+                jmax = j
+        if jmax < 0:
+            continue
+        # G_kk is zero beyond column r0 + (jmax + 1) n: with an upper-triangular Wk
+        # (jmax = kk) the stack has n p (p + 1) / 2 rows instead of n p^2
+        rows = r0 + (jmax + 1) * n
+        G = Gt[off:off + rows]
+        off += rows
+        for i in range(rows):
             for a in range(n):
                 G[i, a] = 0.0
-        for j in range(nbk):
+        for j in range(jmax + 1):
             f = Wk[j, kk]
             if f != 0.0:
                 base = r0 + j * n
@@ -302,12 +597,13 @@ def _add_block_gram(L, Wk, r0, r1, n, Gt, W):
                     Gi = G[i]
                     for a in range(n):
                         Gi[a] += f * Li[a]
-    Gs = Gt[:nk * r1]
-    W += np.dot(Gs.T, Gs)
+    if off:
+        Gs = Gt[:off]
+        W += np.dot(Gs.T, Gs)
 
 
 @njit
-def sqrt_kernel(z, L, Fp, Fi, Fx, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
+def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Rw, Hw, J, Q, Wn, has_N,
                  us, ys, E, hist, hist_every, k_done, n, p, m, out):
     # Long: one compiled loop over the samples is the point of this module; its stages
     # follow sqrt_step's (measurement, moments, new x rows, LQ of the x block).
@@ -324,6 +620,8 @@ def sqrt_kernel(z, L, Fp, Fi, Fx, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
     av = np.empty(J + 1)
     wv = np.empty(J)
     acc_r = np.empty(p)
+    Mrun = np.empty((p, d))             # running sums of the Carlson product
+    colm = np.empty(d)
     yw = np.empty(p)
     Abar = np.empty((n, p))
     Bm = np.empty((n, m))
@@ -353,8 +651,8 @@ def sqrt_kernel(z, L, Fp, Fi, Fx, Cp, Ci, Cx, Rw, Hw, J, Q, Wn, has_N,
             for l in range(p):
                 acc += Rw[r, l] * ys[k, l]
             yw[r] = acc
-        _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r)
-        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Cp, Ci, Cx, Q, Wn, has_N, n, p, m, Abar, AbarT,
+        _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r, Mrun, colm)
+        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT,
                           Bm, coef, xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
             # a non-finite moment: where the reference raises and PLID._one marks the
             # estimate NaN (the rest of this sample's time update is skipped, as there)

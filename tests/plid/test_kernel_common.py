@@ -1,8 +1,13 @@
 """Shared pieces of the compiled kernels: the compiled state recursion behind
-:func:`trussid.plid.simulate` equals scipy's simulation and the numpy fallback."""
+:func:`trussid.plid.simulate` equals scipy's simulation and the numpy fallback; the
+diagonal form of a matrix multiplies as the matrix does."""
 
 import numpy as np
+import pytest
 import scipy.signal
+
+from trussid.plid.bases import basis_for
+from trussid.plid.canonical import ObserverBasis
 
 from trussid.plid import kernel_common as KC
 
@@ -33,3 +38,35 @@ def test_state_sequence_is_the_same_without_numba(monkeypatch):
     plain = KC.state_sequence(A, Bu, x0)
     assert np.allclose(compiled, plain, rtol=1e-13, atol=1e-13 * np.abs(plain).max())
     assert np.array_equal(x0, np.ones(8))                       # the start is not overwritten
+
+
+def _apply_diagonals(offs, V, x):
+    """``sum_k V[k, a] x[a + o_k]``, the product as the square-root kernel forms it."""
+    n = x.shape[0]
+    out = np.zeros_like(x)
+    for k, o in enumerate(offs):
+        lo, hi = max(0, -o), min(n, n - o)
+        out[lo:hi] += V[k, lo:hi, None] * x[lo + o:hi + o]
+    return out
+
+
+@pytest.mark.parametrize("name", ["shift", "rotation", "random sparse", "dense"])
+def test_diagonals_multiply_as_the_matrix(name):
+    rng = np.random.default_rng(3)
+    n = 12
+    M = {"shift": lambda: ObserverBasis.shift(n, 3).F,
+         "rotation": lambda: basis_for(n, 2, 1600.0, [50, 90, 150, 220, 300, 400]).F,
+         "random sparse": lambda: rng.standard_normal((n, n)) * (rng.random((n, n)) < 0.15),
+         "dense": lambda: rng.standard_normal((n, n))}[name]()
+    offs, V = KC.diagonals(M)
+    # only the diagonals that hold a non-zero are kept
+    assert set(offs.tolist()) == set((np.nonzero(M)[1] - np.nonzero(M)[0]).tolist())
+    X = rng.standard_normal((n, 5))
+    assert np.allclose(_apply_diagonals(offs, V, X), M @ X, rtol=0, atol=1e-13)
+
+
+def test_plids_bases_have_at_most_three_diagonals():
+    # why the square-root kernel applies F by diagonals: a few contiguous sweeps per column
+    for F in (ObserverBasis.shift(30, 3).F,
+              basis_for(30, 3, 1600.0, np.linspace(40, 700, 15)).F):
+        assert KC.diagonals(F)[0].size <= 3

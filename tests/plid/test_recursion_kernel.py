@@ -53,6 +53,11 @@ CASES = {
                       None, None),
     "shift MIMO, input noise and drift": (lambda n, p: ObserverBasis.shift(n, p), 2,
                                           np.diag([1e-3, 2e-3]), 1e-8),
+    # without drift the square-root kernel runs its own input-noise moments (a correlated N,
+    # so that its triangular factor has an off-diagonal entry)
+    "rotation MIMO, input noise": (lambda n, p: basis_for(n, p, 1600.0,
+                                                          [50, 90, 150, 220, 300, 400]), 2,
+                                   np.array([[1e-3, 4e-4], [4e-4, 2e-3]]), None),
 }
 
 
