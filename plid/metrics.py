@@ -30,6 +30,7 @@ Poles
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import control
@@ -42,6 +43,7 @@ from trussid.plid.experiment import simulate
 from trussid.plid.frf import FRF, frequency_response
 from trussid.plid.kernel_common import HAVE_NUMBA, state_sequence
 from trussid.plid.modal import assign_pairs, pole_parameters, s_plane
+from trussid.plid.riccati import doubling_gains
 
 
 def _check_sizes(sys, u, y=None):
@@ -144,9 +146,8 @@ def choose_predictor(model: control.StateSpace, u, y, candidates=None,
 
 
 def _one_step_scores(model, u, y, Ks, skip) -> list[float]:
-    """Mean-normalised one-step ratios [dB] of several gains ``Ks`` of one model, their
-    predictors run side by side in one pass over the data (one Python step per sample
-    for all candidates instead of one per candidate)."""
+    """Mean-normalised one-step ratios [dB] of several gains ``Ks`` of one model (the
+    compiled recursion per gain, or without numba one numpy step per sample for all)."""
     A, B, C, D = (np.asarray(M, dtype=float) for M in (model.A, model.B, model.C, model.D))
     Ks = np.asarray(Ks, dtype=float)                          # (c, n, p)
     nc, n = Ks.shape[0], A.shape[0]
@@ -235,25 +236,8 @@ def refine_predictor_gain(model: control.StateSpace, u, y, K0=None, iterations: 
 
 
 def predictor_gains(sys: control.StateSpace, Qs, R) -> list:
-    """Steady-state one-step Kalman predictor gains of one model for several state-noise
-    covariances: :func:`predictor_gain` for each ``Q`` in ``Qs``, solved side by side.
-
-    The filter Riccati equations share ``A``, ``C`` and ``R``; they are solved together by
-    the structure-preserving doubling algorithm (Chu, Fan and Lin, "A structure-preserving
-    doubling algorithm for continuous-time algebraic Riccati equations", and its discrete
-    form SDA-1: ``A_{k+1} = A_k (I + G_k H_k)^-1 A_k``, ``G_{k+1} = G_k + A_k (I + G_k
-    H_k)^-1 G_k A_k^T``, ``H_{k+1} = H_k + A_k^T H_k (I + G_k H_k)^-1 A_k`` with ``A_0 =
-    A^T``, ``G_0 = C^T R^-1 C``, ``H_0 = Q``; ``H_k`` converges quadratically to ``P``) as
-    stacked arrays. Written here because scipy's ``solve_discrete_are`` solves one
-    equation at a time with balancing and a QZ decomposition: the 14 candidate gains of
-    :func:`best_predictor` took 14 such solves, about 85 % of its time on the flutter set
-    (``benchmarks/results/plid_predictor_profile_before.txt``). An equation that the
-    doubling does not settle (no stabilising solution, or too slow a convergence) is
-    handed to :func:`predictor_gain`. Accuracy: a relative Riccati residual of at most
-    1.5e-10 on a 0.25 %-damped plant with tiny ``Q`` (scipy's QZ: 1e-15), i.e. gains
-    equal to scipy's to 7e-5 relative there and to 1e-8 on better-conditioned equations
-    (``tests/plid/test_metrics.py``); they are candidates and starts for the
-    prediction-error refinement, which does not depend on such differences.
+    """:func:`predictor_gain` for several state-noise covariances, solved side by side by
+    :func:`trussid.plid.riccati.doubling_gains` where it settles (why, and its accuracy: there).
 
     Parameters
     ----------
@@ -269,48 +253,10 @@ def predictor_gains(sys: control.StateSpace, Qs, R) -> list:
     list
         Per ``Q``: the gain ``K`` (n, p), or None where no stabilising solution exists.
     """
-    A, C = np.asarray(sys.A, float), np.asarray(sys.C, float)
-    R = np.asarray(R, float)
-    Qs = np.asarray(Qs, float)
-    c, n = Qs.shape[0], A.shape[0]
-    if c == 0:
-        return []
-    with np.errstate(all="ignore"):
-        G = np.broadcast_to(C.T @ np.linalg.solve(R, C), (c, n, n)).copy()
-        Ak = np.broadcast_to(A.T, (c, n, n)).copy()
-        H = Qs.copy()
-        eye = np.eye(n)
-        done = np.zeros(c, bool)
-        for _ in range(60):
-            M = eye + G @ H
-            try:
-                S = np.linalg.solve(M, np.concatenate([Ak, G], axis=2))
-            except np.linalg.LinAlgError:
-                break
-            S1, S2 = S[:, :, :n], S[:, :, n:]
-            AkT = np.transpose(Ak, (0, 2, 1))
-            Hn = H + AkT @ H @ S1
-            G = G + Ak @ S2 @ AkT
-            Ak = Ak @ S1
-            Hn = 0.5 * (Hn + np.transpose(Hn, (0, 2, 1)))
-            G = 0.5 * (G + np.transpose(G, (0, 2, 1)))
-            step = np.linalg.norm(Hn - H, axis=(1, 2))
-            H = Hn
-            done = np.isfinite(step) & (step <= 1e-13 * np.linalg.norm(H, axis=(1, 2)))
-            if done.all() or not np.all(np.isfinite(H)):
-                break
-        PCt = H @ C.T                                             # (c, n, p)
-        K = A @ PCt @ np.linalg.inv(C @ PCt + R)
-    out = []
-    for i in range(c):
-        ok = done[i] and np.all(np.isfinite(K[i])) and np.all(np.isfinite(H[i]))
-        if ok:
-            out.append(K[i])
-            continue
-        try:
-            out.append(predictor_gain(sys, Qs[i], R))
-        except DataError:
-            out.append(None)
+    out = doubling_gains(np.asarray(sys.A, float), np.asarray(sys.C, float), Qs, R)
+    for i in [i for i, K in enumerate(out) if K is None]:
+        with contextlib.suppress(DataError):     # no stabilising solution: stays None
+            out[i] = predictor_gain(sys, np.asarray(Qs[i], float), R)
     return out
 
 
@@ -747,6 +693,6 @@ def frf_error(model, reference, band=None, n_freq: int = 400) -> FRFScore:
 
 
 __all__ = ["PoleMatch", "PredictionScore", "SimulationScore", "FRFScore", "predictor_gain",
-           "default_noise_covariances", "one_step_predict",
-           "prediction_ratio_db", "choose_predictor", "simulation_fit", "modal_parameters", "compare_poles",
-           "frf_error", "prediction_burn_in", "s_plane", "best_predictor", "refine_predictor_gain"]
+           "default_noise_covariances", "one_step_predict", "prediction_ratio_db",
+           "choose_predictor", "simulation_fit", "modal_parameters", "compare_poles", "frf_error",
+           "prediction_burn_in", "s_plane", "best_predictor", "refine_predictor_gain"]
