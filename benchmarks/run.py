@@ -97,7 +97,8 @@ BENCHMARKS = {
 #: Benchmarks that read the measured data beside the repository (``../shared/realdata``):
 #: without it they are skipped, and the summary says so.
 NEEDS = {"realdata": Path(os.environ.get("TRUSSID_REALDATA", ROOT.parent / "shared" / "realdata")),
-         "subframe_modal": ROOT.parent / "shared" / "realdata" / "flexibleStructure.mat"}
+         "subframe_modal": ROOT.parent / "shared" / "realdata" / "flexibleStructure.mat",
+         "predictor": Path(os.environ.get("TRUSSID_REALDATA", ROOT.parent / "shared" / "realdata"))}
 
 #: The modules of ``benchmarks/`` that are not benchmarks, and what runs them.
 HELPERS = {
