@@ -271,6 +271,17 @@ def test_identify_json_says_whether_it_estimated_a_direct_term(work, simulated, 
     assert np.shape(load_model(out)[0].D) == (2, 1)
 
 
+def test_identify_text_names_the_prior_a_direct_term_fit_started_from(work, simulated,
+                                                                       tmp_path):
+    # with D estimated, the summary says which prior PLID started from, as the JSON does
+    out = tmp_path / "md.npz"
+    args = ("identify", work / "data.npz", "--order", 4, "--out", out, "--direct", "yes")
+    start = json.loads(run(*args, "--json").stdout)["direct_term"]["start"]
+    text = run(*args).stdout
+    assert "direct term D: estimated" in text
+    assert (f"PLID started from: {start}" in text) if start else ("started from" not in text)
+
+
 def test_compare_model_and_data_of_different_sizes_fails_cleanly(work, tmp_path):
     rng = np.random.default_rng(0)
     data = write_data(IOData(u=rng.standard_normal((300, 1)), y=rng.standard_normal((300, 3)),

@@ -347,6 +347,9 @@ def _print_fit(prov, outputs, ratio, modes, poles) -> None:
                f"{t.held_out_nmse_without:.3g} without)" if t else "")
         print(f"direct term D: {'estimated' if d.estimated else 'none (D = 0)'}"
               f"{' (' + str(d.mode) + ')' if d.mode != 'auto' else ''}{why}")
+        if d.estimated and d.start:
+            # which prior PLID started from matters when it is not N4SID's model with D
+            print(f"  PLID started from: {d.start}")
     if prov.closed_loop is not None:
         c = prov.closed_loop
         print(f"closed loop ({c.decided_by}): PBSID prior ({c.prior.past} lags), refined by "
