@@ -41,7 +41,7 @@ from trussid.plid._linalg import lstsq, modal_regressors
 from trussid.plid.errors import DataError
 from trussid.plid.experiment import simulate
 from trussid.plid.frf import FRF, frequency_response
-from trussid.plid.kernel_common import HAVE_NUMBA, state_sequence
+from trussid.plid.kernel_common import mean_square_errors
 from trussid.plid.modal import assign_pairs, pole_parameters, s_plane
 from trussid.plid.riccati import doubling_gains
 
@@ -146,32 +146,12 @@ def choose_predictor(model: control.StateSpace, u, y, candidates=None,
 
 
 def _one_step_scores(model, u, y, Ks, skip) -> list[float]:
-    """Mean-normalised one-step ratios [dB] of several gains ``Ks`` of one model (the
-    compiled recursion per gain, or without numba one numpy step per sample for all)."""
+    """Mean-normalised one-step ratios [dB] of several gains ``Ks`` of one model
+    (:func:`trussid.plid.kernel_common.mean_square_errors`)."""
     A, B, C, D = (np.asarray(M, dtype=float) for M in (model.A, model.B, model.C, model.D))
-    Ks = np.asarray(Ks, dtype=float)                          # (c, n, p)
-    nc, n = Ks.shape[0], A.shape[0]
-    AT = np.ascontiguousarray(np.transpose(A[None] - Ks @ C[None], (0, 2, 1)))   # (c, n, n)
-    r = y - u @ D.T                                           # y - D u
-    drive = u @ B.T                                           # (N, n)
-    KT = np.ascontiguousarray(np.transpose(Ks, (0, 2, 1)))  # (c, p, n)
-    Kr = np.einsum("kp,cpn->kcn", r, KT)                     # K (y - D u), (N, c, n)
-    X = np.empty((u.shape[0], nc, n))
+    ms_e = mean_square_errors(A, B, C, D, Ks, u, y, skip)        # (c, p)
     with np.errstate(all="ignore"):
-        if HAVE_NUMBA:
-            # the compiled recursion once per candidate: on the subframe set (5114 samples,
-            # 30 states, 17 candidates) faster than one numpy step per sample for all
-            for i in range(nc):
-                X[:, i] = state_sequence(AT[i].T, drive + Kr[:, i], np.zeros(n))
-        else:
-            x = np.zeros((nc, 1, n))
-            for k in range(u.shape[0]):
-                X[k] = x[:, 0]
-                x = x @ AT + (drive[k] + Kr[k])[:, None, :]
-        e = r[:, None, :] - X @ C.T                           # (N, c, p)
-        ms_e = np.mean(e[skip:] ** 2, axis=0)                 # (c, p)
-        ms_y = np.mean(y[skip:] ** 2, axis=0)
-        out = -10 * np.log10(np.mean(ms_e / ms_y, axis=1))
+        out = -10 * np.log10(np.mean(ms_e / np.mean(y[skip:] ** 2, axis=0), axis=1))
     return [float(v) if np.isfinite(v) else -np.inf for v in out]
 
 

@@ -70,3 +70,35 @@ def test_plids_bases_have_at_most_three_diagonals():
     for F in (ObserverBasis.shift(30, 3).F,
               basis_for(30, 3, 1600.0, np.linspace(40, 700, 15)).F):
         assert KC.diagonals(F)[0].size <= 3
+
+
+def _predictor_case(seed=11, n=8, m=2, p=3, N=400, c=4):
+    rng = np.random.default_rng(seed)
+    A, B = _system(rng, n, m)
+    C = rng.standard_normal((p, n))
+    D = rng.standard_normal((p, m))
+    u = rng.standard_normal((N, m))
+    y = rng.standard_normal((N, p))
+    # small gains keep every predictor A - K C stable
+    Ks = 0.05 * rng.standard_normal((c, n, p))
+    return A, B, C, D, Ks, u, y
+
+
+def test_mean_square_errors_equal_those_of_scipys_predictor_simulation():
+    A, B, C, D, Ks, u, y = _predictor_case()
+    skip = 25
+    got = KC.mean_square_errors(A, B, C, D, Ks, u, y, skip)
+    for i, K in enumerate(Ks):
+        # independently: the predictor as an LTI system driven by [u, y], simulated by scipy
+        pred = (A - K @ C, np.hstack([B - K @ D, K]), C, np.hstack([D, np.zeros((3, 3))]), 1.0)
+        _, yhat, _ = scipy.signal.dlsim(pred, np.hstack([u, y]))
+        want = np.mean((y - yhat)[skip:] ** 2, axis=0)
+        assert np.allclose(got[i], want, rtol=1e-11, atol=0)
+
+
+def test_mean_square_errors_are_the_same_without_numba(monkeypatch):
+    A, B, C, D, Ks, u, y = _predictor_case(seed=12)
+    compiled = KC.mean_square_errors(A, B, C, D, Ks, u, y, 10)
+    monkeypatch.setattr(KC, "_mean_square_errors_compiled", None)
+    plain = KC.mean_square_errors(A, B, C, D, Ks, u, y, 10)
+    assert np.allclose(compiled, plain, rtol=1e-12, atol=0)
