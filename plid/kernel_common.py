@@ -18,7 +18,7 @@ except ImportError:  # the pure-numpy path of recursion_kernel gives the same re
     HAVE_NUMBA = False
 
 __all__ = ["HAVE_NUMBA", "njit", "csr", "diagonals", "state_sequence",
-           "mean_square_errors"]
+           "mean_square_errors", "mode_signals"]
 
 # fastmath without the finite-math flags: the recursion must carry NaN/inf through (the
 # estimator reports a broken run instead of raising), which "nnan"/"ninf" would break.
@@ -214,6 +214,29 @@ _mean_square_errors_compiled = (numba.njit(cache=True, nogil=True)(_mean_square_
                                 if HAVE_NUMBA else None)
 
 
+def _mode_signals(lam, E, F):
+    """Rows ``c nk + s`` of ``F``: ``E[:, c]`` through ``1 / (z - lam_s)``; rows
+    ``p nk + s``: ``lam_s^k`` (see :func:`mode_signals`)."""
+    nk, N, p = lam.shape[0], E.shape[0], E.shape[1]
+    for s in range(nk):
+        ls = lam[s]
+        for c in range(p):
+            row = c * nk + s
+            f = 0j
+            for k in range(N):
+                F[row, k] = f
+                f = ls * f + E[k, c]
+        row = p * nk + s
+        pw = 1.0 + 0j
+        for k in range(N):
+            F[row, k] = pw
+            pw = pw * ls
+
+
+_mode_signals_compiled = (numba.njit(cache=True, nogil=True)(_mode_signals)
+                          if HAVE_NUMBA else None)
+
+
 def state_sequence(A: np.ndarray, Bu: np.ndarray, x0: np.ndarray) -> np.ndarray:
     """States ``x_0 .. x_{N-1}`` of ``x_{k+1} = A x_k + Bu[k]`` as rows (N, n).
 
@@ -282,3 +305,44 @@ def mean_square_errors(A, B, C, D, Ks, u, y, skip: int) -> np.ndarray:
             x = x @ AT + (drive[k] + Kr[k])[:, None, :]
         e = r[:, None, :] - X @ C.T                                                # (N, c, p)
         return np.mean(e[skip:] ** 2, axis=0)
+
+
+def mode_signals(lam: np.ndarray, E: np.ndarray) -> np.ndarray:
+    """Every column of ``E`` (N, p) through every one-pole filter ``1 / (z - lam_s)``, and the
+    powers ``lam_s^k``: ``F`` ((p + 1) nk, N) complex, row ``c nk + s`` holding
+    ``f[k] = sum_{i<k} lam_s^(k-1-i) E[i, c]`` and row ``p nk + s`` holding ``lam_s^k``
+    (the modal regressors of a predictor gain and of the initial state,
+    :func:`trussid.plid.pem.refine_gain`).
+
+    Compiled when numba is there, one pass per pole for all columns (the subframe record,
+    3068 samples, 15 poles, 3 outputs: about 9 -> 0.5 ms against one ``scipy.signal.lfilter``
+    per pole and column and ``exp(k log lam)``); else those. The powers by repeated
+    multiplication drift by about ``k`` roundings from ``exp(k log lam)``: 1e-12 relative
+    over 5000 samples.
+
+    Parameters
+    ----------
+    lam : ndarray (nk,) complex
+        Poles.
+    E : ndarray (N, p)
+        Signals.
+
+    Returns
+    -------
+    ndarray ((p + 1) nk, N) complex
+    """
+    lam = np.ascontiguousarray(lam, dtype=complex)
+    E = np.ascontiguousarray(E, dtype=float)
+    (N, p), nk = E.shape, lam.size
+    if _mode_signals_compiled is not None:
+        F = np.empty(((p + 1) * nk, N), dtype=complex)
+        _mode_signals_compiled(lam, E, F)
+        return F
+    import scipy.signal    # the fallback only
+
+    rows = [scipy.signal.lfilter([0.0, 1.0], [1.0, -ls], E[:, c].astype(complex))
+            for c in range(p) for ls in lam]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        powers = np.exp(np.log(lam)[:, None] * np.arange(N)[None, :])
+    powers[:, 0] = 1.0                              # lam^0, also for lam = 0
+    return np.concatenate([np.reshape(rows, (p * nk, N)), powers], axis=0)

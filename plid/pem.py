@@ -39,8 +39,8 @@ import scipy.linalg
 from trussid.plid.bases import basis_for, model_frequencies
 from trussid.plid.canonical import from_statespace
 from trussid.plid.errors import DataError, IdentificationError
-from trussid.plid.kernel_common import state_sequence
-from trussid.plid._linalg import _one_of_each_pair, modal_regressors, mode_filter
+from trussid.plid.kernel_common import mode_signals, state_sequence
+from trussid.plid._linalg import _one_of_each_pair, modal_regressors
 
 __all__ = ["GainFit", "GainRace", "refine_gain", "refine_gain_from", "gain_iterations",
            "significant_change"]
@@ -177,13 +177,17 @@ def _normal_equations(Ap, C, E, W):
     Vi_k = Vi[keep]                                     # (nk, n)
     N, p = E.shape
     n, nk = Ap.shape[0], lam_k.size
-    F = [mode_filter(lam_k, E[:, c]) for c in range(p)]
-    with np.errstate(divide="ignore"):
-        F.append(np.exp(np.log(lam_k.astype(complex))[:, None] * np.arange(N)[None, :]))
-    m = len(F)
-    F = np.concatenate(F, axis=0)                       # (m nk, N)
-    G = F @ F.T                                         # sum_k f f (no conjugate)
-    Gh = F.conj() @ F.T
+    F = mode_signals(lam_k, E)                          # (m nk, N), m = p + 1
+    m = p + 1
+    # the two complex Gram matrices from one real one of [Re F; Im F] (half the flops of
+    # two complex products): F F^T = Srr - Sii + i (Sri + Sri^T), conj(F) F^T = Srr + Sii
+    # + i (Sri - Sri^T), with Sri = Re F (Im F)^T
+    Z = np.concatenate([F.real, F.imag], axis=0)
+    S = Z @ Z.T
+    mk = m * nk
+    Srr, Sii, Sri = S[:mk, :mk], S[mk:, mk:], S[:mk, mk:]
+    G = (Srr - Sii) + 1j * (Sri + Sri.T)                # sum_k f f (no conjugate)
+    Gh = (Srr + Sii) + 1j * (Sri - Sri.T)
     P = W @ CVw
     PtP, PhP = P.T @ P, P.conj().T @ P
     H = np.empty((m * n, m * n))

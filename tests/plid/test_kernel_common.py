@@ -102,3 +102,20 @@ def test_mean_square_errors_are_the_same_without_numba(monkeypatch):
     monkeypatch.setattr(KC, "_mean_square_errors_compiled", None)
     plain = KC.mean_square_errors(A, B, C, D, Ks, u, y, 10)
     assert np.allclose(compiled, plain, rtol=1e-12, atol=0)
+
+
+def test_mode_signals_are_the_one_pole_filters_and_the_powers_of_each_pole(monkeypatch):
+    rng = np.random.default_rng(13)
+    lam = np.array([0.9 * np.exp(0.4j), 0.5 + 0j, -0.7 + 0.1j, 0j])
+    E = rng.standard_normal((60, 2))
+    F = KC.mode_signals(lam, E)
+    assert F.shape == (3 * lam.size, 60)
+    # independently, from the definition: f[k] = sum_{i<k} lam^(k-1-i) e[i]; then lam^k
+    for c in range(2):
+        for s, ls in enumerate(lam):
+            want = [sum(ls ** (k - 1 - i) * E[i, c] for i in range(k)) for k in range(60)]
+            assert np.allclose(F[c * lam.size + s], want, rtol=1e-12, atol=1e-13)
+    for s, ls in enumerate(lam):
+        assert np.allclose(F[2 * lam.size + s], ls ** np.arange(60), rtol=1e-12, atol=1e-300)
+    monkeypatch.setattr(KC, "_mode_signals_compiled", None)
+    assert np.allclose(KC.mode_signals(lam, E), F, rtol=1e-12, atol=1e-13)
