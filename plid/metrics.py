@@ -300,7 +300,7 @@ def best_predictor(model: control.StateSpace, u, y, candidates=None,
     if not cands:
         raise DataError("no stable one-step predictor for this model")
     # the same samples for every candidate: past the slowest candidate's start-up
-    skip = max(_burn_in(float(r), n, u.shape[0]) for r in rho[rho < 1])
+    skip = max(_burn_in(float(r), n, u.shape[0]) for r in rho[rho < 1]) if n else 0
     scores = dict(zip([c[0] for c in cands],
                       _one_step_scores(model, u, y, [c[1] for c in cands], skip)))
     best = max(range(len(cands)), key=lambda i: scores[cands[i][0]])
