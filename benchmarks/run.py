@@ -87,6 +87,9 @@ BENCHMARKS = {
     "closedloop": (["bench_closedloop.py"], ["bench_closedloop.py", "--quick", "--out", "{out}"]),
     "predictor": (["bench_predictor.py", "--json", "{json}"],
                   ["bench_predictor.py", "--quick", "--json", "{json}"]),
+    # identify against N4SID, CPU, paired with another checkout (--before; issue 34 item 1)
+    "gain_ab": (["bench_gain_ab.py", "--json", "{json}"],
+                ["bench_gain_ab.py", "--quick", "--json", "{json}"]),
     "uncertainty": (["bench_uncertainty.py"],
                     ["bench_uncertainty.py", "--records", "2", "--out", "{out}/uncertainty"]),
     # Not a measurement: the README's tables from the results; the quick run checks that the
@@ -98,7 +101,8 @@ BENCHMARKS = {
 #: without it they are skipped, and the summary says so.
 NEEDS = {"realdata": Path(os.environ.get("TRUSSID_REALDATA", ROOT.parent / "shared" / "realdata")),
          "subframe_modal": ROOT.parent / "shared" / "realdata" / "flexibleStructure.mat",
-         "predictor": Path(os.environ.get("TRUSSID_REALDATA", ROOT.parent / "shared" / "realdata"))}
+         "predictor": Path(os.environ.get("TRUSSID_REALDATA", ROOT.parent / "shared" / "realdata")),
+         "gain_ab": Path(os.environ.get("TRUSSID_REALDATA", ROOT.parent / "shared" / "realdata"))}
 
 #: The modules of ``benchmarks/`` that are not benchmarks, and what runs them.
 HELPERS = {

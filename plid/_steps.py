@@ -40,7 +40,8 @@ def pem_gain(model, u, y, K, kinfo):
     start = kinfo.get("chosen")
     starts = {str(start): K, ZERO_START: np.zeros_like(np.asarray(K, float))}
     try:
-        race = refine_gain_from(model, u, y, starts)
+        # tol None: stop once a step is no longer significant (pem.significant_change)
+        race = refine_gain_from(model, u, y, starts, tol=None)
     except (DataError, np.linalg.LinAlgError) as exc:
         return K, dict(kinfo, pem={"error": str(exc)})
     fit = race.fit

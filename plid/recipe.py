@@ -37,7 +37,7 @@ from trussid.plid.errors import DataError, IdentificationError
 from trussid.plid.estimator import PLIDWarning
 from trussid.plid.feedthrough import direct_prior
 from trussid.plid.metrics import (best_predictor, default_noise_covariances, one_step_predict,
-                                  predictor_gain)
+                                  predictor_gains)
 from trussid.plid.passes import SCRATCH_SCHEDULE, Pass, multipass
 from trussid.plid.provenance import (DirectTerm, DirectTermTest, Identification, Provenance,
                                      Stabilised)
@@ -428,7 +428,9 @@ def _default_gain(model, u, y, R):
     sy2 = np.mean(y ** 2, axis=0)
     Rd = np.diag(np.broadcast_to(R, sy2.shape) * sy2)
     try:
-        return predictor_gain(model, Qd, Rd)
+        # the doubling solve (scipy's QZ solve where it does not settle): the QZ solve was
+        # a tenth of identify's CPU time on the flutter set (issue 34's gain profile)
+        return predictor_gains(model, [Qd], Rd)[0]
     except Exception:  # noqa: BLE001 - no stabilising solution (e.g. an unstable mode)
         return None
 

@@ -70,3 +70,52 @@ def test_plids_bases_have_at_most_three_diagonals():
     for F in (ObserverBasis.shift(30, 3).F,
               basis_for(30, 3, 1600.0, np.linspace(40, 700, 15)).F):
         assert KC.diagonals(F)[0].size <= 3
+
+
+def _predictor_case(seed=11, n=8, m=2, p=3, N=400, c=4):
+    rng = np.random.default_rng(seed)
+    A, B = _system(rng, n, m)
+    C = rng.standard_normal((p, n))
+    D = rng.standard_normal((p, m))
+    u = rng.standard_normal((N, m))
+    y = rng.standard_normal((N, p))
+    # small gains keep every predictor A - K C stable
+    Ks = 0.05 * rng.standard_normal((c, n, p))
+    return A, B, C, D, Ks, u, y
+
+
+def test_mean_square_errors_equal_those_of_scipys_predictor_simulation():
+    A, B, C, D, Ks, u, y = _predictor_case()
+    skip = 25
+    got = KC.mean_square_errors(A, B, C, D, Ks, u, y, skip)
+    for i, K in enumerate(Ks):
+        # independently: the predictor as an LTI system driven by [u, y], simulated by scipy
+        pred = (A - K @ C, np.hstack([B - K @ D, K]), C, np.hstack([D, np.zeros((3, 3))]), 1.0)
+        _, yhat, _ = scipy.signal.dlsim(pred, np.hstack([u, y]))
+        want = np.mean((y - yhat)[skip:] ** 2, axis=0)
+        assert np.allclose(got[i], want, rtol=1e-11, atol=0)
+
+
+def test_mean_square_errors_are_the_same_without_numba(monkeypatch):
+    A, B, C, D, Ks, u, y = _predictor_case(seed=12)
+    compiled = KC.mean_square_errors(A, B, C, D, Ks, u, y, 10)
+    monkeypatch.setattr(KC, "_mean_square_errors_compiled", None)
+    plain = KC.mean_square_errors(A, B, C, D, Ks, u, y, 10)
+    assert np.allclose(compiled, plain, rtol=1e-12, atol=0)
+
+
+def test_mode_signals_are_the_one_pole_filters_and_the_powers_of_each_pole(monkeypatch):
+    rng = np.random.default_rng(13)
+    lam = np.array([0.9 * np.exp(0.4j), 0.5 + 0j, -0.7 + 0.1j, 0j])
+    E = rng.standard_normal((60, 2))
+    F = KC.mode_signals(lam, E)
+    assert F.shape == (3 * lam.size, 60)
+    # independently, from the definition: f[k] = sum_{i<k} lam^(k-1-i) e[i]; then lam^k
+    for c in range(2):
+        for s, ls in enumerate(lam):
+            want = [sum(ls ** (k - 1 - i) * E[i, c] for i in range(k)) for k in range(60)]
+            assert np.allclose(F[c * lam.size + s], want, rtol=1e-12, atol=1e-13)
+    for s, ls in enumerate(lam):
+        assert np.allclose(F[2 * lam.size + s], ls ** np.arange(60), rtol=1e-12, atol=1e-300)
+    monkeypatch.setattr(KC, "_mode_signals_compiled", None)
+    assert np.allclose(KC.mode_signals(lam, E), F, rtol=1e-12, atol=1e-13)

@@ -6,7 +6,7 @@ import scipy.linalg
 
 from trussid.plid.experiment import simulate
 from trussid.plid.metrics import predictor_gain
-from trussid.plid.pem import refine_gain, refine_gain_from
+from trussid.plid.pem import refine_gain, refine_gain_from, significant_change
 
 
 @pytest.fixture(scope="module")
@@ -61,6 +61,24 @@ def test_refine_gain_from_keeps_the_start_that_leads_after_the_race(coloured):
     assert got.fit.logdet_end == pytest.approx(_logdet_of(plant, u, y, got.fit.K, got.fit.x0),
                                                abs=1e-8)
     assert got.fit.logdet_end <= min(heats.values())
+
+
+def test_the_significance_stop_ends_at_the_first_step_that_gains_less_than_q_over_n(coloured):
+    plant, u, y, starts = coloured
+    N, p, n = y.shape[0], plant.noutputs, plant.nstates
+    least = significant_change(N, n, p)
+    assert least == pytest.approx((n * p + n) / N)
+    fit = refine_gain(plant, u, y, starts["kalman"], iterations=30, tol=None)
+    assert fit.converged and 1 <= fit.iterations < 30
+    # independently: the same start refined for a fixed number of steps (tol 0 never
+    # stops early), the criterion recomputed sample by sample from each returned K, x0
+    path = [refine_gain(plant, u, y, starts["kalman"], iterations=i, tol=0.0)
+            for i in range(fit.iterations + 1)]
+    logdets = [_logdet_of(plant, u, y, f.K, f.x0) for f in path]
+    gains = -np.diff(logdets)
+    assert np.all(gains[:-1] >= least)           # every earlier step was significant
+    assert 0 <= gains[-1] < least                # the last one was not, and ended it
+    np.testing.assert_allclose(fit.K, path[-1].K, rtol=1e-10, atol=1e-12 * np.abs(fit.K).max())
 
 
 def test_refine_gain_from_is_indifferent_to_the_order_of_the_starts(coloured):
