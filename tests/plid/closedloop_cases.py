@@ -2,21 +2,32 @@
 (issue 34, acceptance 3) and ``benchmarks/bench_closedloop.py``.
 
 Each truth is a structure's discrete plant with two inputs: the actuator (measured, driven
-by the controller plus a small dither) and an unmeasured force elsewhere on the structure,
-the excitation of the record (so the disturbance reaches the outputs through the
-structure's own modes, as the measured cantilever's push did). The controller is an LQG
-regulator designed on the truth (``control.dlqr``/``control.dlqe``) in predictor form, so
-``u_k`` uses the outputs up to ``k - 1`` only (a sampled controller's computation delay).
+by the controller plus a small dither) and an unmeasured force elsewhere on the structure.
+The controller is an LQG regulator designed on the truth (``control.dlqr``/``control.dlqe``)
+in predictor form, so ``u_k`` uses the outputs up to ``k - 1`` only (a sampled controller's
+computation delay). Two settings of the unmeasured excitation (:func:`record`):
+
+- ``"output"`` (the acceptance's setting): a white disturbance added at the outputs, fed
+  back by the controller, so the input is mostly that disturbance. White, because it is
+  what a sensor-side disturbance with no model of its own looks like, and because it is
+  the case where the true innovations model has ``K = 0`` (the predictor's poles are the
+  plant's, and a consistent method has nothing to hide behind a noise model). Its truths
+  are reduced to the modes the *actuator* excites best (``dominant_from="actuator"``): the
+  actuator is then the only way into the structure.
+- ``"force"`` (harder): the structure's unmeasured force, so the disturbance reaches the
+  outputs through the structure's own modes, as the measured cantilever's push did.
 
 - :func:`testbed_truth`: the thesis testbed (:func:`trussid.testbed.testbed_plant`: channel
   ``ch1`` in, accelerometers ``acc1, acc2`` out, an unmeasured force on the UDF), reduced
-  to its three modes with the largest response from the two inputs above 10 Hz (modal
-  truncation, exact poles and residues).
+  to its three modes with the largest response above 10 Hz (modal truncation, exact poles
+  and residues): 117.8/138.4/166.0 Hz from both inputs, 138.4/166.0/194.4 Hz from the
+  actuator; 0.25 % damping, 1.6 kHz.
 - :func:`grid_truth`: the cantilevered steel grid of ``tests/campaign/structures.py``
   (:func:`force_grid`: one shaker as the actuator, the other corner's shaker as the
   unmeasured force, two displacement sensors where the campaign has accelerometers: with
   accelerometers the force's direct term needs two delay states and every method failed),
-  1 % damping, its three lowest modes (9.6, 13.5 and 14.0 Hz), 400 Hz.
+  1 % damping, its three lowest modes (9.6, 13.5 and 14.0 Hz) or the actuator's two
+  dominant ones (9.6, 13.5 Hz), 400 Hz.
 """
 
 from __future__ import annotations
