@@ -76,6 +76,9 @@ def _dominant(G, keep: int, fmin: float = 10.0, inputs=None):
     Bs = B if inputs is None else B[:, inputs]
     score = []
     for idx, lam in blocks:
+        if lam.imag <= 0:                   # real poles (the chain's delays at z = 0)
+            score.append(-1.0)
+            continue
         s = np.log(lam) / G.dt
         f, z = abs(s) / (2 * np.pi), -s.real / abs(s)
         ok = lam.imag > 0 and f > fmin and z < 0.2
