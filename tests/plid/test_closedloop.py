@@ -175,7 +175,8 @@ def test_identify_closed_loop_under_a_structural_force(case):
 #: 85 % of its outputs' power is the disturbance: on 2e4-2e5 samples the fit started from
 #: the truth itself scatters by 6-54 % in damping over seeds, where the recipe lands on the
 #: same optimum (benchmarks/results/closedloop_i35.md): the record's information, not the
-#: method, sets the length.
+#: method, sets the length. Measured (seed 0): grid 0.05 % / 1.9 %, testbed at 1e6 0.026 % /
+#: 4.4 % (N4SID misses a mode on both); the testbed case takes about 6-8 CPU minutes.
 OUTPUT_SAMPLES = {"grid": 20000, "testbed": 1000000}
 
 
