@@ -176,7 +176,8 @@ def test_identify_closed_loop_under_a_structural_force(case):
 #: the truth itself scatters by 6-54 % in damping over seeds, where the recipe lands on the
 #: same optimum (benchmarks/results/closedloop_i35.md): the record's information, not the
 #: method, sets the length. Measured (seed 0): grid 0.05 % / 1.9 %, testbed at 1e6 0.026 % /
-#: 4.4 % (N4SID misses a mode on both); the testbed case takes about 6-8 CPU minutes.
+#: 4.4 % (N4SID: 23 % / 850 % on the grid, a mode missed on the testbed); the testbed case
+#: takes about 6-8 CPU minutes.
 OUTPUT_SAMPLES = {"grid": 20000, "testbed": 1000000}
 
 
