@@ -177,7 +177,7 @@ def test_identify_closed_loop_under_a_structural_force(case):
 #: same optimum (benchmarks/results/closedloop_i35.md): the record's information, not the
 #: method, sets the length. Measured (seed 0): grid 0.05 % / 1.9 %, testbed at 1e6 0.026 % /
 #: 4.4 % (N4SID: 23 % / 850 % on the grid, a mode missed on the testbed); the testbed case
-#: takes about 6-8 CPU minutes.
+#: took 9.4 CPU minutes at load 4-5.
 OUTPUT_SAMPLES = {"grid": 20000, "testbed": 1000000}
 
 
