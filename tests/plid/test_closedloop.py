@@ -2,10 +2,12 @@
 :func:`trussid.plid.closedloop.pbsid` against the open-loop N4SID prior on the same record,
 the detection of feedback from a reference channel, and ``identify(..., closed_loop=True)``
 on simulated LQG loops of the testbed and of the campaign's steel grid
-(``closedloop_cases.py``).
+(``closedloop_cases.py``): under a white unmeasured output disturbance (the acceptance's
+setting, 1 % / 20 % on every dominant mode) and under an unmeasured structural force (harder,
+not reached: an xfail with its measured misses).
 
-The plant: two modes (50 and 120 Hz, 2 % damping) seen by a collocated velocity sensor,
-driven by an actuator and by an unmeasured force elsewhere on the structure; the loop is
+The first tests' plant: two modes (50 and 120 Hz, 2 % damping) seen by a collocated
+velocity sensor, driven by an actuator and by an unmeasured force elsewhere on the structure; the loop is
 velocity feedback through one sample of computation delay, the dither 10 % of the control
 signal's RMS, so the excitation is mostly the unmeasured force, as on the measured
 cantilever record of the issue. The truth is the plant's own poles.
@@ -145,7 +147,7 @@ def _closed_loop_case(case, seed=0):
 def test_on_the_testbed_loop_identify_closed_loop_is_far_closer_than_open_loop_n4sid():
     """The testbed under a gentle LQG loop (its three dominant modes, 0.25 % damping, raised
     to 0.4-10 % by the loop), 2e4 samples: measured (seed 0) closed-loop recipe 1.4 % /
-    77 %, N4SID 9.2 % / 8800 % (benchmarks/results/closedloop.md)."""
+    77 %, N4SID 9.2 % / 8800 % (benchmarks/results/closedloop_i35.md)."""
     _, fit, (df, dz), (df_n4, dz_n4) = _closed_loop_case("testbed")
     assert fit.provenance.closed_loop.decided_by == "told"
     assert fit.result is None and "output" in fit.provenance.closed_loop.plid_passes
@@ -155,16 +157,80 @@ def test_on_the_testbed_loop_identify_closed_loop_is_far_closer_than_open_loop_n
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=False, reason=(
-    "issue 34 acceptance 3 not reached (benchmarks/results/closedloop.md, 2e4-sample records, "
-    "10 % dither, gentle LQG): the closed-loop recipe's worst mode is 0.3-1.4 % off in "
-    "frequency and 26-77 % in damping on the testbed (N4SID 3.3-9.2 %, damping x75-88 off), "
-    "3.0-3.9 % and 34-98 % on the grid (N4SID misses a mode); prediction error started from "
-    "the truth itself drifts by over 1 % on such records: they carry too little information"))
+    "the harder structural-force setting (an unmeasured force on the structure, not the "
+    "acceptance's output disturbance; benchmarks/results/closedloop_i35.md, 2e4 samples): "
+    "the closed-loop recipe's worst mode is 0.3-1.4 % off in frequency and 26-77 % in "
+    "damping on the testbed, 3.0-3.9 % and 35-99 % on the grid; the one-step criterion is "
+    "flat in the modal parameters there (the fit started from the truth itself drifts by "
+    "over 1 %; longer records did not help within the fit's budget)"))
 @pytest.mark.parametrize("case", ["testbed", "grid"])
-def test_identify_closed_loop_meets_one_percent_and_twenty_percent(case):
+def test_identify_closed_loop_under_a_structural_force(case):
     _, _, (df, dz), (df_n4, dz_n4) = _closed_loop_case(case)
     assert df < 0.01 and dz < 0.2
     assert df_n4 > df and dz_n4 > dz
+
+
+#: Output-disturbance record lengths: the grid's 2e4 samples at 400 Hz (50 s); the testbed's
+#: 1e6 at 1.6 kHz (10 min). The testbed's loop damps its 166 Hz mode from 0.25 % to 10 %, and
+#: 85 % of its outputs' power is the disturbance: on 2e4-2e5 samples the fit started from
+#: the truth itself scatters by 6-54 % in damping over seeds, where the recipe lands on the
+#: same optimum (benchmarks/results/closedloop_i35.md): the record's information, not the
+#: method, sets the length. Measured (seed 0): grid 0.05 % / 1.9 %, testbed at 1e6 0.026 % /
+#: 4.4 % (N4SID: 23 % / 850 % on the grid, a mode missed on the testbed); the testbed case
+#: took 9.4 CPU minutes at load 4-5.
+OUTPUT_SAMPLES = {"grid": 20000, "testbed": 1000000}
+
+
+def _output_case(case, samples, seed=0):
+    """Truth, record and the acceptance's conditions on it: the dither at most 10 % of the
+    control signal's RMS and the input mostly feedback of the unmeasured disturbance."""
+    from tests.plid import closedloop_cases as cc
+
+    truth = cc.testbed_truth("actuator") if case == "testbed" else cc.grid_truth("actuator")
+    ctl = cc.lqg(truth, design_noise="actuator")
+    u, y, r = cc.record(truth, ctl, samples, seed=seed, disturbance="output")
+    assert np.std(r) <= 0.1 * np.std(u)
+    assert feedback_share(u, r)[0] > 0.95
+    return truth, u, y
+
+
+@pytest.mark.parametrize("case", [
+    "grid", pytest.param("testbed", marks=pytest.mark.slow)])
+def test_identify_closed_loop_meets_one_percent_and_twenty_percent(case):
+    """Acceptance 3: under a white unmeasured output disturbance fed back by the LQG loop,
+    every dominant mode within 1 % in frequency and 20 % in damping, where open-loop N4SID
+    on the same record misses by more in both (it takes the loop for the plant)."""
+    from trussid.plid import identify
+
+    truth, u, y = _output_case(case, OUTPUT_SAMPLES[case])
+    n, dt = truth.plant.nstates, truth.plant.dt
+    fit = identify(u, y, n, dt, closed_loop=True, progress=False)
+    df, dz = _truth_errors(fit.model, truth)
+    df_n4, dz_n4 = _truth_errors(subspace_prior(u, y, n, dt)[0], truth)
+    assert df < 0.01 and dz < 0.2
+    assert df_n4 > df and dz_n4 > dz
+    assert df_n4 > 0.1                      # N4SID misses by far more than the target
+
+
+def test_on_an_output_disturbance_record_the_recipe_reaches_the_truth_started_optimum():
+    """The recipe's misses are the record's information, not its optimisation: started from
+    the truth itself (its actuator path with K = 0, the true innovations model of a white
+    output disturbance), the prediction-error fit lands on the recipe's optimum."""
+    import control
+
+    from trussid.plid.closedloop import identify_closed_loop, prediction_error_fit
+
+    truth, u, y = _output_case("grid", 20000, seed=1)
+    G = truth.plant
+    model, _, _, info = identify_closed_loop(u, y, G.nstates, G.dt)
+    start = control.ss(G.A, np.asarray(G.B)[:, :1], G.C, 0, G.dt)
+    from_truth = prediction_error_fit(start, np.zeros((G.nstates, 2)), u, y,
+                                      max_evaluations=200)
+    assert info.converged and from_truth.converged
+    assert from_truth.cost_end == pytest.approx(info.cost_end, rel=1e-6)
+    a, b = modal_table(model), modal_table(from_truth.model)
+    np.testing.assert_allclose(a.frequencies_hz, b.frequencies_hz, rtol=1e-5)
+    np.testing.assert_allclose(a.damping, b.damping, rtol=1e-3)
 
 
 def test_a_reference_channel_that_shows_feedback_selects_the_closed_loop_recipe():
