@@ -45,6 +45,23 @@ def test_the_quick_form_allows_more_for_a_small_study_on_a_busy_machine():
     assert g["ok"] and g["bound"] == 1 + b.ALLOWED_QUICK
 
 
+def test_the_guard_takes_each_workers_own_loop_so_a_slow_serial_process_does_not_move_it():
+    b = _bench()
+    ratios = []
+    for serial_cpu in (0.010, 0.016):  # the serial loop's process fast, then 1.6x slower
+        res = _results(10.3)
+        res["wall_study"]["serial"]["cpu_s_per_point"] = serial_cpu
+        # the two workers' own bare loops: 9.5 and 10.5 ms, 600 and 400 designs done
+        res["wall_study"]["workers2"]["own_serial_cpu_s"] = 600 * 0.0095 + 400 * 0.0105
+        b.derive(res["wall_study"])
+        (g,) = b.guards(res, quick=True)
+        ratios.append(g["value"])
+        assert g["against_serial_process"] == res["wall_study"]["workers2"]["worker_cpu_ratio_unloaded"]
+    # (10.3 - 0.05) / (5.7 + 4.2) + the unloaded background, whatever the serial process read
+    expected = (10.3 - 0.05) / 9.9 + 0.005
+    assert abs(ratios[0] - expected) < 1e-12 and abs(ratios[1] - expected) < 1e-12
+
+
 def test_repeated_fits_take_each_speed_up_against_the_same_repetitions_serial_loop(monkeypatch, tmp_path):
     """Five rotated repetitions; a repetition on a slow spell (every run 1.5x slower) leaves
     the medians where the others put them, and the pair of serial processes, which does the
@@ -69,7 +86,7 @@ def test_repeated_fits_take_each_speed_up_against_the_same_repetitions_serial_lo
         calls.append("pair")
         return {"points": 60, "wall_s": 13.0, "cpu_s_per_point": 0.43, "load_before": [1.0]}
 
-    def engine_run(spec, workers, scratch, external=False, tag=""):
+    def engine_run(spec, workers, scratch, external=False, tag="", own=True):
         calls.append("ext" if external else "loc")
         wall = 6.5 if external else 6.0
         return {"points": 30, "wall_s": wall, "cpu_s_per_point": 0.41,
