@@ -327,9 +327,12 @@ def _evaluate(run: _Run, K_, x0_, W_):
     return float(np.sum((E_ @ W_.T) ** 2)), E_, Ap, r
 
 
-def _start(model, u, y, K0, margin) -> _Run:
+def _start(model, u, y, K0, margin, coordinates: bool = True) -> _Run:
     """The refinement's state at its start: observer coordinates, ``x0`` by least squares
-    and the maximum-likelihood weight."""
+    and the maximum-likelihood weight. ``coordinates`` False: the model's own coordinates
+    (the start's ``log det`` is the same, the residual of a least squares does not depend
+    on the coordinates of its unknowns; the race's probe of a start, :func:`refine_gain_from`,
+    where the observer coordinates were 35-60 % of a start's cost)."""
     u = np.asarray(u, float)
     y = np.asarray(y, float)
     A, B, C, D, ys, sy = _scaled(model, u, y)
@@ -340,8 +343,11 @@ def _start(model, u, y, K0, margin) -> _Run:
     K = np.asarray(K0, float) * sy[None, :]          # K acts on scaled outputs
     if K.shape != (n, p):
         raise DataError(f"start gain K0 has shape {K.shape}, the model needs {(n, p)}")
-    T, Ti = _observer_coordinates(A - K @ C, C)
-    A, B, C, K = T @ A @ Ti, T @ B, C @ Ti, T @ K
+    if coordinates:
+        T, Ti = _observer_coordinates(A - K @ C, C)
+        A, B, C, K = T @ A @ Ti, T @ B, C @ Ti, T @ K
+    else:
+        Ti = np.eye(n)
     rho0 = _rho(A - K @ C)
     if rho0 >= 1:
         raise DataError("the start gain's predictor A - K C is unstable")
@@ -424,6 +430,18 @@ def _result(run: _Run, cpu_seconds: float) -> GainFit:
 #: Iterations every start of :func:`refine_gain_from` gets before the leader is kept.
 RACE_ITERATIONS = 2
 
+#: A start of :func:`refine_gain_from` whose ``log det`` at the start lies more than this
+#: above the lowest start's is dropped before the race. Measured (start gap -> gap after
+#: the 2 race iterations, positive: K = 0 behind the chosen candidate) on the four
+#: measured sets of ``benchmarks/bench_realdata.py`` and the demo's four identifications
+#: (``benchmarks/results/realdata_i36.md``): robot arm 0.95 -> 0.58, flutter 3.07 -> 2.53,
+#: subframe 1.21 -> 3.05, demo SIMO 0.25 -> 0.87, 0.39 -> 1.00, 0.00 -> 0.00 and MIMO
+#: 0.15 -> -0.23 (the one record where K = 0 wins). A start gained at most 0.54 on the
+#: other in two iterations, so a start 1.0 behind (a factor e in the innovation
+#: determinant) is taken as unable to win; on flutter and the subframe it saved the two
+#: race iterations of K = 0, and no kept start changed.
+RACE_GAP = 1.0
+
 #: Starts of :func:`refine_gain_from` within this of the lowest ``log det`` after the race
 #: are tied (when ``tol`` is None; else ``tol`` itself).
 TIE_TOL = 1e-5
@@ -442,7 +460,8 @@ class GainRace:
         whole race's).
     race_logdet : dict
         ``{label: log det}`` of every distinct start after the race iterations (outputs
-        scaled to unit RMS; lower is better); the kept start has the lowest.
+        scaled to unit RMS; lower is better), or at its start for a start that did not
+        race (:data:`RACE_GAP`); the kept start has the lowest.
     """
 
     start: str
@@ -452,7 +471,8 @@ class GainRace:
 
 def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
                      iterations: int | None = None, race: int = RACE_ITERATIONS,
-                     margin: float = 0.999, tol: float | None = 1e-5) -> GainRace:
+                     margin: float = 0.999, tol: float | None = 1e-5,
+                     race_gap: float = RACE_GAP) -> GainRace:
     """:func:`refine_gain` from several starts, the one with the lowest identification
     criterion kept.
 
@@ -461,7 +481,8 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
     places: on the demo's MIMO record (36 states, 3 x 3) the best candidate gain refined to
     ``log det`` -29.16 and K = 0 to -30.27 in the same 5 iterations (validation one-step
     41.4 against 43.6 dB), while on the flutter set K = 0 stalls at -5.0 against -13.7
-    from the best candidate. Every distinct start is refined for ``race`` iterations; the
+    from the best candidate. Every distinct start is refined for ``race`` iterations (a
+    start more than ``race_gap`` behind the best one at the start does not race); the
     one with the lowest criterion then continues for the rest of the iteration limit
     (successive halving: the losers cost ``race`` iterations each, not a whole refinement).
     The choice reads the identification record only; a start within ``tol`` of the lowest
@@ -484,6 +505,10 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
         :func:`gain_iterations`.
     race : int
         Iterations every start gets before the leader is chosen.
+    race_gap : float
+        A start whose ``log det`` at the start (after its initial-state fit) lies more than
+        this above the lowest start's does not race (:data:`RACE_GAP`; ``inf``: every
+        start races).
     margin : float
         As in :func:`refine_gain`.
     tol : float or None
@@ -513,16 +538,33 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
         return GainRace(label, fit, {label: fit.logdet_end})
     runs, error = {}, None
     first = min(race, iterations)
-    for label, K0 in distinct:
+    for k, (label, K0) in enumerate(distinct):
         try:
-            runs[label] = _start(model, u, y, K0, margin)
+            # the first start (the chosen candidate) in full; the others probed for their
+            # start value first (RACE_GAP), and started in full only if they race
+            runs[label] = _start(model, u, y, K0, margin, coordinates=k == 0)
         except (DataError, np.linalg.LinAlgError) as exc:
             error = exc
-            continue
-        _iterate(runs[label], first, tol)
     if not runs:
         raise DataError(f"no start gain could be refined ({error})")
+    # a start too far behind at the start cannot win the race (RACE_GAP): it keeps its
+    # start value and drops out; the runs are independent, so the others are unchanged
     heats = {lab: run.logdet for lab, run in runs.items()}
+    lowest = min(heats.values())
+    for label, K0 in distinct:
+        if label not in runs:
+            continue
+        if heats[label] > lowest + race_gap:
+            del runs[label]
+            continue
+        if label != distinct[0][0]:
+            try:
+                runs[label] = _start(model, u, y, K0, margin)
+            except (DataError, np.linalg.LinAlgError):
+                del runs[label], heats[label]
+                continue
+        _iterate(runs[label], first, tol)
+        heats[label] = runs[label].logdet
     # ties go to the earlier start (the chosen candidate comes first): two starts that
     # reach the same point differ at rounding level, and a rounding-level winner would make
     # the kept start depend on BLAS summation order
