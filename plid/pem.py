@@ -328,11 +328,11 @@ def _evaluate(run: _Run, K_, x0_, W_):
 
 
 def _start(model, u, y, K0, margin, coordinates: bool = True) -> _Run:
-    """The refinement's state at its start: observer coordinates, ``x0`` by least squares
-    and the maximum-likelihood weight. ``coordinates`` False: the model's own coordinates
-    (the start's ``log det`` is the same, the residual of a least squares does not depend
-    on the coordinates of its unknowns; the race's probe of a start, :func:`refine_gain_from`,
-    where the observer coordinates were 35-60 % of a start's cost)."""
+    """The refinement's state at its start: ``x0`` by least squares, the
+    maximum-likelihood weight, then the observer coordinates (:func:`_to_observer`).
+    ``coordinates`` False: left in the model's own coordinates, where the start's
+    ``log det`` is the same (the race's probe of a start, :func:`refine_gain_from`: the
+    observer coordinates were 35-60 % of a start's cost on the measured sets)."""
     u = np.asarray(u, float)
     y = np.asarray(y, float)
     A, B, C, D, ys, sy = _scaled(model, u, y)
@@ -343,11 +343,7 @@ def _start(model, u, y, K0, margin, coordinates: bool = True) -> _Run:
     K = np.asarray(K0, float) * sy[None, :]          # K acts on scaled outputs
     if K.shape != (n, p):
         raise DataError(f"start gain K0 has shape {K.shape}, the model needs {(n, p)}")
-    if coordinates:
-        T, Ti = _observer_coordinates(A - K @ C, C)
-        A, B, C, K = T @ A @ Ti, T @ B, C @ Ti, T @ K
-    else:
-        Ti = np.eye(n)
+    Ti = np.eye(n)
     rho0 = _rho(A - K @ C)
     if rho0 >= 1:
         raise DataError("the start gain's predictor A - K C is unstable")
@@ -365,7 +361,19 @@ def _start(model, u, y, K0, margin, coordinates: bool = True) -> _Run:
     _, run.E, run.Ap, run.r = _evaluate(run, K, run.x0, W)
     run.W, run.cost, run.logdet = _reweighted(run.E)
     run.logdet_start = run.logdet
+    if coordinates:
+        _to_observer(run)
     return run
+
+
+def _to_observer(run: _Run) -> None:
+    """A start (:func:`_start`, made in the model's coordinates) moved into the observer
+    coordinates of :func:`_observer_coordinates` (in place); the residuals, weight, cost
+    and ``log det`` do not depend on the coordinates."""
+    T, Ti = _observer_coordinates(run.Ap, run.C)
+    run.A, run.B, run.C, run.K = T @ run.A @ Ti, T @ run.B, run.C @ Ti, T @ run.K
+    run.x0, run.Ti = T @ run.x0, run.Ti @ Ti
+    run.Ap = run.A - run.K @ run.C
 
 
 def significant_change(n_samples: int, order: int, outputs: int) -> float:
@@ -538,11 +546,11 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
         return GainRace(label, fit, {label: fit.logdet_end})
     runs, error = {}, None
     first = min(race, iterations)
-    for k, (label, K0) in enumerate(distinct):
+    for label, K0 in distinct:
         try:
-            # the first start (the chosen candidate) in full; the others probed for their
-            # start value first (RACE_GAP), and started in full only if they race
-            runs[label] = _start(model, u, y, K0, margin, coordinates=k == 0)
+            # every start probed for its start value first (RACE_GAP), in the model's
+            # coordinates, and moved into the observer coordinates only if it races
+            runs[label] = _start(model, u, y, K0, margin, coordinates=False)
         except (DataError, np.linalg.LinAlgError) as exc:
             error = exc
     if not runs:
@@ -551,18 +559,13 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
     # start value and drops out; the runs are independent, so the others are unchanged
     heats = {lab: run.logdet for lab, run in runs.items()}
     lowest = min(heats.values())
-    for label, K0 in distinct:
+    for label, _ in distinct:
         if label not in runs:
             continue
         if heats[label] > lowest + race_gap:
             del runs[label]
             continue
-        if label != distinct[0][0]:
-            try:
-                runs[label] = _start(model, u, y, K0, margin)
-            except (DataError, np.linalg.LinAlgError):
-                del runs[label], heats[label]
-                continue
+        _to_observer(runs[label])
         _iterate(runs[label], first, tol)
         heats[label] = runs[label].logdet
     # ties go to the earlier start (the chosen candidate comes first): two starts that
