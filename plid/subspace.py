@@ -24,6 +24,8 @@ from functools import cached_property
 
 import control
 import numpy as np
+import scipy.linalg
+import scipy.linalg.lapack
 
 from trussid.plid._linalg import lstsq, real_modal_regressors
 from trussid.plid._validate import as_2d
@@ -149,7 +151,7 @@ def n4sid(u, y, n: int, block_rows: int, dt: float) -> SubspaceFit:
         raise DataError(f"N4SID with {block_rows} block rows needs at least "
                         f"{2 * block_rows + 2} samples, got {y.shape[0]}")
     R22, R32, sv, uy = po_moesp(u, y, block_rows)
-    W = R32 @ np.linalg.pinv(R22)
+    W = _times_pinv(R32, R22)
     obs = W @ uy
     x = _leading_state(W, uy, obs, n)[:, :-1]
     yl = y[block_rows:].T[:, :-1]
@@ -160,6 +162,22 @@ def n4sid(u, y, n: int, block_rows: int, dt: float) -> SubspaceFit:
     CD = np.linalg.lstsq(XU.T, yl.T, rcond=None)[0].T
     C0 = np.linalg.lstsq(xk.T, yl.T, rcond=None)[0].T
     return SubspaceFit(AB[:, :n], AB[:, n:], CD[:, :n], CD[:, n:], C0, dt, block_rows, sv)
+
+
+def _times_pinv(M: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """``M pinv(R)`` for the lower-triangular block ``R`` of :func:`po_moesp`'s factor.
+
+    By a triangular solve (``R^T W^T = M^T``) when ``R`` is well conditioned (LAPACK's
+    estimate of its reciprocal condition number above ``1e-10``): the same product to
+    rounding, where the pseudo-inverse's SVD was a sixth to a third of a run's time on
+    the small measured sets (40 x 40 to 120 x 120); else the pseudo-inverse (a
+    rank-deficient ``R``, e.g. noise-free data, which only it truncates)."""
+    if R.size and np.all(np.isfinite(R)):
+        rcond, info = scipy.linalg.lapack.dtrcon(R, norm="1", uplo="L", diag="N")
+        if info == 0 and rcond > 1e-10:
+            return scipy.linalg.solve_triangular(R, M.T, trans="T", lower=True,
+                                                 check_finite=False).T
+    return M @ np.linalg.pinv(R)
 
 
 def _leading_state(W, uy, obs, n):
