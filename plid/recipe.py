@@ -291,7 +291,7 @@ def _strictly_proper_restart(u, y, order, dt, res, strictly_proper, sched, kw):
     n_bad = count_unstable(res.model)
     if strictly_proper is None:
         strictly_proper, _ = subspace_prior(u, y, order, dt, kw["block_rows"], fits=kw["fits"])
-    alt_d, _, _ = output_error_fit(strictly_proper, u, y, direct=True)
+    alt_d, _, _ = output_error_fit(strictly_proper, u, y, direct=True, d_std=False)
     alt = _start_with_d(alt_d, u, y, order, kw["radius"], kw["R"])
     try:
         alt_res, alt_hist = multipass(u, alt[2], order, dt, sched, basis=alt[3], prior=alt[0],
