@@ -42,8 +42,8 @@ from trussid.plid.passes import SCRATCH_SCHEDULE, Pass, multipass
 from trussid.plid.provenance import (DirectTerm, DirectTermTest, Identification, Provenance,
                                      Stabilised)
 from trussid.plid.reduce import balanced_truncation
-from trussid.plid.subspace import (default_block_rows, direct_term_test, output_error_fit,
-                                   subspace_prior)
+from trussid.plid.subspace import (cached_n4sid, default_block_rows, direct_term_test,
+                                   output_error_fit, subspace_prior)
 
 __all__ = ["identify", "check_data", "PREDICTORS"]
 
@@ -205,8 +205,10 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
             # block-row count, so that only the prior that is used is swept (one N4SID run
             # and one output-error refit fewer per identify; the test's decision was the
             # same on every block-row count of the four measured sets)
+            # (its A, C: the test refits B and D itself, so the prior's own output-error
+            # refit of B is not needed here; the block-row sweep scores it if it is used)
             first = _first_block_rows(u, y, order, block_rows)
-            test = direct_term_test(subspace_prior(u, y, order, dt, [first], fits=fits)[0],
+            test = direct_term_test(cached_n4sid(u, y, order, first, dt, fits).stable_zero_d,
                                     u, y)
             test["block_rows"] = first
             use_d = test["direct"]

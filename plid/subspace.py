@@ -89,6 +89,20 @@ class SubspaceFit:
         """Same state sequence, least squares with ``D = 0``."""
         return control.ss(self.A, self.B, self.C0, np.zeros_like(self.D), self.dt)
 
+    @cached_property
+    def stable_zero_d(self) -> control.StateSpace:
+        """:attr:`zero_d` with any unstable pole reflected in
+        (:func:`trussid.plid.stability.stabilise`): the ``A, C`` of the strictly proper
+        prior this run gives (:func:`subspace_prior` refits only ``B``), which the
+        direct-term test of :func:`trussid.plid.recipe.identify` reads without that
+        refit."""
+        return _stabilised(self.zero_d)
+
+    @cached_property
+    def stable_with_d(self) -> control.StateSpace:
+        """:attr:`with_d` with any unstable pole reflected in."""
+        return _stabilised(self.with_d)
+
 
 def block_hankel(a: np.ndarray, rows: int) -> np.ndarray:
     """Block Hankel matrix of the samples ``a`` (N, c): ``rows`` block rows of c entries,
@@ -198,6 +212,10 @@ def _leading_state(W, uy, obs, n):
         return (U.T @ obs) / np.sqrt(np.sqrt(lam))[:, None]
     _, s, vh = np.linalg.svd(obs, full_matrices=False)
     return np.sqrt(s[:n])[:, None] * vh[:n]
+
+
+def _stabilised(model: control.StateSpace) -> control.StateSpace:
+    return model if _stable(model.A) else stabilise(model).model
 
 
 def _stable(A) -> bool:
@@ -525,9 +543,7 @@ def sweep_block_rows(u, y, n: int, dt: float, block_rows=None, *, direct: bool =
 def _scored_candidate(fit: SubspaceFit, u, y, direct: bool, refit: bool):
     """``(output-error ratio [dB], model)`` of one run's candidate (see
     :func:`sweep_block_rows`)."""
-    model = fit.with_d if direct else fit.zero_d
-    if not _stable(model.A):
-        model = stabilise(model).model
+    model = fit.stable_with_d if direct else fit.stable_zero_d
     if refit:
         model, ysim, _ = output_error_fit(model, u, y, direct=direct, d_std=False)
     else:
