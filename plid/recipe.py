@@ -204,9 +204,9 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
             # decided before the block-row sweep, on the strictly proper prior of the first
             # block-row count, so that only the prior that is used is swept (one N4SID run
             # and one output-error refit fewer per identify; the test's decision was the
-            # same on every block-row count of the four measured sets)
-            # (its A, C: the test refits B and D itself, so the prior's own output-error
-            # refit of B is not needed here; the block-row sweep scores it if it is used)
+            # same on every block-row count of the four measured sets). The test reads the
+            # prior's A, C only (it fits B and D itself): the prior's own refit of B is
+            # left to the sweep, which runs only if that prior is used
             first = _first_block_rows(u, y, order, block_rows)
             test = direct_term_test(cached_n4sid(u, y, order, first, dt, fits).stable_zero_d,
                                     u, y)

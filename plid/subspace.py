@@ -183,9 +183,12 @@ def _times_pinv(M: np.ndarray, R: np.ndarray) -> np.ndarray:
 
     By a triangular solve (``R^T W^T = M^T``) when ``R`` is well conditioned (LAPACK's
     estimate of its reciprocal condition number above ``1e-10``): the same product to
-    rounding, where the pseudo-inverse's SVD was a sixth to a third of a run's time on
-    the small measured sets (40 x 40 to 120 x 120); else the pseudo-inverse (a
-    rank-deficient ``R``, e.g. noise-free data, which only it truncates)."""
+    rounding (measured: 4e-10 relative at most on the four measured sets, whose ``R``
+    has a reciprocal condition number of 5e-10 to 8e-5), where the pseudo-inverse's SVD
+    was a sixth to a third of a run's time on the small sets (40 x 40 to 120 x 120); else
+    the pseudo-inverse (a rank-deficient ``R``, e.g. noise-free data, which only it
+    truncates: above that estimate its default cut-off, ``1e-15`` of the largest
+    singular value, truncates nothing)."""
     if R.size and np.all(np.isfinite(R)):
         rcond, info = scipy.linalg.lapack.dtrcon(R, norm="1", uplo="L", diag="N")
         if info == 0 and rcond > 1e-10:
