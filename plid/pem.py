@@ -572,8 +572,8 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
     # ties go to the earlier start (the chosen candidate comes first): two starts that
     # reach the same point differ at rounding level, and a rounding-level winner would make
     # the kept start depend on BLAS summation order
-    best = min(heats.values())
+    best = min(heats[lab] for lab in runs)
     tie = TIE_TOL if tol is None else tol
-    label = next(lab for lab, h in heats.items() if h <= best + tie)
+    label = next(lab for lab, h in heats.items() if lab in runs and h <= best + tie)
     _iterate(runs[label], iterations - runs[label].iterations, tol)
     return GainRace(label, _result(runs[label], time.process_time() - c0), heats)

@@ -175,3 +175,13 @@ def test_normal_equations_in_modal_coordinates_equal_those_of_a_finite_differenc
     H, g = _normal_equations(A - K @ C, C, E, W)
     np.testing.assert_allclose(H, H_fd, rtol=0, atol=1e-7 * np.abs(H_fd).max())
     np.testing.assert_allclose(g, g_fd, rtol=0, atol=1e-7 * np.abs(g_fd).max())
+
+
+def test_a_start_dropped_before_the_race_is_never_kept_even_with_no_gap(coloured):
+    # race_gap 0: only the start lowest at the start races; a tie tolerance wide enough to
+    # take in the dropped start (10 in log det) must not bring it back
+    plant, u, y, starts = coloured
+    got = refine_gain_from(plant, u, y, starts, iterations=3, race_gap=0.0, tol=10.0)
+    at_start = {lab: refine_gain(plant, u, y, K0, iterations=0).logdet_end
+                for lab, K0 in starts.items()}
+    assert got.start == min(at_start, key=at_start.get)
