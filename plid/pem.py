@@ -29,6 +29,7 @@ on a stability condition, so the Levenberg-Marquardt loop is written out here.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -80,19 +81,45 @@ class GainFit:
 
 
 def _rho(A) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(A)), initial=0.0)) if np.size(A) else 0.0
+    """Spectral radius of ``A`` (infinite when ``A`` is not finite).
+
+    LAPACK's ``dgeev`` without eigenvectors called directly, the routine
+    ``numpy.linalg.eigvals`` calls: at the 8 states of the flutter and robot-arm sets
+    numpy's checks and dispatch were a quarter of the call (37 against 51 us), and
+    :func:`_iterate` tests every trial step against the margin (143 tests for 25 accepted
+    steps on flutter)."""
+    if not np.size(A):
+        return 0.0
+    if not np.isfinite(A).all():
+        return np.inf
+    wr, wi, _, _, info = _GEEV(A, compute_vl=0, compute_vr=0)
+    if info:                     # no convergence (never seen): numpy's call raises there
+        return float(np.max(np.abs(np.linalg.eigvals(A))))
+    return math.sqrt(max((wr * wr + wi * wi).tolist()))
 
 
-def _ml_weight(E: np.ndarray) -> np.ndarray:
-    """``W`` with ``W^T W = cov(E)^-1``: ``E W^T`` has unit covariance."""
+_GEEV = scipy.linalg.lapack.dgeev
+
+
+def _ml_weight(E: np.ndarray, S: np.ndarray | None = None) -> np.ndarray:
+    """``W`` with ``W^T W = cov(E)^-1``: ``E W^T`` has unit covariance (``S``: that
+    covariance ``E^T E / N`` when the caller has it already)."""
     p = E.shape[1]
-    S = (E.T @ E) / E.shape[0]
+    S = (E.T @ E) / E.shape[0] if S is None else S
     S = S + 1e-12 * np.trace(S) / p * np.eye(p)
     return np.linalg.cholesky(np.linalg.inv(S)).T
 
 
-def _logdet(E: np.ndarray) -> float:
-    return float(np.linalg.slogdet((E.T @ E) / E.shape[0])[1])
+def _logdet(E: np.ndarray, S: np.ndarray | None = None) -> float:
+    return float(np.linalg.slogdet((E.T @ E) / E.shape[0] if S is None else S)[1])
+
+
+def _reweighted(E: np.ndarray):
+    """``(W, weighted cost, log det)`` of residuals ``E`` from one covariance ``E^T E / N``
+    (the weight, the cost under it and the criterion were three passes over ``E``)."""
+    S = (E.T @ E) / E.shape[0]
+    W = _ml_weight(E, S)
+    return W, float(np.sum((E @ W.T) ** 2)), _logdet(E, S)
 
 
 def gain_iterations(n_samples: int, order: int, outputs: int) -> int:
@@ -281,6 +308,7 @@ class _Run:
     W: np.ndarray
     cost: float
     logdet_start: float
+    logdet: float = np.nan   # of the current residuals E
     lm: float = 1e-4
     iterations: int = 0
     converged: bool = False
@@ -300,9 +328,12 @@ def _evaluate(run: _Run, K_, x0_, W_):
     return float(np.sum((E_ @ W_.T) ** 2)), E_, Ap, r
 
 
-def _start(model, u, y, K0, margin) -> _Run:
-    """The refinement's state at its start: observer coordinates, ``x0`` by least squares
-    and the maximum-likelihood weight."""
+def _start(model, u, y, K0, margin, coordinates: bool = True) -> _Run:
+    """The refinement's state at its start: ``x0`` by least squares, the
+    maximum-likelihood weight, then the observer coordinates (:func:`_to_observer`).
+    ``coordinates`` False: left in the model's own coordinates, where the start's
+    ``log det`` is the same (the race's probe of a start, :func:`refine_gain_from`: the
+    observer coordinates were 35-60 % of a start's cost on the measured sets)."""
     u = np.asarray(u, float)
     y = np.asarray(y, float)
     A, B, C, D, ys, sy = _scaled(model, u, y)
@@ -313,8 +344,7 @@ def _start(model, u, y, K0, margin) -> _Run:
     K = np.asarray(K0, float) * sy[None, :]          # K acts on scaled outputs
     if K.shape != (n, p):
         raise DataError(f"start gain K0 has shape {K.shape}, the model needs {(n, p)}")
-    T, Ti = _observer_coordinates(A - K @ C, C)
-    A, B, C, K = T @ A @ Ti, T @ B, C @ Ti, T @ K
+    Ti = np.eye(n)
     rho0 = _rho(A - K @ C)
     if rho0 >= 1:
         raise DataError("the start gain's predictor A - K C is unstable")
@@ -330,10 +360,21 @@ def _start(model, u, y, K0, margin) -> _Run:
     Jxw = (Jx.transpose(0, 2, 1) @ W.T).transpose(0, 2, 1).reshape(N * p, n)
     run.x0 = P @ lstsq(Jxw, (E @ W.T).ravel())
     _, run.E, run.Ap, run.r = _evaluate(run, K, run.x0, W)
-    run.W = _ml_weight(run.E)
-    run.cost = float(np.sum((run.E @ run.W.T) ** 2))
-    run.logdet_start = _logdet(run.E)
+    run.W, run.cost, run.logdet = _reweighted(run.E)
+    run.logdet_start = run.logdet
+    if coordinates:
+        _to_observer(run)
     return run
+
+
+def _to_observer(run: _Run) -> None:
+    """A start (:func:`_start`, made in the model's coordinates) moved into the observer
+    coordinates of :func:`_observer_coordinates` (in place); the residuals, weight, cost
+    and ``log det`` do not depend on the coordinates."""
+    T, Ti = _observer_coordinates(run.Ap, run.C)
+    run.A, run.B, run.C, run.K = T @ run.A @ Ti, T @ run.B, run.C @ Ti, T @ run.K
+    run.x0, run.Ti = T @ run.x0, run.Ti @ Ti
+    run.Ap = run.A - run.K @ run.C
 
 
 def significant_change(n_samples: int, order: int, outputs: int) -> float:
@@ -380,12 +421,11 @@ def _iterate(run: _Run, iterations: int, tol: float | None) -> None:
             return
         run.lm = max(run.lm / 10.0, 1e-9)
         rel = (run.cost - cn) / run.cost
-        before = _logdet(run.E) if least is not None else 0.0
+        before = run.logdet
         run.K, run.x0, run.E, run.Ap, run.r = Kn, x0n, En, Apn, rn
-        run.W = _ml_weight(run.E)
-        run.cost = float(np.sum((run.E @ run.W.T) ** 2))
+        run.W, run.cost, run.logdet = _reweighted(run.E)
         run.iterations += 1
-        if (rel < tol) if least is None else (before - _logdet(run.E) < least):
+        if (rel < tol) if least is None else (before - run.logdet < least):
             run.converged = True
             return
 
@@ -393,11 +433,23 @@ def _iterate(run: _Run, iterations: int, tol: float | None) -> None:
 def _result(run: _Run, cpu_seconds: float) -> GainFit:
     return GainFit(K=run.Ti @ run.K / run.sy[None, :], x0=run.Ti @ run.x0,
                    iterations=run.iterations, logdet_start=run.logdet_start,
-                   logdet_end=_logdet(run.E), spectral_radius=run.r,
+                   logdet_end=run.logdet, spectral_radius=run.r,
                    converged=run.converged, cpu_seconds=cpu_seconds)
 
 #: Iterations every start of :func:`refine_gain_from` gets before the leader is kept.
 RACE_ITERATIONS = 2
+
+#: A start of :func:`refine_gain_from` whose ``log det`` at the start lies more than this
+#: above the lowest start's is dropped before the race. Measured (start gap -> gap after
+#: the 2 race iterations, positive: K = 0 behind the chosen candidate) on the four
+#: measured sets of ``benchmarks/bench_realdata.py`` and the demo's four identifications
+#: (``benchmarks/results/realdata_i36.md``): robot arm 0.95 -> 0.58, flutter 3.07 -> 2.53,
+#: subframe 1.21 -> 3.05, demo SIMO 0.25 -> 0.87, 0.39 -> 1.00, 0.00 -> 0.00 and MIMO
+#: 0.15 -> -0.23 (the one record where K = 0 wins). A start gained at most 0.54 on the
+#: other in two iterations, so a start 1.0 behind (a factor e in the innovation
+#: determinant) is taken as unable to win; on flutter and the subframe it saved the two
+#: race iterations of K = 0, and no kept start changed.
+RACE_GAP = 1.0
 
 #: Starts of :func:`refine_gain_from` within this of the lowest ``log det`` after the race
 #: are tied (when ``tol`` is None; else ``tol`` itself).
@@ -417,7 +469,8 @@ class GainRace:
         whole race's).
     race_logdet : dict
         ``{label: log det}`` of every distinct start after the race iterations (outputs
-        scaled to unit RMS; lower is better); the kept start has the lowest.
+        scaled to unit RMS; lower is better), or at its start for a start that did not
+        race (:data:`RACE_GAP`); the kept start has the lowest.
     """
 
     start: str
@@ -427,7 +480,8 @@ class GainRace:
 
 def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
                      iterations: int | None = None, race: int = RACE_ITERATIONS,
-                     margin: float = 0.999, tol: float | None = 1e-5) -> GainRace:
+                     margin: float = 0.999, tol: float | None = 1e-5,
+                     race_gap: float = RACE_GAP) -> GainRace:
     """:func:`refine_gain` from several starts, the one with the lowest identification
     criterion kept.
 
@@ -436,7 +490,8 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
     places: on the demo's MIMO record (36 states, 3 x 3) the best candidate gain refined to
     ``log det`` -29.16 and K = 0 to -30.27 in the same 5 iterations (validation one-step
     41.4 against 43.6 dB), while on the flutter set K = 0 stalls at -5.0 against -13.7
-    from the best candidate. Every distinct start is refined for ``race`` iterations; the
+    from the best candidate. Every distinct start is refined for ``race`` iterations (a
+    start more than ``race_gap`` behind the best one at the start does not race); the
     one with the lowest criterion then continues for the rest of the iteration limit
     (successive halving: the losers cost ``race`` iterations each, not a whole refinement).
     The choice reads the identification record only; a start within ``tol`` of the lowest
@@ -459,6 +514,10 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
         :func:`gain_iterations`.
     race : int
         Iterations every start gets before the leader is chosen.
+    race_gap : float
+        A start whose ``log det`` at the start (after its initial-state fit) lies more than
+        this above the lowest start's does not race (:data:`RACE_GAP`; ``inf``: every
+        start races).
     margin : float
         As in :func:`refine_gain`.
     tol : float or None
@@ -490,19 +549,31 @@ def refine_gain_from(model: control.StateSpace, u, y, starts: dict, *,
     first = min(race, iterations)
     for label, K0 in distinct:
         try:
-            runs[label] = _start(model, u, y, K0, margin)
+            # every start probed for its start value first (RACE_GAP), in the model's
+            # coordinates, and moved into the observer coordinates only if it races
+            runs[label] = _start(model, u, y, K0, margin, coordinates=False)
         except (DataError, np.linalg.LinAlgError) as exc:
             error = exc
-            continue
-        _iterate(runs[label], first, tol)
     if not runs:
         raise DataError(f"no start gain could be refined ({error})")
-    heats = {lab: _logdet(run.E) for lab, run in runs.items()}
+    # a start too far behind at the start cannot win the race (RACE_GAP): it keeps its
+    # start value and drops out; the runs are independent, so the others are unchanged
+    heats = {lab: run.logdet for lab, run in runs.items()}
+    lowest = min(heats.values())
+    for label, _ in distinct:
+        if label not in runs:
+            continue
+        if heats[label] > lowest + race_gap:
+            del runs[label]
+            continue
+        _to_observer(runs[label])
+        _iterate(runs[label], first, tol)
+        heats[label] = runs[label].logdet
     # ties go to the earlier start (the chosen candidate comes first): two starts that
     # reach the same point differ at rounding level, and a rounding-level winner would make
     # the kept start depend on BLAS summation order
-    best = min(heats.values())
+    best = min(heats[lab] for lab in runs)
     tie = TIE_TOL if tol is None else tol
-    label = next(lab for lab, h in heats.items() if h <= best + tie)
+    label = next(lab for lab, h in heats.items() if lab in runs and h <= best + tie)
     _iterate(runs[label], iterations - runs[label].iterations, tol)
     return GainRace(label, _result(runs[label], time.process_time() - c0), heats)

@@ -42,8 +42,8 @@ from trussid.plid.passes import SCRATCH_SCHEDULE, Pass, multipass
 from trussid.plid.provenance import (DirectTerm, DirectTermTest, Identification, Provenance,
                                      Stabilised)
 from trussid.plid.reduce import balanced_truncation
-from trussid.plid.subspace import (default_block_rows, direct_term_test, output_error_fit,
-                                   subspace_prior)
+from trussid.plid.subspace import (cached_n4sid, default_block_rows, direct_term_test,
+                                   output_error_fit, subspace_prior)
 
 __all__ = ["identify", "check_data", "PREDICTORS"]
 
@@ -204,9 +204,11 @@ def identify(u, y, order: int, dt: float, *, start: str = "subspace", R=None,
             # decided before the block-row sweep, on the strictly proper prior of the first
             # block-row count, so that only the prior that is used is swept (one N4SID run
             # and one output-error refit fewer per identify; the test's decision was the
-            # same on every block-row count of the four measured sets)
+            # same on every block-row count of the four measured sets). The test reads the
+            # prior's A, C only (it fits B and D itself): the prior's own refit of B is
+            # left to the sweep, which runs only if that prior is used
             first = _first_block_rows(u, y, order, block_rows)
-            test = direct_term_test(subspace_prior(u, y, order, dt, [first], fits=fits)[0],
+            test = direct_term_test(cached_n4sid(u, y, order, first, dt, fits).stable_zero_d,
                                     u, y)
             test["block_rows"] = first
             use_d = test["direct"]
@@ -291,7 +293,7 @@ def _strictly_proper_restart(u, y, order, dt, res, strictly_proper, sched, kw):
     n_bad = count_unstable(res.model)
     if strictly_proper is None:
         strictly_proper, _ = subspace_prior(u, y, order, dt, kw["block_rows"], fits=kw["fits"])
-    alt_d, _, _ = output_error_fit(strictly_proper, u, y, direct=True)
+    alt_d, _, _ = output_error_fit(strictly_proper, u, y, direct=True, d_std=False)
     alt = _start_with_d(alt_d, u, y, order, kw["radius"], kw["R"])
     try:
         alt_res, alt_hist = multipass(u, alt[2], order, dt, sched, basis=alt[3], prior=alt[0],

@@ -47,7 +47,8 @@ def _logdet_of(plant, u, y, K, x0):
 def test_refine_gain_from_keeps_the_start_that_leads_after_the_race(coloured):
     plant, u, y, starts = coloured
     race, total = 2, 8
-    got = refine_gain_from(plant, u, y, starts, iterations=total, race=race)
+    got = refine_gain_from(plant, u, y, starts, iterations=total, race=race,
+                           race_gap=np.inf)
     # independently: each start refined alone for the race's iterations
     heats = {lab: refine_gain(plant, u, y, K0, iterations=race).logdet_end
              for lab, K0 in starts.items()}
@@ -61,6 +62,26 @@ def test_refine_gain_from_keeps_the_start_that_leads_after_the_race(coloured):
     assert got.fit.logdet_end == pytest.approx(_logdet_of(plant, u, y, got.fit.K, got.fit.x0),
                                                abs=1e-8)
     assert got.fit.logdet_end <= min(heats.values())
+
+
+def test_a_start_too_far_behind_at_the_start_does_not_race(coloured):
+    # a gap under the two starts' difference: the one behind keeps its start value (its
+    # criterion with x0 fitted, recomputed sample by sample) and the other continues as a
+    # refinement from it alone would; with no gap both race and the same start is kept
+    plant, u, y, starts = coloured
+    at_start = {lab: refine_gain(plant, u, y, K0, iterations=0) for lab, K0 in starts.items()}
+    logdet0 = {lab: _logdet_of(plant, u, y, starts[lab], f.x0) for lab, f in at_start.items()}
+    ahead, behind = sorted(logdet0, key=logdet0.get)
+    gap = logdet0[behind] - logdet0[ahead]
+    assert gap > 0.05
+    got = refine_gain_from(plant, u, y, starts, iterations=6, race_gap=0.5 * gap)
+    assert got.start == ahead
+    assert got.race_logdet[behind] == pytest.approx(logdet0[behind], abs=1e-8)
+    alone = refine_gain(plant, u, y, starts[ahead], iterations=6)
+    np.testing.assert_allclose(got.fit.K, alone.K, rtol=1e-10, atol=1e-12 * np.abs(alone.K).max())
+    full = refine_gain_from(plant, u, y, starts, iterations=6, race_gap=np.inf)
+    assert full.start == ahead
+    assert full.race_logdet[behind] < got.race_logdet[behind]
 
 
 def test_the_significance_stop_ends_at_the_first_step_that_gains_less_than_q_over_n(coloured):
@@ -154,3 +175,13 @@ def test_normal_equations_in_modal_coordinates_equal_those_of_a_finite_differenc
     H, g = _normal_equations(A - K @ C, C, E, W)
     np.testing.assert_allclose(H, H_fd, rtol=0, atol=1e-7 * np.abs(H_fd).max())
     np.testing.assert_allclose(g, g_fd, rtol=0, atol=1e-7 * np.abs(g_fd).max())
+
+
+def test_a_start_dropped_before_the_race_is_never_kept_even_with_no_gap(coloured):
+    # race_gap 0: only the start lowest at the start races; a tie tolerance wide enough to
+    # take in the dropped start (10 in log det) must not bring it back
+    plant, u, y, starts = coloured
+    got = refine_gain_from(plant, u, y, starts, iterations=3, race_gap=0.0, tol=10.0)
+    at_start = {lab: refine_gain(plant, u, y, K0, iterations=0).logdet_end
+                for lab, K0 in starts.items()}
+    assert got.start == min(at_start, key=at_start.get)

@@ -155,3 +155,21 @@ def test_given_block_rows_are_all_tried():
     u, y = plant_record(acc, 1500, 40, seed=4)
     _, choice = sweep_block_rows(u, y, 6, acc.dt, [20, 30, 40], min_gain_db=np.inf)
     assert list(choice.candidates) == [20, 30, 40] and choice.stopped is None
+
+
+def test_the_product_with_the_pseudo_inverse_of_r22_is_numpys_pinv(record):
+    # the triangular solve of a well-conditioned R22 against numpy's SVD pseudo-inverse,
+    # and a rank-deficient factor (noise-free data: one row of exact zeros), where only the
+    # pseudo-inverse is defined, must take that route
+    from trussid.plid.subspace import _times_pinv
+
+    _, u, y = record
+    R22, R32, _, _ = po_moesp(u, y, 10)
+    ref = R32 @ np.linalg.pinv(R22)
+    np.testing.assert_allclose(_times_pinv(R32, R22), ref, rtol=0, atol=1e-10 * np.abs(ref).max())
+    singular = R22.copy()
+    singular[3:, 3] = 0.0
+    singular[3, :4] = 0.0
+    ref = R32 @ np.linalg.pinv(singular)
+    assert np.all(np.isfinite(ref))
+    np.testing.assert_array_equal(_times_pinv(R32, singular), ref)
