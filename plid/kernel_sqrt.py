@@ -67,39 +67,81 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
         hx = 0.0
         for i in range(n):
             hx += Hw[k, i] * z[q + i]
-        # f = (T_1 ... T_{k-1})^T g: D g + V_j . (sum_{i > j} g_i U_i)
-        for r in range(k):
-            acc_r[r] = 0.0
-        for j in range(J - 1, -1, -1):
-            g = Gm[k, j]
-            fj = D[j] * g
+        # f = (T_1 ... T_{k-1})^T g: D g + V_j . (sum_{i > j} g_i U_i). The running sums
+        # are the loop's carried dependency: for the first three outputs they are locals
+        # (registers), where the array acc_r would put a store and a reload on that chain
+        # every iteration (LLVM cannot prove acc_r apart from V and U); same arithmetic in
+        # the same order
+        if k < 3:
+            c0 = 0.0
+            c1 = 0.0
+            for j in range(J - 1, -1, -1):
+                g = Gm[k, j]
+                fj = D[j] * g
+                if k >= 1:
+                    fj += V[j, 0] * c0
+                if k == 2:
+                    fj += V[j, 1] * c1
+                if k >= 1:
+                    c0 += g * U[j, 0]
+                if k == 2:
+                    c1 += g * U[j, 1]
+                f[j] = fj
+        else:
             for r in range(k):
-                fj += V[j, r] * acc_r[r]
-            for r in range(k):
-                acc_r[r] += g * U[j, r]
-            f[j] = fj
+                acc_r[r] = 0.0
+            for j in range(J - 1, -1, -1):
+                g = Gm[k, j]
+                fj = D[j] * g
+                for r in range(k):
+                    fj += V[j, r] * acc_r[r]
+                for r in range(k):
+                    acc_r[r] += g * U[j, r]
+                f[j] = fj
         # a_j = 1 + sum_{i >= j} f_i^2
         acc = 0.0
         a[J] = 1.0
         for j in range(J - 1, -1, -1):
             acc += f[j] * f[j]
             a[j] = acc + 1.0
-        # w = (T_1 ... T_{k-1}) f and the new V columns, one forward pass
-        for r in range(k):
-            acc_r[r] = 0.0
-        for j in range(J):
-            s = np.sqrt(a[j] * a[j + 1])
-            dj = a[j + 1] / s
-            bj = -f[j] / s
-            wj = D[j] * f[j]
+        # w = (T_1 ... T_{k-1}) f and the new V columns, one forward pass (locals for the
+        # first three outputs, as above)
+        if k < 3:
+            c0 = 0.0
+            c1 = 0.0
+            for j in range(J):
+                s = np.sqrt(a[j] * a[j + 1])
+                dj = a[j + 1] / s
+                fj = f[j]
+                bj = -fj / s
+                wj = D[j] * fj
+                if k >= 1:
+                    wj += U[j, 0] * c0
+                    c0 += V[j, 0] * fj
+                    V[j, 0] = V[j, 0] * dj - c0 * bj
+                if k == 2:
+                    wj += U[j, 1] * c1
+                    c1 += V[j, 1] * fj
+                    V[j, 1] = V[j, 1] * dj - c1 * bj
+                w[j] = wj
+                V[j, k] = bj
+                D[j] *= dj
+        else:
             for r in range(k):
-                wj += U[j, r] * acc_r[r]
-                incl = acc_r[r] + V[j, r] * f[j]
-                V[j, r] = V[j, r] * dj - incl * bj
-                acc_r[r] = incl
-            w[j] = wj
-            V[j, k] = bj
-            D[j] *= dj
+                acc_r[r] = 0.0
+            for j in range(J):
+                s = np.sqrt(a[j] * a[j + 1])
+                dj = a[j + 1] / s
+                bj = -f[j] / s
+                wj = D[j] * f[j]
+                for r in range(k):
+                    wj += U[j, r] * acc_r[r]
+                    incl = acc_r[r] + V[j, r] * f[j]
+                    V[j, r] = V[j, r] * dj - incl * bj
+                    acc_r[r] = incl
+                w[j] = wj
+                V[j, k] = bj
+                D[j] *= dj
         innov = yw[k] - hx
         for j in range(J):
             innov -= Gm[k, j] * wsum[j]
@@ -429,21 +471,27 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
     for a in range(n):
         for i in range(n):
             pre[a, n + i] = Wf[a, i]
+    # 0 * x is NaN exactly where x is not finite (not folded away: the kernels' fastmath
+    # flags leave out "nnan"): one branch-free sum instead of a test per entry
+    chk = 0.0
     tri = True
     for a in range(n):
+        pa = pre[a]
         for i in range(2 * n):
-            if not np.isfinite(pre[a, i]):
-                return False
+            chk += 0.0 * pa[i]
         for i in range(a + 1, n):
             if Wf[a, i] != 0.0:
                 tri = False
+    if not np.isfinite(chk):
+        return False
     if tri:
         _lq_tri(pre, n)
     else:
         _lq_rows(pre)               # Wf is the symmetric root of a singular W: no structure
-    for a in range(n):
-        for i in range(n):
-            L[q + a, q + i] = pre[a, i] if i <= a else 0.0
+    for i in range(n):
+        Li = L[q:, q + i]           # down L's (Fortran-ordered) column
+        for a in range(n):
+            Li[a] = pre[a, i] if i <= a else 0.0
     for a in range(n):
         z[q + a] = xn[a]
     return True
@@ -499,7 +547,6 @@ def _lq_tri(M, n):
     instead of 5 n^3 / 3. Same sign convention as :func:`_lq_rows`.
     """
     v = np.empty(n + 1)
-    s = np.empty(n)
     for k in range(n):
         hi = n + k + 1
         Mk = M[k, k:hi]
@@ -519,15 +566,29 @@ def _lq_tri(M, n):
         Mk[0] = beta
         for j in range(1, n + 1):
             Mk[j] = 0.0
-        for i in range(k + 1, n):
+        # two rows per sweep: each read of v serves both (the sweeps are n + 1 long, so
+        # loop overhead, not arithmetic, is what a sweep per row pays for)
+        i = k + 1
+        while i + 1 < n:
+            Mi = M[i, k:hi]
+            Mj = M[i + 1, k:hi]
+            acc = 0.0
+            acc1 = 0.0
+            for j in range(n + 1):
+                acc += Mi[j] * v[j]
+                acc1 += Mj[j] * v[j]
+            f = acc * tau
+            f1 = acc1 * tau
+            for j in range(n + 1):
+                Mi[j] -= f * v[j]
+                Mj[j] -= f1 * v[j]
+            i += 2
+        if i < n:
             Mi = M[i, k:hi]
             acc = 0.0
             for j in range(n + 1):
                 acc += Mi[j] * v[j]
-            s[i] = acc * tau
-        for i in range(k + 1, n):
-            Mi = M[i, k:hi]
-            f = s[i]
+            f = acc * tau
             for j in range(n + 1):
                 Mi[j] -= f * v[j]
 
