@@ -157,6 +157,9 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
             M[r, i] = 0.0
     j = J - 1
     if p == 3:
+        while j >= 3:
+            _lt_quad3(L, M, z, j, D, wsum, U, V)
+            j -= 4
         while j >= 1:
             _lt_pair3(L, M, z, j, D, wsum, U, V)
             j -= 2
@@ -164,6 +167,69 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
         _lt_column(L, col, M, z, j, D[j], wsum[j], U[j], V[j], p)
         j -= 1
 
+
+
+@njit
+def _lt_quad3(L, M, z, j, D, wsum, U, V):
+    """Columns j .. j - 3 of ``L T`` (three outputs) in one sweep, as four calls of
+    :func:`_lt_column` in that order: the running sums ``M`` and ``z`` are read and written
+    once per four columns (per two in :func:`_lt_pair3`), which halves the sweep's loads
+    and stores again (its stores, not its multiply-adds, were the limit).
+
+    Rows j - 3 .. j - 1 hold only some of the four columns (L is lower triangular; ``M``
+    is still zero there): those few entries are updated one by one first.
+    """
+    for r in range(j - 3, j):
+        for c in range(r, j - 4, -1):        # the columns row r has, right to left
+            lrc = L[r, c]
+            L[r, c] = D[c] * lrc + M[0, r] * V[c, 0] + M[1, r] * V[c, 1] + M[2, r] * V[c, 2]
+            M[0, r] += lrc * U[c, 0]
+            M[1, r] += lrc * U[c, 1]
+            M[2, r] += lrc * U[c, 2]
+            z[r] += lrc * wsum[c]
+    La = L[j:, j]
+    Lb = L[j:, j - 1]
+    Lc = L[j:, j - 2]
+    Ld = L[j:, j - 3]
+    M0 = M[0, j:]
+    M1 = M[1, j:]
+    M2 = M[2, j:]
+    zj = z[j:]
+    da, db, dc, dd = D[j], D[j - 1], D[j - 2], D[j - 3]
+    wa, wb, wc, wd = wsum[j], wsum[j - 1], wsum[j - 2], wsum[j - 3]
+    va0, va1, va2 = V[j, 0], V[j, 1], V[j, 2]
+    vb0, vb1, vb2 = V[j - 1, 0], V[j - 1, 1], V[j - 1, 2]
+    vc0, vc1, vc2 = V[j - 2, 0], V[j - 2, 1], V[j - 2, 2]
+    vd0, vd1, vd2 = V[j - 3, 0], V[j - 3, 1], V[j - 3, 2]
+    ua0, ua1, ua2 = U[j, 0], U[j, 1], U[j, 2]
+    ub0, ub1, ub2 = U[j - 1, 0], U[j - 1, 1], U[j - 1, 2]
+    uc0, uc1, uc2 = U[j - 2, 0], U[j - 2, 1], U[j - 2, 2]
+    ud0, ud1, ud2 = U[j - 3, 0], U[j - 3, 1], U[j - 3, 2]
+    for i in range(La.size):
+        la = La[i]
+        lb = Lb[i]
+        lc = Lc[i]
+        ld = Ld[i]
+        m0 = M0[i]
+        m1 = M1[i]
+        m2 = M2[i]
+        La[i] = da * la + m0 * va0 + m1 * va1 + m2 * va2
+        m0 += la * ua0
+        m1 += la * ua1
+        m2 += la * ua2
+        Lb[i] = db * lb + m0 * vb0 + m1 * vb1 + m2 * vb2
+        m0 += lb * ub0
+        m1 += lb * ub1
+        m2 += lb * ub2
+        Lc[i] = dc * lc + m0 * vc0 + m1 * vc1 + m2 * vc2
+        m0 += lc * uc0
+        m1 += lc * uc1
+        m2 += lc * uc2
+        Ld[i] = dd * ld + m0 * vd0 + m1 * vd1 + m2 * vd2
+        M0[i] = m0 + ld * ud0
+        M1[i] = m1 + ld * ud1
+        M2[i] = m2 + ld * ud2
+        zj[i] += la * wa + lb * wb + lc * wc + ld * wd
 
 @njit
 def _lt_pair3(L, M, z, j, D, wsum, U, V):
