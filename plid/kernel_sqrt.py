@@ -712,18 +712,41 @@ def _add_block_gram(L, Wk, r0, r1, n, Gt, W):
         rows = r0 + (jmax + 1) * n
         G = Gt[off:off + rows]
         off += rows
+        # row i of G_kk (column i of the blocks) sums blocks j0 .. jmax, j0 the first
+        # whose rows reach column i; written in one to three sweeps of n, not zeroed and
+        # then accumulated block by block (each sweep is short: their count is the cost)
         for i in range(rows):
-            for a in range(n):
-                G[i, a] = 0.0
-        for j in range(jmax + 1):
-            f = Wk[j, kk]
-            if f != 0.0:
-                base = r0 + j * n
-                for i in range(base + n):
-                    Li = L[base:base + n, i]
-                    Gi = G[i]
-                    for a in range(n):
-                        Gi[a] += f * Li[a]
+            Gi = G[i]
+            j = max(0, (i - r0) // n)
+            t = jmax - j + 1
+            b0 = r0 + j * n
+            f0 = Wk[j, kk]
+            L0 = L[b0:b0 + n, i]
+            if t >= 3:
+                f1 = Wk[j + 1, kk]
+                f2 = Wk[j + 2, kk]
+                L1 = L[b0 + n:b0 + 2 * n, i]
+                L2 = L[b0 + 2 * n:b0 + 3 * n, i]
+                for a in range(n):
+                    Gi[a] = f0 * L0[a] + f1 * L1[a] + f2 * L2[a]
+                j += 3
+            elif t == 2:
+                f1 = Wk[j + 1, kk]
+                L1 = L[b0 + n:b0 + 2 * n, i]
+                for a in range(n):
+                    Gi[a] = f0 * L0[a] + f1 * L1[a]
+                j += 2
+            else:
+                for a in range(n):
+                    Gi[a] = f0 * L0[a]
+                j += 1
+            while j <= jmax:
+                f0 = Wk[j, kk]
+                b0 = r0 + j * n
+                L0 = L[b0:b0 + n, i]
+                for a in range(n):
+                    Gi[a] += f0 * L0[a]
+                j += 1
     if off:
         Gs = Gt[:off]
         W += np.dot(Gs.T, Gs)
