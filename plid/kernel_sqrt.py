@@ -537,19 +537,14 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
     for a in range(n):
         for i in range(n):
             pre[a, n + i] = Wf[a, i]
-    # 0 * x is NaN exactly where x is not finite (not folded away: the kernels' fastmath
-    # flags leave out "nnan"): one branch-free sum instead of a test per entry
-    chk = 0.0
     tri = True
     for a in range(n):
-        pa = pre[a]
         for i in range(2 * n):
-            chk += 0.0 * pa[i]
+            if not np.isfinite(pre[a, i]):
+                return False
         for i in range(a + 1, n):
             if Wf[a, i] != 0.0:
                 tri = False
-    if not np.isfinite(chk):
-        return False
     if tri:
         _lq_tri(pre, n)
     else:
