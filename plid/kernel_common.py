@@ -17,7 +17,7 @@ except ImportError:  # the pure-numpy path of recursion_kernel gives the same re
     numba = None
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "njit", "csr", "diagonals", "state_sequence",
+__all__ = ["HAVE_NUMBA", "njit", "csr", "diagonals", "pair_blocks", "state_sequence",
            "mean_square_errors", "mode_signals"]
 
 # fastmath without the finite-math flags: the recursion must carry NaN/inf through (the
@@ -60,6 +60,30 @@ def diagonals(M: np.ndarray):
         a = np.arange(max(0, -o), min(n, n - o))
         V[k, a] = M[a, a + o]
     return offs, V
+
+
+
+def pair_blocks(M: np.ndarray) -> np.ndarray:
+    """``M``'s 2 x 2 diagonal blocks as rows ``[m00, m01, m10, m11]`` ((n / 2, 4)) when
+    ``M`` is block-diagonal in pairs of rows from the first (the rotation basis's ``F``),
+    else an empty (0, 4) array.
+
+    The square-root kernel then applies ``M`` pair by pair in one sweep, where by its three
+    diagonals it takes three.
+    """
+    M = np.asarray(M, dtype=float)
+    n = M.shape[0]
+    if n % 2 or n == 0:
+        return np.zeros((0, 4))
+    B = np.zeros_like(M)
+    idx = np.arange(0, n, 2)
+    blocks = np.stack([M[idx, idx], M[idx, idx + 1], M[idx + 1, idx], M[idx + 1, idx + 1]],
+                      axis=1)
+    B[idx, idx], B[idx, idx + 1] = blocks[:, 0], blocks[:, 1]
+    B[idx + 1, idx], B[idx + 1, idx + 1] = blocks[:, 2], blocks[:, 3]
+    if not np.array_equal(B, M):
+        return np.zeros((0, 4))
+    return np.ascontiguousarray(blocks)
 
 
 @njit

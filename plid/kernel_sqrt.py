@@ -11,12 +11,16 @@ the time update is the array (pre-array / LQ) form of the square-root covariance
 implementations", IEEE Trans. Autom. Control 31(10), 1986), triangularised by Householder
 reflections that keep the pre-array's triangular half.
 
-Where the time goes (``benchmarks/results/plid_speed_sqrt.md``, 30 / 36 states, rotation
-basis, load 1-2): per sample about 20 / 32 us measurement update (8 / 20 us the Carlson
-product, a sweep over the lower triangle of L) and 44 / 64 us time update (new x rows 10 / 15,
-second-order Gram 12 / 19, LQ 8 / 10, the rest moments); every pass over L is bound by
-memory traffic more than by arithmetic, which is
-why the loops are fused (two factor columns per sweep, three outputs per sweep).
+Where the time goes (36 states, 3 -> 3, rotation basis; cycles per sample counted stage by
+stage beside main's kernel in one process, ``benchmarks/results/plid_speed_i36.md``): of
+about 200 thousand, the Carlson product (a sweep over the lower triangle of L, four
+columns per sweep) 22 %, the new x rows 20 %, the second-order Gram (a BLAS product) 14 %,
+the LQ of the x block 14 %, the Carlson generators 8 %, the rest (C L, L^T h, the moments,
+the Cholesky of W) 22 %. The factor's columns of the x rows are n long, so most loops are
+short: their count per column (set-up, alias checks, a scalar remainder), more than their
+arithmetic, is what the time update pays, hence the fused sweeps (two rows per LQ
+reflection sweep, F by its 2 x 2 blocks in one sweep, the Gram's blocks summed per row);
+the Carlson product, with four columns per sweep, is near the multiply-add rate.
 """
 
 from __future__ import annotations
@@ -343,7 +347,7 @@ def _lt_column(L, col, M, z, j, dj, wj, Uj, Vj, p):
 
 
 @njit
-def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
+def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
                xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
     """The square-root time update of one sample (as sqrt_step's); False at a non-finite
     moment, where the reference raises.
@@ -499,6 +503,15 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
                 Ac = AbarT[c]
                 for a in range(n):
                     col[a] += Ac[a] * v
+        if Fb.shape[0]:
+            # F is 2 x 2 blocks on the diagonal (the rotation basis): one sweep over the
+            # pairs instead of one per diagonal (three short sweeps whose set-up, not their
+            # arithmetic, was the cost)
+            for b in range(Fb.shape[0]):
+                x0 = Lx[2 * b]
+                x1 = Lx[2 * b + 1]
+                col[2 * b] += Fb[b, 0] * x0 + Fb[b, 1] * x1
+                col[2 * b + 1] += Fb[b, 2] * x0 + Fb[b, 3] * x1
         # F by its diagonals: contiguous, where the sparse rows would gather
         # (aligned views indexed from 0: an index ``a + o`` numba cannot prove non-negative
         # gets a wrap-around branch that stops LLVM vectorising)
@@ -748,7 +761,7 @@ def _add_block_gram(L, Wk, r0, r1, n, Gt, W):
 
 
 @njit
-def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Rw, Hw, J, Q, Wn, has_N,
+def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Rw, Hw, J, Q, Wn, has_N,
                  us, ys, E, hist, hist_every, k_done, n, p, m, out):
     # Long: one compiled loop over the samples is the point of this module; its stages
     # follow sqrt_step's (measurement, moments, new x rows, LQ of the x block).
@@ -797,7 +810,7 @@ def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Rw, Hw, J, Q, Wn, has_
                 acc += Rw[r, l] * ys[k, l]
             yw[r] = acc
         _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r, Mrun, colm)
-        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT,
+        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT,
                           Bm, coef, xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
             # a non-finite moment: where the reference raises and PLID._one marks the
             # estimate NaN (the rest of this sample's time update is skipped, as there)
