@@ -640,9 +640,35 @@ def _lq_tri(M, n):
         Mk[0] = beta
         for j in range(1, n + 1):
             Mk[j] = 0.0
-        # two rows per sweep: each read of v serves both (the sweeps are n + 1 long, so
-        # loop overhead, not arithmetic, is what a sweep per row pays for)
+        # four (then two) rows per sweep: each read of v serves them all (the sweeps are
+        # n + 1 long, so loop overhead, not arithmetic, is what a sweep per row pays for)
         i = k + 1
+        while i + 3 < n:
+            Ma = M[i, k:hi]
+            Mb = M[i + 1, k:hi]
+            Mc = M[i + 2, k:hi]
+            Md = M[i + 3, k:hi]
+            acc = 0.0
+            acc1 = 0.0
+            acc2 = 0.0
+            acc3 = 0.0
+            for j in range(n + 1):
+                vj = v[j]
+                acc += Ma[j] * vj
+                acc1 += Mb[j] * vj
+                acc2 += Mc[j] * vj
+                acc3 += Md[j] * vj
+            fa = acc * tau
+            fb = acc1 * tau
+            fc = acc2 * tau
+            fd = acc3 * tau
+            for j in range(n + 1):
+                vj = v[j]
+                Ma[j] -= fa * vj
+                Mb[j] -= fb * vj
+                Mc[j] -= fc * vj
+                Md[j] -= fd * vj
+            i += 4
         while i + 1 < n:
             Mi = M[i, k:hi]
             Mj = M[i + 1, k:hi]
