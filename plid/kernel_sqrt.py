@@ -76,6 +76,11 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
         # (registers), where the array acc_r would put a store and a reload on that chain
         # every iteration (LLVM cannot prove acc_r apart from V and U); same arithmetic in
         # the same order
+        # In the same backward pass: a_j = 1 + sum_{i >= j} f_i^2 and g . wsum (the
+        # innovation's share of the earlier outputs' correction), one sweep instead of three
+        a[J] = 1.0
+        sq = 0.0
+        gw = 0.0
         if k < 3:
             c0 = 0.0
             c1 = 0.0
@@ -91,6 +96,9 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
                 if k == 2:
                     c1 += g * U[j, 1]
                 f[j] = fj
+                sq += fj * fj
+                a[j] = sq + 1.0
+                gw += g * wsum[j]
         else:
             for r in range(k):
                 acc_r[r] = 0.0
@@ -102,12 +110,9 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
                 for r in range(k):
                     acc_r[r] += g * U[j, r]
                 f[j] = fj
-        # a_j = 1 + sum_{i >= j} f_i^2
-        acc = 0.0
-        a[J] = 1.0
-        for j in range(J - 1, -1, -1):
-            acc += f[j] * f[j]
-            a[j] = acc + 1.0
+                sq += fj * fj
+                a[j] = sq + 1.0
+                gw += g * wsum[j]
         # w = (T_1 ... T_{k-1}) f and the new V columns, one forward pass (locals for the
         # first three outputs, as above)
         if k < 3:
@@ -146,10 +151,7 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
                 w[j] = wj
                 V[j, k] = bj
                 D[j] *= dj
-        innov = yw[k] - hx
-        for j in range(J):
-            innov -= Gm[k, j] * wsum[j]
-        sc = innov / a[0]
+        sc = (yw[k] - hx - gw) / a[0]
         for j in range(J):
             wsum[j] += w[j] * sc
             U[j, k] = w[j]
@@ -170,7 +172,6 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
     while j >= 0:
         _lt_column(L, col, M, z, j, D[j], wsum[j], U[j], V[j], p)
         j -= 1
-
 
 
 @njit
