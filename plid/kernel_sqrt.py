@@ -40,24 +40,11 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
     p, n = Hw.shape
     d = L.shape[0]
     # rows g_k = L^T h_k: each column of L's x rows read once for all outputs (p <= 3)
-    for j in range(J):
-        Lx = L[q:, j]
-        if p == 3:
-            h0 = Hw[0]
-            h1 = Hw[1]
-            h2 = Hw[2]
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            for i in range(n):
-                li = Lx[i]
-                a0 += h0[i] * li
-                a1 += h1[i] * li
-                a2 += h2[i] * li
-            Gm[0, j] = a0
-            Gm[1, j] = a1
-            Gm[2, j] = a2
-        else:
+    if p == 3:
+        _rows_dot3(Hw, L, q, J, Gm)
+    else:
+        for j in range(J):
+            Lx = L[q:, j]
             for k in range(p):
                 hk = Hw[k]
                 acc = 0.0
@@ -173,6 +160,57 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
         _lt_column(L, col, M, z, j, D[j], wsum[j], U[j], V[j], p)
         j -= 1
 
+
+
+@njit
+def _rows_dot3(H, L, q, cols, out):
+    """``out[k, j] = H[k] . L[q:, j]`` for three rows ``H[k]`` and the columns ``j < cols``
+    of L's x rows: each column read once for the three rows, two columns per sweep (the
+    columns are n long: per sweep, the set-up and the reductions' final sums weigh as
+    much as the multiply-adds)."""
+    n = H.shape[1]
+    h0 = H[0]
+    h1 = H[1]
+    h2 = H[2]
+    j = 0
+    while j + 1 < cols:
+        La = L[q:, j]
+        Lb = L[q:, j + 1]
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        b0 = 0.0
+        b1 = 0.0
+        b2 = 0.0
+        for i in range(n):
+            la = La[i]
+            lb = Lb[i]
+            a0 += h0[i] * la
+            a1 += h1[i] * la
+            a2 += h2[i] * la
+            b0 += h0[i] * lb
+            b1 += h1[i] * lb
+            b2 += h2[i] * lb
+        out[0, j] = a0
+        out[1, j] = a1
+        out[2, j] = a2
+        out[0, j + 1] = b0
+        out[1, j + 1] = b1
+        out[2, j + 1] = b2
+        j += 2
+    if j < cols:
+        Lx = L[q:, j]
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        for i in range(n):
+            li = Lx[i]
+            a0 += h0[i] * li
+            a1 += h1[i] * li
+            a2 += h2[i] * li
+        out[0, j] = a0
+        out[1, j] = a1
+        out[2, j] = a2
 
 @njit
 def _lt_quad3(L, M, z, j, D, wsum, U, V):
@@ -381,22 +419,7 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Q, Wn, has_N, n
     # non-zeros; a C with many (rotation basis: a sum of block components) as three dense
     # dot products per read of a column, which vectorise where the gather does not
     if p == 3 and Ci.size > 2 * p:
-        C0 = Cd[0]
-        C1 = Cd[1]
-        C2 = Cd[2]
-        for i in range(d):
-            Lx = L[q:, i]
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            for a in range(n):
-                li = Lx[a]
-                a0 += C0[a] * li
-                a1 += C1[a] * li
-                a2 += C2[a] * li
-            CL[0, i] = a0
-            CL[1, i] = a1
-            CL[2, i] = a2
+        _rows_dot3(Cd, L, q, d, CL)
     else:
         for i in range(d):
             for r in range(p):
