@@ -70,6 +70,16 @@ def pair_blocks(M: np.ndarray) -> np.ndarray:
 
     The square-root kernel then applies ``M`` pair by pair in one sweep, where by its three
     diagonals it takes three.
+
+    Parameters
+    ----------
+    M : ndarray (n, n)
+        A square matrix (the basis's ``F``, dimensionless).
+
+    Returns
+    -------
+    ndarray (n / 2, 4) or (0, 4)
+        Block ``b``'s entries ``M[2b, 2b], M[2b, 2b + 1], M[2b + 1, 2b], M[2b + 1, 2b + 1]``.
     """
     M = np.asarray(M, dtype=float)
     n = M.shape[0]
