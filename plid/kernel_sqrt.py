@@ -527,15 +527,7 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Q, Wn, has_N, n
                 Ac = AbarT[c]
                 for a in range(n):
                     col[a] += Ac[a] * v
-        if Fb.shape[0]:
-            # F is 2 x 2 blocks on the diagonal (the rotation basis): one sweep over the
-            # pairs instead of one per diagonal (three short sweeps whose set-up, not their
-            # arithmetic, was the cost)
-            for b in range(Fb.shape[0]):
-                x0 = Lx[2 * b]
-                x1 = Lx[2 * b + 1]
-                col[2 * b] += Fb[b, 0] * x0 + Fb[b, 1] * x1
-                col[2 * b + 1] += Fb[b, 2] * x0 + Fb[b, 3] * x1
+        pairs = Fb.shape[0] > 0
         # F by its diagonals: contiguous, where the sparse rows would gather
         # (aligned views indexed from 0: an index ``a + o`` numba cannot prove non-negative
         # gets a wrap-around branch that stops LLVM vectorising)
@@ -565,11 +557,30 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Q, Wn, has_N, n
                 Lb0 = L[b * n:(b + 1) * n, i]
                 for a in range(n):
                     col[a] += f0 * Lb0[a]
-            for a in range(n):
-                Lx[a] = col[a]
+            if pairs:
+                # F is 2 x 2 blocks on the diagonal (the rotation basis): its product is
+                # the last sweep, pair by pair in place (a pair reads only its own two old
+                # entries), and writes the column: one sweep where the three diagonals and
+                # the copy took four
+                for b in range(Fb.shape[0]):
+                    x0 = Lx[2 * b]
+                    x1 = Lx[2 * b + 1]
+                    Lx[2 * b] = col[2 * b] + Fb[b, 0] * x0 + Fb[b, 1] * x1
+                    Lx[2 * b + 1] = col[2 * b + 1] + Fb[b, 2] * x0 + Fb[b, 3] * x1
+            else:
+                for a in range(n):
+                    Lx[a] = col[a]
         else:
-            for a in range(n):
-                pre[a, i - q] = col[a]          # pre = [A_hat L_xx, Wf], n x 2n
+            # pre = [A_hat L_xx, Wf], n x 2n
+            if pairs:
+                for b in range(Fb.shape[0]):
+                    x0 = Lx[2 * b]
+                    x1 = Lx[2 * b + 1]
+                    pre[2 * b, i - q] = col[2 * b] + Fb[b, 0] * x0 + Fb[b, 1] * x1
+                    pre[2 * b + 1, i - q] = col[2 * b + 1] + Fb[b, 2] * x0 + Fb[b, 3] * x1
+            else:
+                for a in range(n):
+                    pre[a, i - q] = col[a]
     # L_xx from the LQ of [A_hat L_xx, Wf] (the reference: the R of the QR of its transpose)
     for a in range(n):
         for i in range(n):
