@@ -156,11 +156,26 @@ def _psd_factor(M, out):
             break
         d = np.sqrt(s)
         out[j, j] = d
-        for i in range(j + 1, k):
-            s = M[i, j]
+        oj = out[j, :j]
+        # two rows per sweep of row j (the sweeps are short: their count is the cost)
+        i = j + 1
+        while i + 1 < k:
+            oa = out[i, :j]
+            ob = out[i + 1, :j]
+            sa = M[i, j]
+            sb = M[i + 1, j]
             for t in range(j):
-                s -= out[i, t] * out[j, t]
-            out[i, j] = s / d
+                sa -= oa[t] * oj[t]
+                sb -= ob[t] * oj[t]
+            out[i, j] = sa / d
+            out[i + 1, j] = sb / d
+            i += 2
+        if i < k:
+            oa = out[i, :j]
+            sa = M[i, j]
+            for t in range(j):
+                sa -= oa[t] * oj[t]
+            out[i, j] = sa / d
     if ok:
         return True
     Ms = 0.5 * (M + M.T)
