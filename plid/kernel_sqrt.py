@@ -13,10 +13,10 @@ reflections that keep the pre-array's triangular half.
 
 Where the time goes (36 states, 3 -> 3, rotation basis; cycles per sample counted stage by
 stage beside main's kernel in one process, ``benchmarks/results/plid_speed_i36.md``): of
-about 200 thousand, the Carlson product (a sweep over the lower triangle of L, four
-columns per sweep) 22 %, the new x rows 20 %, the second-order Gram (a BLAS product) 14 %,
-the LQ of the x block 14 %, the Carlson generators 8 %, the rest (C L, L^T h, the moments,
-the Cholesky of W) 22 %. The factor's columns of the x rows are n long, so most loops are
+about 200 thousand ticks, the Carlson product (a sweep over the lower triangle of L, four
+columns per sweep) 22 %, the new x rows 22 %, the second-order Gram (a BLAS product) 15 %,
+the LQ of the x block 15 %, the Carlson generators 8 %, the rest (C L, L^T h, the moments,
+the Cholesky of W) 19 %. The factor's columns of the x rows are n long, so most loops are
 short: their count per column (set-up, alias checks, a scalar remainder), more than their
 arithmetic, is what the time update pays, hence the fused sweeps (two rows per LQ
 reflection sweep, F by its 2 x 2 blocks in one sweep, the Gram's blocks summed per row);
