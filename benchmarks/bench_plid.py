@@ -471,6 +471,10 @@ def main(argv=None):
                     help="CI form: case (a) on 3000 samples at 2 block rows, the default start; speed "
                          "on 1000 samples, (12,1,3), 1 repeat")
     args = ap.parse_args(argv)
+    if args.processes < 1:
+        ap.error(f"--processes must be at least 1, got {args.processes}")
+    if args.baseline_python and not os.access(args.baseline_python, os.X_OK):
+        ap.error(f"--baseline-python {args.baseline_python}: not an executable file")
     t_start = time.perf_counter()
     report = {"machine_start": machine()}
     print(f"machine: {report['machine_start']}", flush=True)
@@ -488,10 +492,6 @@ def main(argv=None):
             print(f"  verdict {r['case']} seed {r['seed']}: {r['verdict']}")
         report["accuracy"] = results
         print(accuracy_tables(results))
-    if args.processes < 1:
-        ap.error(f"--processes must be at least 1, got {args.processes}")
-    if args.baseline_python and not os.access(args.baseline_python, os.X_OK):
-        ap.error(f"--baseline-python {args.baseline_python}: not an executable file")
     if "speed" in args.which and (args.processes > 1 or args.baseline_python):
         child = ["--repeats", str(args.repeats)]
         if args.shapes:
