@@ -62,7 +62,6 @@ def diagonals(M: np.ndarray):
     return offs, V
 
 
-
 def pair_blocks(M: np.ndarray) -> np.ndarray:
     """``M``'s 2 x 2 diagonal blocks as rows ``[m00, m01, m10, m11]`` ((n / 2, 4)) when
     ``M`` is block-diagonal in pairs of rows from the first (the rotation basis's ``F``),

@@ -13,8 +13,9 @@ equal to rounding: the tests check 1e-9 relative), in one numba-compiled loop th
   ``T = diag(D) + tril(U V^T, -1)`` by a right-to-left running sum, O(d J p), where the
   reference calls a dense triangular product (BLAS trmm, O(d J^2 / 2)), two columns per
   sweep (four with three outputs) with the state correction in the same sweep; applies
-  ``F`` in the new x rows by its 2 x 2 blocks (the rotation basis) or else its diagonals; takes upper-triangular factors of the p x p (and m x m) weights of the
-  second-order moments, so that their Gram stacks n p (p + 1) / 2 rows, not n p^2; and
+  ``F`` in the new x rows by its 2 x 2 blocks (the rotation basis) or else its diagonals;
+  takes upper-triangular factors of the p x p (and m x m) weights of the second-order
+  moments, so that their Gram stacks n p (p + 1) / 2 rows, not n p^2; and
   triangularises ``[A_hat L_xx, Wf]`` with ``Wf`` triangular by Householder reflections
   that touch n + 1 columns per row (n^3 instead of 5 n^3 / 3);
 - allocates nothing per sample.
