@@ -17,7 +17,7 @@ except ImportError:  # the pure-numpy path of recursion_kernel gives the same re
     numba = None
     HAVE_NUMBA = False
 
-__all__ = ["HAVE_NUMBA", "njit", "csr", "diagonals", "state_sequence",
+__all__ = ["HAVE_NUMBA", "njit", "csr", "diagonals", "pair_blocks", "state_sequence",
            "mean_square_errors", "mode_signals"]
 
 # fastmath without the finite-math flags: the recursion must carry NaN/inf through (the
@@ -60,6 +60,39 @@ def diagonals(M: np.ndarray):
         a = np.arange(max(0, -o), min(n, n - o))
         V[k, a] = M[a, a + o]
     return offs, V
+
+
+def pair_blocks(M: np.ndarray) -> np.ndarray:
+    """``M``'s 2 x 2 diagonal blocks as rows ``[m00, m01, m10, m11]`` ((n / 2, 4)) when
+    ``M`` is block-diagonal in pairs of rows from the first (the rotation basis's ``F``),
+    else an empty (0, 4) array.
+
+    The square-root kernel then applies ``M`` pair by pair in one sweep, where by its three
+    diagonals it takes three.
+
+    Parameters
+    ----------
+    M : ndarray (n, n)
+        A square matrix (the basis's ``F``, dimensionless).
+
+    Returns
+    -------
+    ndarray (n / 2, 4) or (0, 4)
+        Block ``b``'s entries ``M[2b, 2b], M[2b, 2b + 1], M[2b + 1, 2b], M[2b + 1, 2b + 1]``.
+    """
+    M = np.asarray(M, dtype=float)
+    n = M.shape[0]
+    if n % 2 or n == 0:
+        return np.zeros((0, 4))
+    B = np.zeros_like(M)
+    idx = np.arange(0, n, 2)
+    blocks = np.stack([M[idx, idx], M[idx, idx + 1], M[idx + 1, idx], M[idx + 1, idx + 1]],
+                      axis=1)
+    B[idx, idx], B[idx, idx + 1] = blocks[:, 0], blocks[:, 1]
+    B[idx + 1, idx], B[idx + 1, idx + 1] = blocks[:, 2], blocks[:, 3]
+    if not np.array_equal(B, M):
+        return np.zeros((0, 4))
+    return np.ascontiguousarray(blocks)
 
 
 @njit
@@ -122,11 +155,26 @@ def _psd_factor(M, out):
             break
         d = np.sqrt(s)
         out[j, j] = d
-        for i in range(j + 1, k):
-            s = M[i, j]
+        oj = out[j, :j]
+        # two rows per sweep of row j (the sweeps are short: their count is the cost)
+        i = j + 1
+        while i + 1 < k:
+            oa = out[i, :j]
+            ob = out[i + 1, :j]
+            sa = M[i, j]
+            sb = M[i + 1, j]
             for t in range(j):
-                s -= out[i, t] * out[j, t]
-            out[i, j] = s / d
+                sa -= oa[t] * oj[t]
+                sb -= ob[t] * oj[t]
+            out[i, j] = sa / d
+            out[i + 1, j] = sb / d
+            i += 2
+        if i < k:
+            oa = out[i, :j]
+            sa = M[i, j]
+            for t in range(j):
+                sa -= oa[t] * oj[t]
+            out[i, j] = sa / d
     if ok:
         return True
     Ms = 0.5 * (M + M.T)

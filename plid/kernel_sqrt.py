@@ -11,12 +11,16 @@ the time update is the array (pre-array / LQ) form of the square-root covariance
 implementations", IEEE Trans. Autom. Control 31(10), 1986), triangularised by Householder
 reflections that keep the pre-array's triangular half.
 
-Where the time goes (``benchmarks/results/plid_speed_sqrt.md``, 30 / 36 states, rotation
-basis, load 1-2): per sample about 20 / 32 us measurement update (8 / 20 us the Carlson
-product, a sweep over the lower triangle of L) and 44 / 64 us time update (new x rows 10 / 15,
-second-order Gram 12 / 19, LQ 8 / 10, the rest moments); every pass over L is bound by
-memory traffic more than by arithmetic, which is
-why the loops are fused (two factor columns per sweep, three outputs per sweep).
+Where the time goes (36 states, 3 -> 3, rotation basis; cycles per sample counted stage by
+stage beside main's kernel in one process, ``benchmarks/results/plid_speed_i36.md``): of
+about 200 thousand ticks, the Carlson product (a sweep over the lower triangle of L, four
+columns per sweep) 22 %, the new x rows 22 %, the second-order Gram (a BLAS product) 15 %,
+the LQ of the x block 15 %, the Carlson generators 8 %, the rest (C L, L^T h, the moments,
+the Cholesky of W) 19 %. The factor's columns of the x rows are n long, so most loops are
+short: their count per column (set-up, alias checks, a scalar remainder), more than their
+arithmetic, is what the time update pays, hence the fused sweeps (two rows per LQ
+reflection sweep, F by its 2 x 2 blocks in one sweep, the Gram's blocks summed per row);
+the Carlson product, with four columns per sweep, is near the multiply-add rate.
 """
 
 from __future__ import annotations
@@ -36,24 +40,11 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
     p, n = Hw.shape
     d = L.shape[0]
     # rows g_k = L^T h_k: each column of L's x rows read once for all outputs (p <= 3)
-    for j in range(J):
-        Lx = L[q:, j]
-        if p == 3:
-            h0 = Hw[0]
-            h1 = Hw[1]
-            h2 = Hw[2]
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            for i in range(n):
-                li = Lx[i]
-                a0 += h0[i] * li
-                a1 += h1[i] * li
-                a2 += h2[i] * li
-            Gm[0, j] = a0
-            Gm[1, j] = a1
-            Gm[2, j] = a2
-        else:
+    if p == 3:
+        _rows_dot3(Hw, L, q, J, Gm)
+    else:
+        for j in range(J):
+            Lx = L[q:, j]
             for k in range(p):
                 hk = Hw[k]
                 acc = 0.0
@@ -67,43 +58,87 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
         hx = 0.0
         for i in range(n):
             hx += Hw[k, i] * z[q + i]
-        # f = (T_1 ... T_{k-1})^T g: D g + V_j . (sum_{i > j} g_i U_i)
-        for r in range(k):
-            acc_r[r] = 0.0
-        for j in range(J - 1, -1, -1):
-            g = Gm[k, j]
-            fj = D[j] * g
-            for r in range(k):
-                fj += V[j, r] * acc_r[r]
-            for r in range(k):
-                acc_r[r] += g * U[j, r]
-            f[j] = fj
-        # a_j = 1 + sum_{i >= j} f_i^2
-        acc = 0.0
+        # f = (T_1 ... T_{k-1})^T g: D g + V_j . (sum_{i > j} g_i U_i). The running sums
+        # are the loop's carried dependency: for the first three outputs they are locals
+        # (registers), where the array acc_r would put a store and a reload on that chain
+        # every iteration (LLVM cannot prove acc_r apart from V and U); same arithmetic in
+        # the same order
+        # In the same backward pass: a_j = 1 + sum_{i >= j} f_i^2 and g . wsum (the
+        # innovation's share of the earlier outputs' correction), one sweep instead of three
         a[J] = 1.0
-        for j in range(J - 1, -1, -1):
-            acc += f[j] * f[j]
-            a[j] = acc + 1.0
-        # w = (T_1 ... T_{k-1}) f and the new V columns, one forward pass
-        for r in range(k):
-            acc_r[r] = 0.0
-        for j in range(J):
-            s = np.sqrt(a[j] * a[j + 1])
-            dj = a[j + 1] / s
-            bj = -f[j] / s
-            wj = D[j] * f[j]
+        sq = 0.0
+        gw = 0.0
+        if k < 3:
+            c0 = 0.0
+            c1 = 0.0
+            for j in range(J - 1, -1, -1):
+                g = Gm[k, j]
+                fj = D[j] * g
+                if k >= 1:
+                    fj += V[j, 0] * c0
+                if k == 2:
+                    fj += V[j, 1] * c1
+                if k >= 1:
+                    c0 += g * U[j, 0]
+                if k == 2:
+                    c1 += g * U[j, 1]
+                f[j] = fj
+                sq += fj * fj
+                a[j] = sq + 1.0
+                gw += g * wsum[j]
+        else:
             for r in range(k):
-                wj += U[j, r] * acc_r[r]
-                incl = acc_r[r] + V[j, r] * f[j]
-                V[j, r] = V[j, r] * dj - incl * bj
-                acc_r[r] = incl
-            w[j] = wj
-            V[j, k] = bj
-            D[j] *= dj
-        innov = yw[k] - hx
-        for j in range(J):
-            innov -= Gm[k, j] * wsum[j]
-        sc = innov / a[0]
+                acc_r[r] = 0.0
+            for j in range(J - 1, -1, -1):
+                g = Gm[k, j]
+                fj = D[j] * g
+                for r in range(k):
+                    fj += V[j, r] * acc_r[r]
+                for r in range(k):
+                    acc_r[r] += g * U[j, r]
+                f[j] = fj
+                sq += fj * fj
+                a[j] = sq + 1.0
+                gw += g * wsum[j]
+        # w = (T_1 ... T_{k-1}) f and the new V columns, one forward pass (locals for the
+        # first three outputs, as above)
+        if k < 3:
+            c0 = 0.0
+            c1 = 0.0
+            for j in range(J):
+                s = np.sqrt(a[j] * a[j + 1])
+                dj = a[j + 1] / s
+                fj = f[j]
+                bj = -fj / s
+                wj = D[j] * fj
+                if k >= 1:
+                    wj += U[j, 0] * c0
+                    c0 += V[j, 0] * fj
+                    V[j, 0] = V[j, 0] * dj - c0 * bj
+                if k == 2:
+                    wj += U[j, 1] * c1
+                    c1 += V[j, 1] * fj
+                    V[j, 1] = V[j, 1] * dj - c1 * bj
+                w[j] = wj
+                V[j, k] = bj
+                D[j] *= dj
+        else:
+            for r in range(k):
+                acc_r[r] = 0.0
+            for j in range(J):
+                s = np.sqrt(a[j] * a[j + 1])
+                dj = a[j + 1] / s
+                bj = -f[j] / s
+                wj = D[j] * f[j]
+                for r in range(k):
+                    wj += U[j, r] * acc_r[r]
+                    incl = acc_r[r] + V[j, r] * f[j]
+                    V[j, r] = V[j, r] * dj - incl * bj
+                    acc_r[r] = incl
+                w[j] = wj
+                V[j, k] = bj
+                D[j] *= dj
+        sc = (yw[k] - hx - gw) / a[0]
         for j in range(J):
             wsum[j] += w[j] * sc
             U[j, k] = w[j]
@@ -115,6 +150,9 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
             M[r, i] = 0.0
     j = J - 1
     if p == 3:
+        while j >= 3:
+            _lt_quad3(L, M, z, j, D, wsum, U, V)
+            j -= 4
         while j >= 1:
             _lt_pair3(L, M, z, j, D, wsum, U, V)
             j -= 2
@@ -122,6 +160,119 @@ def _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, f, a, w, acc_r, M, 
         _lt_column(L, col, M, z, j, D[j], wsum[j], U[j], V[j], p)
         j -= 1
 
+
+
+@njit
+def _rows_dot3(H, L, q, cols, out):
+    """``out[k, j] = H[k] . L[q:, j]`` for three rows ``H[k]`` and the columns ``j < cols``
+    of L's x rows: each column read once for the three rows, two columns per sweep (the
+    columns are n long: per sweep, the set-up and the reductions' final sums weigh as
+    much as the multiply-adds)."""
+    n = H.shape[1]
+    h0 = H[0]
+    h1 = H[1]
+    h2 = H[2]
+    j = 0
+    while j + 1 < cols:
+        La = L[q:, j]
+        Lb = L[q:, j + 1]
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        b0 = 0.0
+        b1 = 0.0
+        b2 = 0.0
+        for i in range(n):
+            la = La[i]
+            lb = Lb[i]
+            a0 += h0[i] * la
+            a1 += h1[i] * la
+            a2 += h2[i] * la
+            b0 += h0[i] * lb
+            b1 += h1[i] * lb
+            b2 += h2[i] * lb
+        out[0, j] = a0
+        out[1, j] = a1
+        out[2, j] = a2
+        out[0, j + 1] = b0
+        out[1, j + 1] = b1
+        out[2, j + 1] = b2
+        j += 2
+    if j < cols:
+        Lx = L[q:, j]
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        for i in range(n):
+            li = Lx[i]
+            a0 += h0[i] * li
+            a1 += h1[i] * li
+            a2 += h2[i] * li
+        out[0, j] = a0
+        out[1, j] = a1
+        out[2, j] = a2
+
+@njit
+def _lt_quad3(L, M, z, j, D, wsum, U, V):
+    """Columns j .. j - 3 of ``L T`` (three outputs) in one sweep, as four calls of
+    :func:`_lt_column` in that order: the running sums ``M`` and ``z`` are read and written
+    once per four columns (per two in :func:`_lt_pair3`), which halves the sweep's loads
+    and stores again (its stores, not its multiply-adds, were the limit).
+
+    Rows j - 3 .. j - 1 hold only some of the four columns (L is lower triangular; ``M``
+    is still zero there): those few entries are updated one by one first.
+    """
+    for r in range(j - 3, j):
+        for c in range(r, j - 4, -1):        # the columns row r has, right to left
+            lrc = L[r, c]
+            L[r, c] = D[c] * lrc + M[0, r] * V[c, 0] + M[1, r] * V[c, 1] + M[2, r] * V[c, 2]
+            M[0, r] += lrc * U[c, 0]
+            M[1, r] += lrc * U[c, 1]
+            M[2, r] += lrc * U[c, 2]
+            z[r] += lrc * wsum[c]
+    La = L[j:, j]
+    Lb = L[j:, j - 1]
+    Lc = L[j:, j - 2]
+    Ld = L[j:, j - 3]
+    M0 = M[0, j:]
+    M1 = M[1, j:]
+    M2 = M[2, j:]
+    zj = z[j:]
+    da, db, dc, dd = D[j], D[j - 1], D[j - 2], D[j - 3]
+    wa, wb, wc, wd = wsum[j], wsum[j - 1], wsum[j - 2], wsum[j - 3]
+    va0, va1, va2 = V[j, 0], V[j, 1], V[j, 2]
+    vb0, vb1, vb2 = V[j - 1, 0], V[j - 1, 1], V[j - 1, 2]
+    vc0, vc1, vc2 = V[j - 2, 0], V[j - 2, 1], V[j - 2, 2]
+    vd0, vd1, vd2 = V[j - 3, 0], V[j - 3, 1], V[j - 3, 2]
+    ua0, ua1, ua2 = U[j, 0], U[j, 1], U[j, 2]
+    ub0, ub1, ub2 = U[j - 1, 0], U[j - 1, 1], U[j - 1, 2]
+    uc0, uc1, uc2 = U[j - 2, 0], U[j - 2, 1], U[j - 2, 2]
+    ud0, ud1, ud2 = U[j - 3, 0], U[j - 3, 1], U[j - 3, 2]
+    for i in range(La.size):
+        la = La[i]
+        lb = Lb[i]
+        lc = Lc[i]
+        ld = Ld[i]
+        m0 = M0[i]
+        m1 = M1[i]
+        m2 = M2[i]
+        La[i] = da * la + m0 * va0 + m1 * va1 + m2 * va2
+        m0 += la * ua0
+        m1 += la * ua1
+        m2 += la * ua2
+        Lb[i] = db * lb + m0 * vb0 + m1 * vb1 + m2 * vb2
+        m0 += lb * ub0
+        m1 += lb * ub1
+        m2 += lb * ub2
+        Lc[i] = dc * lc + m0 * vc0 + m1 * vc1 + m2 * vc2
+        m0 += lc * uc0
+        m1 += lc * uc1
+        m2 += lc * uc2
+        Ld[i] = dd * ld + m0 * vd0 + m1 * vd1 + m2 * vd2
+        M0[i] = m0 + ld * ud0
+        M1[i] = m1 + ld * ud1
+        M2[i] = m2 + ld * ud2
+        zj[i] += la * wa + lb * wb + lc * wc + ld * wd
 
 @njit
 def _lt_pair3(L, M, z, j, D, wsum, U, V):
@@ -235,7 +386,7 @@ def _lt_column(L, col, M, z, j, dj, wj, Uj, Vj, p):
 
 
 @njit
-def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
+def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT, Bm, coef,
                xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
     """The square-root time update of one sample (as sqrt_step's); False at a non-finite
     moment, where the reference raises.
@@ -268,22 +419,7 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
     # non-zeros; a C with many (rotation basis: a sum of block components) as three dense
     # dot products per read of a column, which vectorise where the gather does not
     if p == 3 and Ci.size > 2 * p:
-        C0 = Cd[0]
-        C1 = Cd[1]
-        C2 = Cd[2]
-        for i in range(d):
-            Lx = L[q:, i]
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            for a in range(n):
-                li = Lx[a]
-                a0 += C0[a] * li
-                a1 += C1[a] * li
-                a2 += C2[a] * li
-            CL[0, i] = a0
-            CL[1, i] = a1
-            CL[2, i] = a2
+        _rows_dot3(Cd, L, q, d, CL)
     else:
         for i in range(d):
             for r in range(p):
@@ -391,6 +527,7 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
                 Ac = AbarT[c]
                 for a in range(n):
                     col[a] += Ac[a] * v
+        pairs = Fb.shape[0] > 0
         # F by its diagonals: contiguous, where the sparse rows would gather
         # (aligned views indexed from 0: an index ``a + o`` numba cannot prove non-negative
         # gets a wrap-around branch that stops LLVM vectorising)
@@ -420,11 +557,30 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
                 Lb0 = L[b * n:(b + 1) * n, i]
                 for a in range(n):
                     col[a] += f0 * Lb0[a]
-            for a in range(n):
-                Lx[a] = col[a]
+            if pairs:
+                # F is 2 x 2 blocks on the diagonal (the rotation basis): its product is
+                # the last sweep, pair by pair in place (a pair reads only its own two old
+                # entries), and writes the column: one sweep where the three diagonals and
+                # the copy took four
+                for b in range(Fb.shape[0]):
+                    x0 = Lx[2 * b]
+                    x1 = Lx[2 * b + 1]
+                    Lx[2 * b] = col[2 * b] + Fb[b, 0] * x0 + Fb[b, 1] * x1
+                    Lx[2 * b + 1] = col[2 * b + 1] + Fb[b, 2] * x0 + Fb[b, 3] * x1
+            else:
+                for a in range(n):
+                    Lx[a] = col[a]
         else:
-            for a in range(n):
-                pre[a, i - q] = col[a]          # pre = [A_hat L_xx, Wf], n x 2n
+            # pre = [A_hat L_xx, Wf], n x 2n
+            if pairs:
+                for b in range(Fb.shape[0]):
+                    x0 = Lx[2 * b]
+                    x1 = Lx[2 * b + 1]
+                    pre[2 * b, i - q] = col[2 * b] + Fb[b, 0] * x0 + Fb[b, 1] * x1
+                    pre[2 * b + 1, i - q] = col[2 * b + 1] + Fb[b, 2] * x0 + Fb[b, 3] * x1
+            else:
+                for a in range(n):
+                    pre[a, i - q] = col[a]
     # L_xx from the LQ of [A_hat L_xx, Wf] (the reference: the R of the QR of its transpose)
     for a in range(n):
         for i in range(n):
@@ -441,9 +597,10 @@ def _sqrt_time(z, L, uk, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p,
         _lq_tri(pre, n)
     else:
         _lq_rows(pre)               # Wf is the symmetric root of a singular W: no structure
-    for a in range(n):
-        for i in range(n):
-            L[q + a, q + i] = pre[a, i] if i <= a else 0.0
+    for i in range(n):
+        Li = L[q:, q + i]           # down L's (Fortran-ordered) column
+        for a in range(n):
+            Li[a] = pre[a, i] if i <= a else 0.0
     for a in range(n):
         z[q + a] = xn[a]
     return True
@@ -499,7 +656,6 @@ def _lq_tri(M, n):
     instead of 5 n^3 / 3. Same sign convention as :func:`_lq_rows`.
     """
     v = np.empty(n + 1)
-    s = np.empty(n)
     for k in range(n):
         hi = n + k + 1
         Mk = M[k, k:hi]
@@ -519,15 +675,55 @@ def _lq_tri(M, n):
         Mk[0] = beta
         for j in range(1, n + 1):
             Mk[j] = 0.0
-        for i in range(k + 1, n):
+        # four (then two) rows per sweep: each read of v serves them all (the sweeps are
+        # n + 1 long, so loop overhead, not arithmetic, is what a sweep per row pays for)
+        i = k + 1
+        while i + 3 < n:
+            Ma = M[i, k:hi]
+            Mb = M[i + 1, k:hi]
+            Mc = M[i + 2, k:hi]
+            Md = M[i + 3, k:hi]
+            acc = 0.0
+            acc1 = 0.0
+            acc2 = 0.0
+            acc3 = 0.0
+            for j in range(n + 1):
+                vj = v[j]
+                acc += Ma[j] * vj
+                acc1 += Mb[j] * vj
+                acc2 += Mc[j] * vj
+                acc3 += Md[j] * vj
+            fa = acc * tau
+            fb = acc1 * tau
+            fc = acc2 * tau
+            fd = acc3 * tau
+            for j in range(n + 1):
+                vj = v[j]
+                Ma[j] -= fa * vj
+                Mb[j] -= fb * vj
+                Mc[j] -= fc * vj
+                Md[j] -= fd * vj
+            i += 4
+        while i + 1 < n:
+            Mi = M[i, k:hi]
+            Mj = M[i + 1, k:hi]
+            acc = 0.0
+            acc1 = 0.0
+            for j in range(n + 1):
+                acc += Mi[j] * v[j]
+                acc1 += Mj[j] * v[j]
+            f = acc * tau
+            f1 = acc1 * tau
+            for j in range(n + 1):
+                Mi[j] -= f * v[j]
+                Mj[j] -= f1 * v[j]
+            i += 2
+        if i < n:
             Mi = M[i, k:hi]
             acc = 0.0
             for j in range(n + 1):
                 acc += Mi[j] * v[j]
-            s[i] = acc * tau
-        for i in range(k + 1, n):
-            Mi = M[i, k:hi]
-            f = s[i]
+            f = acc * tau
             for j in range(n + 1):
                 Mi[j] -= f * v[j]
 
@@ -585,25 +781,48 @@ def _add_block_gram(L, Wk, r0, r1, n, Gt, W):
         rows = r0 + (jmax + 1) * n
         G = Gt[off:off + rows]
         off += rows
+        # row i of G_kk (column i of the blocks) sums blocks j0 .. jmax, j0 the first
+        # whose rows reach column i; written in one to three sweeps of n, not zeroed and
+        # then accumulated block by block (each sweep is short: their count is the cost)
         for i in range(rows):
-            for a in range(n):
-                G[i, a] = 0.0
-        for j in range(jmax + 1):
-            f = Wk[j, kk]
-            if f != 0.0:
-                base = r0 + j * n
-                for i in range(base + n):
-                    Li = L[base:base + n, i]
-                    Gi = G[i]
-                    for a in range(n):
-                        Gi[a] += f * Li[a]
+            Gi = G[i]
+            j = max(0, (i - r0) // n)
+            t = jmax - j + 1
+            b0 = r0 + j * n
+            f0 = Wk[j, kk]
+            L0 = L[b0:b0 + n, i]
+            if t >= 3:
+                f1 = Wk[j + 1, kk]
+                f2 = Wk[j + 2, kk]
+                L1 = L[b0 + n:b0 + 2 * n, i]
+                L2 = L[b0 + 2 * n:b0 + 3 * n, i]
+                for a in range(n):
+                    Gi[a] = f0 * L0[a] + f1 * L1[a] + f2 * L2[a]
+                j += 3
+            elif t == 2:
+                f1 = Wk[j + 1, kk]
+                L1 = L[b0 + n:b0 + 2 * n, i]
+                for a in range(n):
+                    Gi[a] = f0 * L0[a] + f1 * L1[a]
+                j += 2
+            else:
+                for a in range(n):
+                    Gi[a] = f0 * L0[a]
+                j += 1
+            while j <= jmax:
+                f0 = Wk[j, kk]
+                b0 = r0 + j * n
+                L0 = L[b0:b0 + n, i]
+                for a in range(n):
+                    Gi[a] += f0 * L0[a]
+                j += 1
     if off:
         Gs = Gt[:off]
         W += np.dot(Gs.T, Gs)
 
 
 @njit
-def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Rw, Hw, J, Q, Wn, has_N,
+def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Rw, Hw, J, Q, Wn, has_N,
                  us, ys, E, hist, hist_every, k_done, n, p, m, out):
     # Long: one compiled loop over the samples is the point of this module; its stages
     # follow sqrt_step's (measurement, moments, new x rows, LQ of the x block).
@@ -652,7 +871,7 @@ def sqrt_kernel(z, L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Rw, Hw, J, Q, Wn, has_
                 acc += Rw[r, l] * ys[k, l]
             yw[r] = acc
         _sqrt_measurement(z, L, Hw, yw, q, J, Gm, D, U, V, wsum, fv, av, wv, acc_r, Mrun, colm)
-        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT,
+        if not _sqrt_time(z, L, us[k], Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, Q, Wn, has_N, n, p, m, Abar, AbarT,
                           Bm, coef, xn, CL, Sv, Ws, c3, Gt, W, Wf, col, pre):
             # a non-finite moment: where the reference raises and PLID._one marks the
             # estimate NaN (the rest of this sample's time update is skipped, as there)

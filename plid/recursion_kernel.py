@@ -12,9 +12,10 @@ equal to rounding: the tests check 1e-9 relative), in one numba-compiled loop th
 - square-root form: applies the product of the p Carlson factors
   ``T = diag(D) + tril(U V^T, -1)`` by a right-to-left running sum, O(d J p), where the
   reference calls a dense triangular product (BLAS trmm, O(d J^2 / 2)), two columns per
-  sweep with the state correction in the same sweep; applies ``F`` by its diagonals in the
-  new x rows; takes upper-triangular factors of the p x p (and m x m) weights of the
-  second-order moments, so that their Gram stacks n p (p + 1) / 2 rows, not n p^2; and
+  sweep (four with three outputs) with the state correction in the same sweep; applies
+  ``F`` in the new x rows by its 2 x 2 blocks (the rotation basis) or else its diagonals;
+  takes upper-triangular factors of the p x p (and m x m) weights of the second-order
+  moments, so that their Gram stacks n p (p + 1) / 2 rows, not n p^2; and
   triangularises ``[A_hat L_xx, Wf]`` with ``Wf`` triangular by Householder reflections
   that touch n + 1 columns per row (n^3 instead of 5 n^3 / 3);
 - allocates nothing per sample.
@@ -39,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trussid.plid.kernel_common import HAVE_NUMBA, csr, diagonals
+from trussid.plid.kernel_common import HAVE_NUMBA, csr, diagonals, pair_blocks
 from trussid.plid.kernel_direct import direct_kernel
 from trussid.plid.kernel_sqrt import sqrt_kernel
 from trussid.plid.recursion_common import Problem, psd_factor
@@ -168,8 +169,11 @@ def run_sqrt(pb: Problem, st: SqrtState, us: np.ndarray, ys: np.ndarray, E: np.n
     if not st.L.flags.f_contiguous:
         st.L = np.asfortranarray(st.L)
     Fo, Fd = diagonals(pb.F)
+    Fb = pair_blocks(pb.F)
+    if Fb.shape[0]:
+        Fo, Fd = Fo[:0], Fd[:0]       # the kernel applies F by its 2 x 2 blocks instead
     Cd = np.ascontiguousarray(pb.C, dtype=float)
-    sqrt_kernel(st.z, st.L, Fp, Fi, Fx, Fo, Fd, Cp, Ci, Cx, Cd, np.ascontiguousarray(st.Rw),
+    sqrt_kernel(st.z, st.L, Fp, Fi, Fx, Fo, Fd, Fb, Cp, Ci, Cx, Cd, np.ascontiguousarray(st.Rw),
                  np.ascontiguousarray(st.Hw), int(st.J), np.ascontiguousarray(pb.Q), Wn,
                  pb.N is not None, np.ascontiguousarray(us), np.ascontiguousarray(ys), E, hist,
                  int(hist_every), int(k_done), pb.n, pb.p, pb.m, out)

@@ -72,6 +72,33 @@ def test_plids_bases_have_at_most_three_diagonals():
         assert KC.diagonals(F)[0].size <= 3
 
 
+
+def _apply_pairs(B, x):
+    """``M x`` from the rows ``[m00, m01, m10, m11]`` of M's 2 x 2 diagonal blocks."""
+    x0, x1 = x[0::2], x[1::2]
+    out = np.empty_like(x)
+    out[0::2] = B[:, 0, None] * x0 + B[:, 1, None] * x1
+    out[1::2] = B[:, 2, None] * x0 + B[:, 3, None] * x1
+    return out
+
+
+def test_the_rotation_basis_is_applied_by_its_pair_blocks_and_others_are_not():
+    rng = np.random.default_rng(4)
+    for n, p in ((12, 2), (12, 3), (30, 3)):
+        F = basis_for(n, p, 1600.0, np.linspace(40, 700, n // 2)).F
+        B = KC.pair_blocks(F)
+        assert B.shape == (n // 2, 4)
+        X = rng.standard_normal((n, 5))
+        assert np.allclose(_apply_pairs(B, X), F @ X, rtol=0, atol=1e-13)
+    # not block-diagonal in pairs from the first row: a shift, a real pole per output
+    # (odd states per output shift the pairs), a coupling outside the blocks, odd n
+    coupled = basis_for(12, 2, 1600.0, np.linspace(40, 700, 6)).F.copy()
+    coupled[0, 5] = 0.1
+    for F in (ObserverBasis.shift(12, 3).F, basis_for(9, 3, 1600.0, np.linspace(40, 700, 6)).F,
+              coupled, np.eye(5)):
+        assert KC.pair_blocks(F).shape == (0, 4)
+
+
 def _predictor_case(seed=11, n=8, m=2, p=3, N=400, c=4):
     rng = np.random.default_rng(seed)
     A, B = _system(rng, n, m)

@@ -91,6 +91,43 @@ def test_kernel_equals_the_reference_step_to_rounding(case, form, modal_plant, s
     assert np.std(E[-100:]) < 0.3
 
 
+
+SQRT_SHAPES = {
+    # name: (basis factory(n, p), n, p, m): the kernel's three-output paths (four-column
+    # Carlson sweeps, dense C rows in the rotation basis, unrolled recurrences) and the
+    # generic ones they stand beside (one output; four outputs, whose fourth update takes
+    # the general recurrence)
+    "rotation 3 -> 3": (lambda n, p: basis_for(n, p, 1600.0, [50, 90, 150, 220, 300, 400]),
+                        12, 3, 3),
+    "shift 1 -> 1": (lambda n, p: ObserverBasis.shift(n, p), 6, 1, 1),
+    "shift 2 -> 4": (lambda n, p: ObserverBasis.shift(n, p), 8, 4, 2),
+    "rotation 2 -> 4": (lambda n, p: basis_for(n, p, 1600.0, [50, 90, 150, 220, 300, 400]),
+                        8, 4, 2),
+}
+
+
+@needs_numba
+@pytest.mark.parametrize("shape", list(SQRT_SHAPES))
+def test_sqrt_kernel_equals_the_reference_step_for_one_to_four_outputs(shape, modal_plant,
+                                                                       simulate, rng):
+    make, n, p, m = SQRT_SHAPES[shape]
+    pb = _problem(make(n, p), m, None, None)
+    us, ys = _record(modal_plant, simulate, rng, m, p, 500)
+    z0 = np.zeros(pb.dim)
+    z0[:pb.q] = 0.05 * rng.standard_normal(pb.q)
+    P0 = np.diag(np.r_[np.full(pb.q, 1e-1), np.full(n, 1e2)])
+    ref, E_ref, H_ref = _reference(sqrt_step, sqrt_init, pb, z0, P0, us, ys, every=7)
+    st = sqrt_init(pb, z0, P0)
+    E = np.empty_like(ys)
+    hist = np.empty((RK.history_rows(0, len(us), 7), pb.q))
+    assert RK.run_sqrt(pb, st, us, ys, E, hist, 7, 0, use_kernel=True).failed == -1
+    assert _rel(st.z, ref.z) < 1e-9
+    assert _rel(sqrt_covariance(st), sqrt_covariance(ref)) < 1e-9
+    assert _rel(E, E_ref) < 1e-9
+    assert _rel(hist, H_ref) < 1e-9
+    assert np.std(E[-100:]) < 0.3         # it learned: not two idle runs compared
+
+
 @needs_numba
 def test_kernel_in_blocks_equals_one_call(modal_plant, simulate, rng):
     # fit runs blocks of 2000 samples, update one sample: the history counter and the
@@ -151,3 +188,24 @@ def test_a_non_finite_sample_leaves_the_estimate_non_finite_on_both_paths():
         RK.run_direct(pb, b, us, ys, np.empty((5, 1)), np.empty((0, pb.q)), 0, 0,
                       use_kernel=True)
     assert not np.all(np.isfinite(a.z)) and not np.all(np.isfinite(b.z))
+
+
+@needs_numba
+def test_a_non_finite_sample_stops_the_square_root_kernel_as_the_reference():
+    # the square-root step raises on a non-finite moment (PLID then carries NaN); the
+    # kernel reports that sample and carries NaN too (the test is per entry: a branch-free
+    # sum of 0 * x, NaN exactly where x is not finite, was folded to 0 under the kernels'
+    # fastmath flags and missed the sample)
+    pb = _problem(ObserverBasis.shift(2, 1), 1, None, None)
+    P0 = np.eye(pb.dim)
+    us = np.ones((5, 1))
+    ys = np.array([[1.0], [np.inf], [1.0], [1.0], [1.0]])
+    a = sqrt_init(pb, np.zeros(pb.dim), P0)
+    b = sqrt_init(pb, np.zeros(pb.dim), P0)
+    with np.errstate(all="ignore"):
+        RK.run_sqrt(pb, a, us, ys, np.empty((5, 1)), np.empty((0, pb.q)), 0, 0,
+                    use_kernel=False)
+        out = RK.run_sqrt(pb, b, us, ys, np.empty((5, 1)), np.empty((0, pb.q)), 0, 0,
+                          use_kernel=True)
+    assert not np.all(np.isfinite(a.z)) and not np.all(np.isfinite(b.z))
+    assert out.failed == 1
