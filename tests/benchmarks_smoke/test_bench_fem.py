@@ -1,19 +1,11 @@
 """The FE benchmark's README table: one row per tool and case, the comparator's time as a
 multiple of trussid's, failures shown as such, every row stamped with the commit."""
 
-import sys
-from pathlib import Path
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.benchmarks_smoke.benchmark_module import benchmark_module
 
 
 def _bench():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    try:
-        import bench_fem_vs_opensees
-    finally:
-        sys.path.remove(str(ROOT / "benchmarks"))
-    return bench_fem_vs_opensees
+    return benchmark_module("bench_fem_vs_opensees")
 
 
 def test_readme_table_rows_give_ratios_and_commits():

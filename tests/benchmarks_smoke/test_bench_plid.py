@@ -3,20 +3,14 @@ each process's best rate, their best and median, and whether the target held in 
 process, not only in the best one (the shared host swings 1.6x between processes)."""
 
 import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from tests.benchmarks_smoke.benchmark_module import benchmark_module
 
 
 def _bench():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    try:
-        import bench_plid
-    finally:
-        sys.path.remove(str(ROOT / "benchmarks"))
-    return bench_plid
+    return benchmark_module("bench_plid")
 
 
 def _row(label, rate, engine="compiled", diff=None, load=1.0):

@@ -2,19 +2,11 @@
 loop's, the idle background taken out at the run's wall time and put back at an unloaded
 machine's rate; a drift past the allowed overhead fails it."""
 
-import sys
-from pathlib import Path
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.benchmarks_smoke.benchmark_module import benchmark_module
 
 
 def _bench():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    try:
-        import bench_study
-    finally:
-        sys.path.remove(str(ROOT / "benchmarks"))
-    return bench_study
+    return benchmark_module("bench_study")
 
 
 def _results(worker_cpu_s: float) -> dict:
